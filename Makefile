@@ -1,0 +1,32 @@
+# wearcoef: `make figures` rebuilds every artifact and figure of a profile; `make test` runs
+# the whole test suite (format, lint, tests). Build products go to a fixed directory outside
+# the clone so that repeated fresh clones (CI) reuse them.
+CARGO_TARGET_DIR ?= /var/tmp/wearcoef-target
+export CARGO_TARGET_DIR
+PROFILE ?= default
+JOBS ?= $(shell nproc)
+BIN := $(CARGO_TARGET_DIR)/release/wearcoef
+
+.PHONY: figures build test fmt clippy bench bench-fft clean
+
+figures: build
+	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
+
+build:
+	cargo build --release --locked
+
+test:
+	cargo fmt --check
+	cargo clippy --locked --all-targets -- -D warnings
+	cargo test --locked
+
+fmt:
+	cargo fmt
+
+bench: bench-fft
+
+bench-fft:
+	bash benches/fft_compare.sh
+
+clean:
+	$(BIN) clean || rm -rf data

@@ -1,0 +1,453 @@
+//! `pipeline.yaml`: schema, validation and profile resolution.
+//!
+//! Unknown fields are rejected at parse time (serde `deny_unknown_fields`); every value is
+//! then checked and the first invalid one is reported with its field path (e.g.
+//! `studies.fig2.profiles.quick.lambda_s_over_dl`), the value and the allowed range.
+//! Nothing is written before the whole file validates.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::surface::{Method, SurfaceParams};
+
+/// A configuration error: a YAML syntax/schema problem or an invalid value.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Parse { path: String, message: String },
+    #[error("{path}: {field} = {value}: {allowed}")]
+    Invalid {
+        path: String,
+        field: String,
+        value: String,
+        allowed: String,
+    },
+    #[error("{path}: unknown profile '{profile}'; declared profiles: {known}")]
+    UnknownProfile {
+        path: String,
+        profile: String,
+        known: String,
+    },
+}
+
+/// The whole file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pipeline {
+    /// Schema version of this file; only 1 exists.
+    pub schema_version: u32,
+    pub material: Material,
+    pub solver: Solver,
+    /// Profile name → one-line description.
+    pub profiles: BTreeMap<String, String>,
+    /// Study name → study.
+    pub studies: BTreeMap<String, Study>,
+}
+
+/// Elastic constants.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Effective modulus E* = E/(1 − ν²), the stress unit of every pressure written.
+    pub e_star: f64,
+}
+
+/// Contact-solver settings shared by all studies.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solver {
+    /// Convergence threshold on the dimensionless error of docs/CONVENTIONS.md.
+    pub tolerance: f64,
+    /// Iteration cap; reaching it is an error, never a result.
+    pub max_iterations: u32,
+}
+
+/// A study: one set of surface parameters, a number of realizations and a load range, with
+/// per-profile sizes.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Study {
+    #[serde(default)]
+    pub description: String,
+    /// Hurst exponent H ∈ (0, 1).
+    pub hurst: f64,
+    /// Spectrum bandwidth λ_l/λ_s.
+    pub lambda_l_over_lambda_s: f64,
+    /// Optional roll-off plateau: λ_r/λ_l > 1 (flat PSD between q_r and q_l).
+    #[serde(default)]
+    pub rolloff_over_lambda_l: Option<f64>,
+    /// Surface generator: `filter` (default) or `random-phase`.
+    #[serde(default = "default_method")]
+    pub method: String,
+    /// Study seed; realization i uses `surface::realization_seed(seed, i)`.
+    pub seed: u64,
+    /// Loads W/W0, shared by all profiles unless a profile overrides them.
+    pub loads: Loads,
+    /// Profile name → sizes for that profile. A study without an entry for a profile is not
+    /// part of that profile.
+    pub profiles: BTreeMap<String, StudyProfile>,
+}
+
+fn default_method() -> String {
+    "filter".to_string()
+}
+
+/// Per-profile sizes of a study.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyProfile {
+    /// Box size over largest wavelength, L/λ_l.
+    pub l_over_lambda_l: f64,
+    /// Resolution of the smallest wavelength, λ_s/Δl (≥ 2).
+    pub lambda_s_over_dl: f64,
+    /// Number of independent surface realizations (≥ 1).
+    pub realizations: u32,
+    /// Loads for this profile, replacing the study's.
+    #[serde(default)]
+    pub loads: Option<Loads>,
+}
+
+/// Loads W/W0 (dimensionless, W0 = E*·rms slope·L²), either listed or as a range.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Loads {
+    /// Explicit increasing list.
+    #[serde(default)]
+    pub values: Option<Vec<f64>>,
+    #[serde(default)]
+    pub min: Option<f64>,
+    #[serde(default)]
+    pub max: Option<f64>,
+    #[serde(default)]
+    pub count: Option<u32>,
+    /// `log` (default) or `linear`.
+    #[serde(default)]
+    pub spacing: Option<String>,
+}
+
+/// A study resolved for one profile: concrete grid sizes and loads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyPlan {
+    pub name: String,
+    pub profile: String,
+    pub realizations: u32,
+    pub seed: u64,
+    /// Surface parameters of realization 0 (the seed is set per realization).
+    pub surface: SurfaceParams,
+    /// W/W0, strictly increasing.
+    pub loads: Vec<f64>,
+}
+
+impl StudyPlan {
+    /// Surface parameters of realization `index`.
+    pub fn surface_for(&self, index: u32) -> SurfaceParams {
+        SurfaceParams {
+            seed: crate::surface::realization_seed(self.seed, index as u64),
+            ..self.surface.clone()
+        }
+    }
+}
+
+/// Largest grid side accepted (memory guard: 65536² doubles are 32 GiB).
+pub const MAX_N: usize = 32768;
+
+impl Pipeline {
+    /// Read, parse and validate a file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parse and validate YAML text; `origin` names it in messages.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, ConfigError> {
+        let pipeline: Pipeline = serde_saphyr::from_str(text).map_err(|e| ConfigError::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        pipeline.validate(origin)?;
+        Ok(pipeline)
+    }
+
+    fn validate(&self, origin: &str) -> Result<(), ConfigError> {
+        let invalid = |field: String, value: String, allowed: &str| ConfigError::Invalid {
+            path: origin.to_string(),
+            field,
+            value,
+            allowed: allowed.to_string(),
+        };
+        if self.schema_version != 1 {
+            return Err(invalid(
+                "schema_version".into(),
+                self.schema_version.to_string(),
+                "only schema version 1 exists",
+            ));
+        }
+        if !(self.material.e_star.is_finite() && self.material.e_star > 0.0) {
+            return Err(invalid(
+                "material.e_star".into(),
+                self.material.e_star.to_string(),
+                "the effective modulus must be finite and > 0",
+            ));
+        }
+        let tol = self.solver.tolerance;
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(invalid(
+                "solver.tolerance".into(),
+                tol.to_string(),
+                "must lie in (0, 1); 1e-10 is a sensible value",
+            ));
+        }
+        if self.solver.max_iterations == 0 {
+            return Err(invalid(
+                "solver.max_iterations".into(),
+                "0".into(),
+                "must be ≥ 1 (a few thousand is ample)",
+            ));
+        }
+        if self.profiles.is_empty() {
+            return Err(invalid("profiles".into(), "{}".into(), "declare at least one profile"));
+        }
+        if self.studies.is_empty() {
+            return Err(invalid("studies".into(), "{}".into(), "declare at least one study"));
+        }
+        for (name, study) in &self.studies {
+            for profile in study.profiles.keys() {
+                if !self.profiles.contains_key(profile) {
+                    return Err(invalid(
+                        format!("studies.{name}.profiles.{profile}"),
+                        profile.clone(),
+                        &format!(
+                            "not a declared profile; declare it under `profiles` or use one of: {}",
+                            self.profile_names().join(", ")
+                        ),
+                    ));
+                }
+            }
+            for profile in study.profiles.keys() {
+                self.resolve_study(name, profile, origin)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Declared profile names, sorted.
+    pub fn profile_names(&self) -> Vec<String> {
+        self.profiles.keys().cloned().collect()
+    }
+
+    /// Every study of `profile`, resolved, in name order.
+    pub fn plan(&self, profile: &str, origin: &str) -> Result<Vec<StudyPlan>, ConfigError> {
+        if !self.profiles.contains_key(profile) {
+            return Err(ConfigError::UnknownProfile {
+                path: origin.to_string(),
+                profile: profile.to_string(),
+                known: self.profile_names().join(", "),
+            });
+        }
+        self.studies
+            .iter()
+            .filter(|(_, s)| s.profiles.contains_key(profile))
+            .map(|(name, _)| self.resolve_study(name, profile, origin))
+            .collect()
+    }
+
+    fn resolve_study(&self, name: &str, profile: &str, origin: &str) -> Result<StudyPlan, ConfigError> {
+        let study = &self.studies[name];
+        let sp = &study.profiles[profile];
+        let base = format!("studies.{name}");
+        let pbase = format!("{base}.profiles.{profile}");
+        let invalid = |field: String, value: f64, allowed: String| ConfigError::Invalid {
+            path: origin.to_string(),
+            field,
+            value: value.to_string(),
+            allowed,
+        };
+        if !(study.hurst.is_finite() && study.hurst > 0.0 && study.hurst < 1.0) {
+            return Err(invalid(
+                format!("{base}.hurst"),
+                study.hurst,
+                "the Hurst exponent must lie in the open interval (0, 1)".into(),
+            ));
+        }
+        let ratio = study.lambda_l_over_lambda_s;
+        if !(ratio.is_finite() && ratio > 1.0) {
+            return Err(invalid(
+                format!("{base}.lambda_l_over_lambda_s"),
+                ratio,
+                "λ_l/λ_s must be finite and > 1 (λ_l > λ_s)".into(),
+            ));
+        }
+        let method = Method::parse(&study.method).ok_or_else(|| ConfigError::Invalid {
+            path: origin.to_string(),
+            field: format!("{base}.method"),
+            value: study.method.clone(),
+            allowed: "must be `filter` or `random-phase`".into(),
+        })?;
+        if let Some(r) = study.rolloff_over_lambda_l {
+            if !(r.is_finite() && r > 1.0 && r <= sp.l_over_lambda_l) {
+                return Err(invalid(
+                    format!("{base}.rolloff_over_lambda_l"),
+                    r,
+                    format!("λ_r/λ_l must lie in (1, L/λ_l = {}]", sp.l_over_lambda_l),
+                ));
+            }
+        }
+        let res = sp.lambda_s_over_dl;
+        if !(res.is_finite() && res >= 2.0) {
+            return Err(invalid(
+                format!("{pbase}.lambda_s_over_dl"),
+                res,
+                "λ_s/Δl must be ≥ 2: the smallest wavelength needs at least two grid spacings (Nyquist)".into(),
+            ));
+        }
+        let box_ratio = sp.l_over_lambda_l;
+        if !(box_ratio.is_finite() && box_ratio >= 1.0) {
+            return Err(invalid(
+                format!("{pbase}.l_over_lambda_l"),
+                box_ratio,
+                "L/λ_l must be ≥ 1: the largest wavelength cannot exceed the box".into(),
+            ));
+        }
+        if sp.realizations == 0 {
+            return Err(invalid(
+                format!("{pbase}.realizations"),
+                0.0,
+                "must be ≥ 1".into(),
+            ));
+        }
+        let n_real = box_ratio * ratio * res;
+        let n = n_real.round();
+        if (n_real - n).abs() > 1e-9 * n_real.max(1.0) {
+            return Err(invalid(
+                format!("{pbase}.l_over_lambda_l"),
+                box_ratio,
+                format!(
+                    "the grid L/Δl = (L/λ_l)·(λ_l/λ_s)·(λ_s/Δl) = {box_ratio}·{ratio}·{res} = {n_real} is not an integer; choose ratios whose product is an even integer"
+                ),
+            ));
+        }
+        let n = n as usize;
+        if n % 2 != 0 || n < 4 || n > MAX_N {
+            return Err(invalid(
+                format!("{pbase}.l_over_lambda_l"),
+                box_ratio,
+                format!("the grid L/Δl = {n} must be an even integer in [4, {MAX_N}]"),
+            ));
+        }
+        let loads_field;
+        let loads = match &sp.loads {
+            Some(l) => {
+                loads_field = format!("{pbase}.loads");
+                l
+            }
+            None => {
+                loads_field = format!("{base}.loads");
+                &study.loads
+            }
+        };
+        let loads = resolve_loads(loads, &loads_field, origin)?;
+        let lambda_s_px = res;
+        let lambda_l_px = res * ratio;
+        let surface = SurfaceParams {
+            n,
+            hurst: study.hurst,
+            lambda_l_px,
+            lambda_s_px,
+            rolloff_lambda_px: study.rolloff_over_lambda_l.map(|r| r * lambda_l_px),
+            method,
+            seed: study.seed,
+        };
+        surface.validate().map_err(|e| ConfigError::Invalid {
+            path: origin.to_string(),
+            field: format!("{pbase} (surface {})", e.field),
+            value: e.value,
+            allowed: e.allowed,
+        })?;
+        Ok(StudyPlan {
+            name: name.to_string(),
+            profile: profile.to_string(),
+            realizations: sp.realizations,
+            seed: study.seed,
+            surface,
+            loads,
+        })
+    }
+}
+
+fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, ConfigError> {
+    let invalid = |sub: &str, value: String, allowed: &str| ConfigError::Invalid {
+        path: origin.to_string(),
+        field: format!("{field}{sub}"),
+        value,
+        allowed: allowed.to_string(),
+    };
+    let values = match (&loads.values, loads.min, loads.max, loads.count) {
+        (Some(v), None, None, None) => {
+            if loads.spacing.is_some() {
+                return Err(invalid(".spacing", format!("{:?}", loads.spacing), "only applies to min/max/count ranges"));
+            }
+            v.clone()
+        }
+        (None, Some(min), Some(max), Some(count)) => {
+            if !(min.is_finite() && min > 0.0) {
+                return Err(invalid(".min", min.to_string(), "W/W0 must be finite and > 0"));
+            }
+            if !(max.is_finite() && max > min) {
+                return Err(invalid(".max", max.to_string(), &format!("must be finite and > min = {min}")));
+            }
+            if count < 2 {
+                return Err(invalid(".count", count.to_string(), "a range needs at least 2 loads"));
+            }
+            let spacing = loads.spacing.as_deref().unwrap_or("log");
+            let m = (count - 1) as f64;
+            match spacing {
+                "log" => (0..count)
+                    .map(|i| {
+                        if i == count - 1 {
+                            max
+                        } else {
+                            (min.ln() + (max.ln() - min.ln()) * i as f64 / m).exp()
+                        }
+                    })
+                    .collect(),
+                "linear" => (0..count)
+                    .map(|i| if i == count - 1 { max } else { min + (max - min) * i as f64 / m })
+                    .collect(),
+                other => return Err(invalid(".spacing", other.to_string(), "must be `log` or `linear`")),
+            }
+        }
+        _ => {
+            return Err(invalid(
+                "",
+                "(incomplete)".into(),
+                "give either `values: [..]` or all of `min`, `max`, `count` (and optionally `spacing`)",
+            ))
+        }
+    };
+    if values.is_empty() {
+        return Err(invalid(".values", "[]".into(), "give at least one load"));
+    }
+    for (i, &w) in values.iter().enumerate() {
+        if !(w.is_finite() && w > 0.0) {
+            return Err(invalid(&format!(".values[{i}]"), w.to_string(), "every load W/W0 must be finite and > 0"));
+        }
+        if i > 0 && w <= values[i - 1] {
+            return Err(invalid(
+                &format!(".values[{i}]"),
+                w.to_string(),
+                &format!("loads must be strictly increasing (previous value {})", values[i - 1]),
+            ));
+        }
+    }
+    Ok(values)
+}

@@ -1,0 +1,247 @@
+//! `wearcoef` command line: parse, call the library, map errors to exit codes
+//! (0 success, 1 failure, 2 invalid input or configuration).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand, ValueEnum};
+use serde_json::json;
+
+use wearcoef::config::{ConfigError, Pipeline};
+use wearcoef::pipeline::runner::{self, RunOptions};
+use wearcoef::pipeline::store::Store;
+use wearcoef::spectral::Fft2;
+use wearcoef::surface::{self, Method, SurfaceError, SurfaceParams};
+
+#[derive(Parser)]
+#[command(name = "wearcoef", version, about = "Rough contact, cluster statistics and wear coefficients (Frérot et al., JMPS 2018), rebuilt reproducibly")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(clap::Args, Clone)]
+struct StoreArgs {
+    /// Pipeline description.
+    #[arg(long, default_value = "pipeline.yaml")]
+    config: PathBuf,
+    /// Data directory (artifact store and catalogs).
+    #[arg(long, default_value = "data")]
+    data: PathBuf,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Build what is missing for a profile (targets: stage or study names; default all).
+    Run {
+        targets: Vec<String>,
+        #[command(flatten)]
+        store: StoreArgs,
+        /// Profile declared in the pipeline file.
+        #[arg(long, default_value = "default")]
+        profile: String,
+        /// Worker threads [default: number of cores].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Show what is present or missing for a profile.
+    Status {
+        #[command(flatten)]
+        store: StoreArgs,
+        #[arg(long, default_value = "default")]
+        profile: String,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Re-hash every artifact against its manifest; exit 1 on any mismatch.
+    Verify {
+        #[arg(long, default_value = "data")]
+        data: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Remove the data directory, or with --corrupt only the entries that fail `verify`.
+    Clean {
+        #[arg(long, default_value = "data")]
+        data: PathBuf,
+        #[arg(long)]
+        corrupt: bool,
+    },
+    /// Generate one self-affine surface into a .npy file (lengths in grid spacings).
+    Surface {
+        /// Grid nodes per side (even).
+        #[arg(long)]
+        n: usize,
+        /// Largest wavelength λ_l in grid spacings.
+        #[arg(long)]
+        lambda_l_px: f64,
+        /// Smallest wavelength λ_s in grid spacings (≥ 2).
+        #[arg(long)]
+        lambda_s_px: f64,
+        /// Hurst exponent in (0, 1).
+        #[arg(long)]
+        hurst: f64,
+        /// Seed of the random stream.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Roll-off wavelength λ_r in grid spacings (flat PSD between λ_l and λ_r).
+        #[arg(long)]
+        rolloff_lambda_px: Option<f64>,
+        #[arg(long, value_enum, default_value_t = MethodArg::Filter)]
+        method: MethodArg,
+        /// Output file (float64 .npy, C order).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Print the realised statistics as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Filter,
+    RandomPhase,
+}
+
+/// An error that means "your input is wrong" (exit 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct InputError(String);
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            let is_input = e.chain().any(|c| {
+                c.downcast_ref::<ConfigError>().is_some()
+                    || c.downcast_ref::<SurfaceError>().is_some()
+                    || c.downcast_ref::<InputError>().is_some()
+            });
+            ExitCode::from(if is_input { 2 } else { 1 })
+        }
+    }
+}
+
+fn load(path: &Path) -> anyhow::Result<Pipeline> {
+    Ok(Pipeline::load(path)?)
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Run { targets, store, profile, jobs, quiet, json } => {
+            let pipeline = load(&store.config)?;
+            let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            if jobs == 0 {
+                return Err(InputError("--jobs must be ≥ 1".into()).into());
+            }
+            let opts = RunOptions { profile, targets, jobs, quiet };
+            let origin = store.config.display().to_string();
+            let summary = runner::run(&pipeline, &origin, &Store::new(&store.data), &opts)?;
+            if json {
+                println!("{}", serde_json::to_string(&summary)?);
+            } else {
+                println!("{summary}");
+            }
+        }
+        Command::Status { store, profile, json } => {
+            let pipeline = load(&store.config)?;
+            let origin = store.config.display().to_string();
+            let lines = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
+            if json {
+                println!("{}", serde_json::to_string(&json!({"profile": profile, "stages": lines}))?);
+            } else {
+                println!("{:<10} {:<24} {:>8} {:>8}", "stage", "study", "present", "missing");
+                for l in &lines {
+                    println!("{:<10} {:<24} {:>8} {:>8}", l.stage, l.study, l.present, l.missing);
+                }
+            }
+        }
+        Command::Verify { data, json } => {
+            let store = Store::new(&data);
+            let (checked, problems) = store.verify()?;
+            if json {
+                println!("{}", serde_json::to_string(&json!({"checked": checked, "problems": problems}))?);
+            } else {
+                for p in &problems {
+                    println!("MISMATCH {}: {}", p.path, p.reason);
+                }
+                println!("verified {checked} entries: {} problem(s)", problems.len());
+            }
+            if !problems.is_empty() {
+                return Ok(ExitCode::from(1));
+            }
+        }
+        Command::Clean { data, corrupt } => {
+            let store = Store::new(&data);
+            if corrupt {
+                let removed = store.remove_corrupt()?;
+                let stale = store.remove_stale_temporaries()?;
+                println!("removed {} corrupt entries and {stale} stale temporary directories", removed.len());
+            } else {
+                store.remove_all()?;
+                println!("removed {}", data.display());
+            }
+        }
+        Command::Surface { n, lambda_l_px, lambda_s_px, hurst, seed, rolloff_lambda_px, method, output, json } => {
+            let params = SurfaceParams {
+                n,
+                hurst,
+                lambda_l_px,
+                lambda_s_px,
+                rolloff_lambda_px,
+                method: match method {
+                    MethodArg::Filter => Method::Filter,
+                    MethodArg::RandomPhase => Method::RandomPhase,
+                },
+                seed,
+            };
+            params.validate()?;
+            let fft = Fft2::new(n);
+            let mut scratch = fft.make_scratch();
+            let s = surface::generate(&params, &fft, &mut scratch)?;
+            write_atomically(&output, |tmp| Ok(wearcoef::io::write_heights(tmp, n, s.heights.clone())?))?;
+            if json {
+                let out = json!({
+                    "n": n,
+                    "hurst": hurst,
+                    "lambda_l_px": lambda_l_px,
+                    "lambda_s_px": lambda_s_px,
+                    "rolloff_lambda_px": rolloff_lambda_px,
+                    "method": params.method.as_str(),
+                    "seed": seed,
+                    "mean_height": s.stats.mean_height,
+                    "rms_height": s.stats.rms_height,
+                    "rms_slope": s.stats.rms_slope,
+                    "hurst_fit": s.stats.hurst_fit,
+                    "output": output.display().to_string(),
+                });
+                println!("{}", serde_json::to_string(&out)?);
+            }
+        }
+    }
+    std::io::stdout().flush().ok();
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Write through a temporary sibling file and rename, so a failure leaves no partial file.
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().context("output path has no file name")?;
+    let tmp = dir.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
+    let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display())));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

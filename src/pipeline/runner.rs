@@ -1,0 +1,254 @@
+//! Running a profile: plan the instances, build the missing ones in parallel, write the
+//! catalog, report.
+
+use std::io::IsTerminal;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use serde::Serialize;
+use serde_json::Value;
+
+use super::catalog::{self, Row};
+use super::stages::{self, Instance};
+use super::store::{CommitOutcome, Manifest, Program, Store};
+use crate::config::{Pipeline, StudyPlan};
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub profile: String,
+    /// Stage or study names; empty means everything in the profile.
+    pub targets: Vec<String>,
+    /// Worker threads (instances and FFTs share one pool).
+    pub jobs: usize,
+    /// Hide the progress bar even on a terminal.
+    pub quiet: bool,
+}
+
+/// The one-line outcome of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    pub profile: String,
+    pub instances: usize,
+    pub computed: usize,
+    pub reused: usize,
+    pub wall_seconds: f64,
+    pub catalog: String,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "wearcoef run --profile {}: {} instances, {} computed, {} reused, {:.2} s; catalog {}",
+            self.profile, self.instances, self.computed, self.reused, self.wall_seconds, self.catalog
+        )
+    }
+}
+
+/// Studies of the profile selected by `targets` (study names) and the stage filter.
+fn select(
+    pipeline: &Pipeline,
+    origin: &str,
+    profile: &str,
+    targets: &[String],
+) -> anyhow::Result<(Vec<StudyPlan>, Vec<&'static str>)> {
+    let plans = pipeline.plan(profile, origin)?;
+    let mut studies = Vec::new();
+    let mut stage_filter = Vec::new();
+    for t in targets {
+        if let Some(s) = stages::STAGES.iter().find(|s| **s == t.as_str()) {
+            stage_filter.push(*s);
+        } else if plans.iter().any(|p| &p.name == t) {
+            studies.push(t.clone());
+        } else {
+            anyhow::bail!(
+                "unknown target '{t}' for profile '{profile}': use a stage ({}) or a study of this profile ({})",
+                stages::STAGES.join(", "),
+                plans.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
+            );
+        }
+    }
+    let plans = if studies.is_empty() {
+        plans
+    } else {
+        plans.into_iter().filter(|p| studies.contains(&p.name)).collect()
+    };
+    // A stage target builds that stage and everything upstream of it.
+    let last = stage_filter
+        .iter()
+        .filter_map(|s| stages::STAGES.iter().position(|x| x == s))
+        .max()
+        .unwrap_or(stages::STAGES.len() - 1);
+    Ok((plans, stages::STAGES[..=last].to_vec()))
+}
+
+/// Build what is missing for a profile.
+pub fn run(pipeline: &Pipeline, origin: &str, store: &Store, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+    let start = Instant::now();
+    let (plans, wanted_stages) = select(pipeline, origin, &opts.profile, &opts.targets)?;
+    store.remove_stale_temporaries()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.jobs.max(1))
+        .build()?;
+
+    let all = stages::instances(&plans);
+    let mut computed = 0;
+    let mut reused = 0;
+    let mut total = 0;
+    for stage in &wanted_stages {
+        let batch: Vec<&Instance> = all.iter().filter(|i| i.stage == *stage).collect();
+        total += batch.len();
+        let mut missing = Vec::new();
+        for inst in batch {
+            match store.lookup(inst.stage, &inst.key)? {
+                Some(_) => reused += 1,
+                None => missing.push(inst),
+            }
+        }
+        if missing.is_empty() {
+            continue;
+        }
+        let bar = progress(missing.len(), stage, opts.quiet);
+        let results: Vec<anyhow::Result<()>> = pool.install(|| {
+            missing
+                .par_iter()
+                .map(|inst| {
+                    let r = build(store, inst);
+                    bar.inc(1);
+                    r
+                })
+                .collect()
+        });
+        bar.finish_and_clear();
+        for r in results {
+            r?;
+            computed += 1;
+        }
+    }
+
+    let catalog_dir = store.root().join(&opts.profile);
+    let rows = catalog_rows(store, &all)?;
+    catalog::write(&catalog_dir, &rows)?;
+    Ok(RunSummary {
+        profile: opts.profile.clone(),
+        instances: total,
+        computed,
+        reused,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        catalog: catalog_dir.join("index.parquet").display().to_string(),
+    })
+}
+
+fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    if quiet || !std::io::stdout().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+    }
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} eta {eta}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(stage.to_string());
+    bar
+}
+
+fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let entry = store.begin(inst.stage, &inst.key)?;
+    let results = stages::compute(inst, entry.path()).map_err(|e| {
+        anyhow::anyhow!(
+            "stage {} (studies {}, realization {:?}) failed: {e}",
+            inst.stage,
+            inst.studies.join(", "),
+            inst.realization
+        )
+    })?;
+    let manifest = Manifest {
+        stage: inst.stage.to_string(),
+        version: inst.version,
+        key: inst.key.clone(),
+        params: inst.params.clone(),
+        inputs: inst.inputs.clone(),
+        outputs: Default::default(),
+        program: Program::current(),
+        wall_seconds: start.elapsed().as_secs_f64(),
+        results,
+    };
+    match entry.commit(manifest)? {
+        CommitOutcome::Stored | CommitOutcome::AlreadyPresent => Ok(()),
+    }
+}
+
+fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for inst in all {
+        let Some(manifest) = store.lookup(inst.stage, &inst.key)? else {
+            continue;
+        };
+        let mut extra = std::collections::BTreeMap::new();
+        for source in [&manifest.params, &manifest.results] {
+            if let Value::Object(map) = source {
+                for (k, v) in map {
+                    if !v.is_object() && !v.is_array() {
+                        extra.insert(k.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        let dir = store.entry_dir(inst.stage, &inst.key);
+        for study in &inst.studies {
+            for file in manifest.outputs.keys() {
+                rows.push(Row {
+                    stage: inst.stage.to_string(),
+                    study: study.clone(),
+                    realization: inst.realization,
+                    file: file.clone(),
+                    path: dir.join(file).display().to_string(),
+                    key: inst.key.clone(),
+                    extra: extra.clone(),
+                });
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// Presence of every instance of a profile, per stage and study.
+#[derive(Debug, Clone, Serialize)]
+pub struct StatusLine {
+    pub stage: String,
+    pub study: String,
+    pub present: usize,
+    pub missing: usize,
+}
+
+/// What is present or missing for a profile.
+pub fn status(pipeline: &Pipeline, origin: &str, store: &Store, profile: &str) -> anyhow::Result<Vec<StatusLine>> {
+    let plans = pipeline.plan(profile, origin)?;
+    let all = stages::instances(&plans);
+    let mut lines: Vec<StatusLine> = Vec::new();
+    for stage in stages::STAGES {
+        for plan in &plans {
+            let mut line = StatusLine {
+                stage: stage.to_string(),
+                study: plan.name.clone(),
+                present: 0,
+                missing: 0,
+            };
+            for inst in all.iter().filter(|i| i.stage == *stage && i.studies.contains(&plan.name)) {
+                if store.lookup(inst.stage, &inst.key)?.is_some() {
+                    line.present += 1;
+                } else {
+                    line.missing += 1;
+                }
+            }
+            lines.push(line);
+        }
+    }
+    Ok(lines)
+}

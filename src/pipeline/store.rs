@@ -1,0 +1,384 @@
+//! The content-addressed artifact store.
+//!
+//! Layout under the data directory `D`:
+//! - `D/cache/<stage>/<key>/`: one complete stage instance: its output files and
+//!   `manifest.json` (written last, inside a temporary directory).
+//! - `D/cache/<stage>/.tmp-<key>-<pid>-<nanos>/`: an instance being written. It is renamed
+//!   to `<key>/` only when complete, so a killed process leaves nothing that looks complete;
+//!   leftovers of dead processes are removed by the next run or by `clean`.
+//! - `D/<profile>/index.parquet`, `index.csv`: the catalogs.
+//!
+//! Two processes may build the same instance at once: each writes its own temporary
+//! directory; the first rename wins and the other discards its copy (instances are pure
+//! functions of their key, so both copies are identical).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::hash::{instance_key, sha256_file};
+
+/// Name of the manifest file in every entry.
+pub const MANIFEST: &str = "manifest.json";
+
+/// Errors of the store.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("corrupt cache entry {path}: {reason}. Fix: run `wearcoef verify` to list damaged entries and `wearcoef clean --corrupt` to remove them; the next run rebuilds them")]
+    Corrupt { path: String, reason: String },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
+    move |source| StoreError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// One output file of an entry.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct OutputFile {
+    pub sha256: String,
+    pub bytes: u64,
+}
+
+/// Who wrote an entry.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Program {
+    pub name: String,
+    pub version: String,
+    pub git_commit: Option<String>,
+}
+
+impl Program {
+    /// This build of wearcoef.
+    pub fn current() -> Self {
+        Self {
+            name: env!("CARGO_PKG_NAME").to_string(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            git_commit: option_env!("WEARCOEF_GIT_COMMIT")
+                .filter(|s| !s.is_empty())
+                .map(str::to_string),
+        }
+    }
+}
+
+/// `manifest.json`: everything needed to explain and check an entry.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub stage: String,
+    pub version: u32,
+    pub key: String,
+    pub params: Value,
+    pub inputs: Vec<String>,
+    pub outputs: BTreeMap<String, OutputFile>,
+    pub program: Program,
+    pub wall_seconds: f64,
+    /// Stage-specific results (realised statistics, solver reports, ...).
+    pub results: Value,
+}
+
+/// The store rooted at a data directory.
+#[derive(Debug, Clone)]
+pub struct Store {
+    root: PathBuf,
+}
+
+/// A temporary entry being written; dropped without [`TempEntry::commit`] it is removed.
+pub struct TempEntry {
+    dir: PathBuf,
+    final_dir: PathBuf,
+    committed: bool,
+}
+
+/// How a commit ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommitOutcome {
+    /// Our copy is now the entry.
+    Stored,
+    /// Another process stored the same key first; our identical copy was discarded.
+    AlreadyPresent,
+}
+
+/// Result of checking one entry.
+#[derive(Debug, Clone, Serialize)]
+pub struct EntryProblem {
+    pub path: String,
+    pub reason: String,
+}
+
+impl Store {
+    pub fn new(root: impl Into<PathBuf>) -> Self {
+        Self { root: root.into() }
+    }
+
+    /// The data directory.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// `D/cache`.
+    pub fn cache_dir(&self) -> PathBuf {
+        self.root.join("cache")
+    }
+
+    /// Directory of a complete entry.
+    pub fn entry_dir(&self, stage: &str, key: &str) -> PathBuf {
+        self.cache_dir().join(stage).join(key)
+    }
+
+    /// The manifest of a complete entry, `None` if absent. A present but damaged entry
+    /// (unreadable manifest, missing output, wrong size) is an error naming the fix.
+    /// Hashes are checked by [`Store::verify`] and by [`Store::read_output`].
+    pub fn lookup(&self, stage: &str, key: &str) -> Result<Option<Manifest>, StoreError> {
+        let dir = self.entry_dir(stage, key);
+        if !dir.exists() {
+            return Ok(None);
+        }
+        let manifest = read_manifest(&dir)?;
+        for (name, file) in &manifest.outputs {
+            let path = dir.join(name);
+            let meta = std::fs::metadata(&path).map_err(|e| StoreError::Corrupt {
+                path: path.display().to_string(),
+                reason: format!("output file unreadable ({e})"),
+            })?;
+            if meta.len() != file.bytes {
+                return Err(StoreError::Corrupt {
+                    path: path.display().to_string(),
+                    reason: format!("size {} bytes, manifest says {}", meta.len(), file.bytes),
+                });
+            }
+        }
+        Ok(Some(manifest))
+    }
+
+    /// Path of an output of a complete entry after checking its SHA-256 against the manifest.
+    pub fn read_output(&self, manifest: &Manifest, name: &str) -> Result<PathBuf, StoreError> {
+        let path = self.entry_dir(&manifest.stage, &manifest.key).join(name);
+        let expected = manifest.outputs.get(name).ok_or_else(|| StoreError::Corrupt {
+            path: path.display().to_string(),
+            reason: "not listed in the manifest".into(),
+        })?;
+        let (hash, _) = sha256_file(&path).map_err(io_err(&path))?;
+        if hash != expected.sha256 {
+            return Err(StoreError::Corrupt {
+                path: path.display().to_string(),
+                reason: format!("SHA-256 {hash} differs from the manifest's {}", expected.sha256),
+            });
+        }
+        Ok(path)
+    }
+
+    /// Start writing an entry in a fresh temporary directory.
+    pub fn begin(&self, stage: &str, key: &str) -> Result<TempEntry, StoreError> {
+        let stage_dir = self.cache_dir().join(stage);
+        std::fs::create_dir_all(&stage_dir).map_err(io_err(&stage_dir))?;
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0);
+        let dir = stage_dir.join(format!(".tmp-{key}-{}-{nanos}", std::process::id()));
+        std::fs::create_dir(&dir).map_err(io_err(&dir))?;
+        Ok(TempEntry {
+            dir,
+            final_dir: stage_dir.join(key),
+            committed: false,
+        })
+    }
+
+    /// Remove temporary directories left by processes that no longer run.
+    pub fn remove_stale_temporaries(&self) -> Result<usize, StoreError> {
+        let mut removed = 0;
+        for stage_dir in list_dirs(&self.cache_dir())? {
+            for dir in list_dirs(&stage_dir)? {
+                let name = dir.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string();
+                if let Some(rest) = name.strip_prefix(".tmp-") {
+                    let pid = rest.split('-').nth(1).and_then(|p| p.parse::<u32>().ok());
+                    let alive = pid.is_some_and(|p| Path::new("/proc").join(p.to_string()).exists());
+                    if !alive {
+                        std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
+                        removed += 1;
+                    }
+                }
+            }
+        }
+        Ok(removed)
+    }
+
+    /// All complete entries as (stage, key, directory).
+    pub fn entries(&self) -> Result<Vec<(String, String, PathBuf)>, StoreError> {
+        let mut out = Vec::new();
+        for stage_dir in list_dirs(&self.cache_dir())? {
+            let stage = file_name(&stage_dir);
+            for dir in list_dirs(&stage_dir)? {
+                let key = file_name(&dir);
+                if !key.starts_with('.') {
+                    out.push((stage.clone(), key, dir));
+                }
+            }
+        }
+        out.sort();
+        Ok(out)
+    }
+
+    /// Re-hash every entry against its manifest and recompute its key. Returns the number
+    /// of entries checked and every problem found.
+    pub fn verify(&self) -> Result<(usize, Vec<EntryProblem>), StoreError> {
+        let entries = self.entries()?;
+        let mut problems = Vec::new();
+        for (stage, key, dir) in &entries {
+            if let Err(reason) = check_entry(stage, key, dir) {
+                problems.push(EntryProblem {
+                    path: dir.display().to_string(),
+                    reason,
+                });
+            }
+        }
+        Ok((entries.len(), problems))
+    }
+
+    /// Remove the entries that fail [`Store::verify`]; returns their paths.
+    pub fn remove_corrupt(&self) -> Result<Vec<String>, StoreError> {
+        let (_, problems) = self.verify()?;
+        for p in &problems {
+            std::fs::remove_dir_all(&p.path).map_err(io_err(Path::new(&p.path)))?;
+        }
+        Ok(problems.into_iter().map(|p| p.path).collect())
+    }
+
+    /// Remove the whole data directory.
+    pub fn remove_all(&self) -> Result<(), StoreError> {
+        if self.root.exists() {
+            std::fs::remove_dir_all(&self.root).map_err(io_err(&self.root))?;
+        }
+        Ok(())
+    }
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string()
+}
+
+fn list_dirs(dir: &Path) -> Result<Vec<PathBuf>, StoreError> {
+    if !dir.exists() {
+        return Ok(Vec::new());
+    }
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io_err(dir))? {
+        let entry = entry.map_err(io_err(dir))?;
+        if entry.file_type().map_err(io_err(dir))?.is_dir() {
+            out.push(entry.path());
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+fn read_manifest(dir: &Path) -> Result<Manifest, StoreError> {
+    let path = dir.join(MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(|e| StoreError::Corrupt {
+        path: path.display().to_string(),
+        reason: format!("manifest unreadable ({e})"),
+    })?;
+    serde_json::from_str(&text).map_err(|e| StoreError::Corrupt {
+        path: path.display().to_string(),
+        reason: format!("manifest is not valid ({e})"),
+    })
+}
+
+fn check_entry(stage: &str, key: &str, dir: &Path) -> Result<(), String> {
+    let manifest = read_manifest(dir).map_err(|e| e.to_string())?;
+    if manifest.stage != stage || manifest.key != key {
+        return Err(format!(
+            "manifest names {}/{} but the entry sits at {stage}/{key}",
+            manifest.stage, manifest.key
+        ));
+    }
+    let recomputed = instance_key(stage, manifest.version, &manifest.params, &manifest.inputs);
+    if recomputed != key {
+        return Err(format!("manifest parameters hash to {recomputed}, not to the entry's key"));
+    }
+    for (name, file) in &manifest.outputs {
+        let path = dir.join(name);
+        let (hash, bytes) = sha256_file(&path).map_err(|e| format!("{name}: unreadable ({e})"))?;
+        if bytes != file.bytes {
+            return Err(format!("{name}: {bytes} bytes, manifest says {}", file.bytes));
+        }
+        if hash != file.sha256 {
+            return Err(format!("{name}: SHA-256 {hash} differs from the manifest's {}", file.sha256));
+        }
+    }
+    for entry in std::fs::read_dir(dir).map_err(|e| e.to_string())? {
+        let name = entry.map_err(|e| e.to_string())?.file_name().to_string_lossy().to_string();
+        if name != MANIFEST && !manifest.outputs.contains_key(&name) {
+            return Err(format!("{name}: file not listed in the manifest"));
+        }
+    }
+    Ok(())
+}
+
+impl TempEntry {
+    /// Directory to write outputs into.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Hash every file written, write the manifest and rename into place.
+    /// `manifest.outputs` is filled here from the files present.
+    pub fn commit(mut self, mut manifest: Manifest) -> Result<CommitOutcome, StoreError> {
+        let mut outputs = BTreeMap::new();
+        for entry in std::fs::read_dir(&self.dir).map_err(io_err(&self.dir))? {
+            let entry = entry.map_err(io_err(&self.dir))?;
+            let name = entry.file_name().to_string_lossy().to_string();
+            if name == MANIFEST {
+                continue;
+            }
+            let (sha256, bytes) = sha256_file(&entry.path()).map_err(io_err(&entry.path()))?;
+            outputs.insert(name, OutputFile { sha256, bytes });
+        }
+        manifest.outputs = outputs;
+        let text = serde_json::to_string_pretty(&manifest).expect("manifest serialises");
+        let path = self.dir.join(MANIFEST);
+        std::fs::write(&path, text + "\n").map_err(io_err(&path))?;
+        debug_pause();
+        match std::fs::rename(&self.dir, &self.final_dir) {
+            Ok(()) => {
+                self.committed = true;
+                Ok(CommitOutcome::Stored)
+            }
+            Err(_) if self.final_dir.join(MANIFEST).exists() => Ok(CommitOutcome::AlreadyPresent),
+            Err(e) => Err(StoreError::Io {
+                path: self.final_dir.display().to_string(),
+                source: e,
+            }),
+        }
+    }
+}
+
+impl Drop for TempEntry {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
+    }
+}
+
+/// Test hook: `WEARCOEF_DEBUG_PAUSE_BEFORE_COMMIT_MS` makes every commit wait that long
+/// after its files are written and before the rename, so a test can kill a run in the
+/// middle of a stage deterministically. Unset in normal use.
+fn debug_pause() {
+    if let Some(ms) = std::env::var("WEARCOEF_DEBUG_PAUSE_BEFORE_COMMIT_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+}

@@ -1,0 +1,288 @@
+//! Planned 2-D real-to-complex FFTs on square periodic grids.
+//!
+//! Conventions (stated once here and in docs/CONVENTIONS.md):
+//! - Forward: `H[k] = Σ_j h[j] exp(−2πi j·k/n)`, **not normalised** (as numpy `rfft2` and
+//!   rustfft). Inverse: `h[j] = Σ_k H[k] exp(+2πi j·k/n)`, **also not normalised**: a forward
+//!   then inverse pair multiplies by `n²`. Callers fold the `1/n²` into their multipliers.
+//! - Layout of a [`Spectrum`]: the half spectrum kx ∈ `0..=n/2` (`n/2+1` values) times
+//!   ky ∈ `0..n` (wrapped, see [`crate::grid::Grid::wrapped_index`]), stored **kx-major**:
+//!   entry `(kx, ky)` at `kx * n + ky`. This is the transpose of numpy's `rfft2` layout and
+//!   saves one transpose each way.
+//! - Real fields are row-major `n × n` (row = y index `iy`, column = x index `ix`), so the
+//!   r2c transform runs along x (contiguous) and kx is the half axis.
+//!
+//! Plans are built once per grid size ([`Fft2::new`]); all working memory lives in a
+//! caller-owned [`Fft2Scratch`], so repeated transforms allocate nothing. Work is spread
+//! over the current rayon pool by rows; the result does not depend on the thread count
+//! (each 1-D transform is computed identically whatever thread runs it).
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::{num_complex::Complex64, Fft, FftPlanner};
+
+/// Side of the square tiles used by the cache-blocked transpose.
+const TILE: usize = 32;
+/// Upper bound on the number of independent work blocks (each owns its scratch).
+const MAX_BLOCKS: usize = 64;
+
+/// Planned forward and inverse 2-D real FFTs for an `n × n` grid.
+pub struct Fft2 {
+    n: usize,
+    r2c: Arc<dyn RealToComplex<f64>>,
+    c2r: Arc<dyn ComplexToReal<f64>>,
+    col_forward: Arc<dyn Fft<f64>>,
+    col_inverse: Arc<dyn Fft<f64>>,
+}
+
+/// Working memory for one [`Fft2`]; reuse it across calls.
+pub struct Fft2Scratch {
+    n: usize,
+    /// Row-transformed data, `n` rows of `n/2+1` (y-major), between the two passes.
+    rows: Vec<Complex64>,
+    blocks: Vec<Block>,
+    rows_per_block: usize,
+}
+
+struct Block {
+    real_row: Vec<f64>,
+    complex: Vec<Complex64>,
+}
+
+impl Fft2 {
+    /// Plan the transforms for an `n × n` grid (`n` even, ≥ 2).
+    ///
+    /// # Panics
+    /// If `n` is odd or below 2 (a [`crate::grid::Grid`] never is).
+    pub fn new(n: usize) -> Self {
+        assert!(n >= 2 && n % 2 == 0, "Fft2 needs an even n ≥ 2, got {n}");
+        let mut real_planner = RealFftPlanner::<f64>::new();
+        let mut planner = FftPlanner::<f64>::new();
+        Self {
+            n,
+            r2c: real_planner.plan_fft_forward(n),
+            c2r: real_planner.plan_fft_inverse(n),
+            col_forward: planner.plan_fft_forward(n),
+            col_inverse: planner.plan_fft_inverse(n),
+        }
+    }
+
+    /// Nodes per side.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Length of a half spectrum, `(n/2 + 1) · n`.
+    pub fn spectrum_len(&self) -> usize {
+        (self.n / 2 + 1) * self.n
+    }
+
+    /// A zeroed half spectrum in this plan's layout.
+    pub fn make_spectrum(&self) -> Vec<Complex64> {
+        vec![Complex64::new(0.0, 0.0); self.spectrum_len()]
+    }
+
+    /// Allocate the scratch these plans need (about `n²` doubles).
+    pub fn make_scratch(&self) -> Fft2Scratch {
+        let n = self.n;
+        let blocks_wanted = n.min(MAX_BLOCKS);
+        let rows_per_block = n.div_ceil(blocks_wanted);
+        let n_blocks = n.div_ceil(rows_per_block);
+        let complex_len = [
+            self.r2c.get_scratch_len(),
+            self.c2r.get_scratch_len(),
+            self.col_forward.get_inplace_scratch_len(),
+            self.col_inverse.get_inplace_scratch_len(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+        .max(1);
+        Fft2Scratch {
+            n,
+            rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
+            blocks: (0..n_blocks)
+                .map(|_| Block {
+                    real_row: vec![0.0; n],
+                    complex: vec![Complex64::new(0.0, 0.0); complex_len],
+                })
+                .collect(),
+            rows_per_block,
+        }
+    }
+
+    /// Forward transform of the real row-major field `input` (length `n²`) into `output`
+    /// (length [`Self::spectrum_len`], kx-major). Not normalised.
+    pub fn forward(&self, input: &[f64], output: &mut [Complex64], scratch: &mut Fft2Scratch) {
+        let n = self.n;
+        let h = n / 2 + 1;
+        self.check(input.len(), output.len(), scratch);
+        let rpb = scratch.rows_per_block;
+        // 1. r2c along x for every row y.
+        scratch
+            .rows
+            .par_chunks_mut(rpb * h)
+            .zip(input.par_chunks(rpb * n))
+            .zip(scratch.blocks.par_iter_mut())
+            .for_each(|((rows_out, rows_in), block)| {
+                for (row_out, row_in) in rows_out.chunks_exact_mut(h).zip(rows_in.chunks_exact(n)) {
+                    block.real_row.copy_from_slice(row_in);
+                    self.r2c
+                        .process_with_scratch(&mut block.real_row, row_out, &mut block.complex)
+                        .expect("r2c lengths are fixed by the plan");
+                }
+            });
+        // 2. transpose (n × h) → (h × n).
+        transpose(&scratch.rows, output, n, h);
+        // 3. complex FFT along y for every kx.
+        let cpb = h.div_ceil(scratch.blocks.len());
+        output
+            .par_chunks_mut(cpb * n)
+            .zip(scratch.blocks.par_iter_mut())
+            .for_each(|(cols, block)| {
+                let len = self.col_forward.get_inplace_scratch_len();
+                self.col_forward
+                    .process_with_scratch(cols, &mut block.complex[..len]);
+            });
+    }
+
+    /// Inverse transform of the half spectrum `spectrum` into the real field `output`.
+    /// Not normalised (the pair multiplies by `n²`). `spectrum` is used as working memory
+    /// and holds garbage afterwards. The imaginary parts of the self-conjugate columns
+    /// (kx = 0 and kx = n/2) are discarded, i.e. the spectrum is projected onto the
+    /// Hermitian (real-field) subspace.
+    pub fn inverse(&self, spectrum: &mut [Complex64], output: &mut [f64], scratch: &mut Fft2Scratch) {
+        let n = self.n;
+        let h = n / 2 + 1;
+        self.check(output.len(), spectrum.len(), scratch);
+        let rpb = scratch.rows_per_block;
+        let cpb = h.div_ceil(scratch.blocks.len());
+        // 1. inverse complex FFT along y for every kx.
+        spectrum
+            .par_chunks_mut(cpb * n)
+            .zip(scratch.blocks.par_iter_mut())
+            .for_each(|(cols, block)| {
+                let len = self.col_inverse.get_inplace_scratch_len();
+                self.col_inverse
+                    .process_with_scratch(cols, &mut block.complex[..len]);
+            });
+        // 2. transpose (h × n) → (n × h).
+        transpose(spectrum, &mut scratch.rows, h, n);
+        // 3. c2r along x for every row.
+        scratch
+            .rows
+            .par_chunks_mut(rpb * h)
+            .zip(output.par_chunks_mut(rpb * n))
+            .zip(scratch.blocks.par_iter_mut())
+            .for_each(|((rows_in, rows_out), block)| {
+                for (row_in, row_out) in rows_in.chunks_exact_mut(h).zip(rows_out.chunks_exact_mut(n)) {
+                    row_in[0].im = 0.0;
+                    row_in[h - 1].im = 0.0;
+                    self.c2r
+                        .process_with_scratch(row_in, row_out, &mut block.complex)
+                        .expect("c2r lengths are fixed and imaginary parts were cleared");
+                }
+            });
+    }
+
+    fn check(&self, real_len: usize, spec_len: usize, scratch: &Fft2Scratch) {
+        assert_eq!(real_len, self.n * self.n, "real field must have n² values");
+        assert_eq!(spec_len, self.spectrum_len(), "spectrum must have (n/2+1)·n values");
+        assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
+    }
+}
+
+/// Cache-blocked out-of-place transpose of a `rows × cols` row-major matrix.
+fn transpose(src: &[Complex64], dst: &mut [Complex64], rows: usize, cols: usize) {
+    debug_assert_eq!(src.len(), rows * cols);
+    debug_assert_eq!(dst.len(), rows * cols);
+    // dst is cols × rows; split it into bands of TILE destination rows.
+    dst.par_chunks_mut(TILE * rows)
+        .enumerate()
+        .for_each(|(band, dst_band)| {
+            let c0 = band * TILE;
+            let band_rows = dst_band.len() / rows;
+            for r0 in (0..rows).step_by(TILE) {
+                let r1 = (r0 + TILE).min(rows);
+                for dc in 0..band_rows {
+                    let c = c0 + dc;
+                    let out = &mut dst_band[dc * rows + r0..dc * rows + r1];
+                    for (o, r) in out.iter_mut().zip(r0..r1) {
+                        *o = src[r * cols + c];
+                    }
+                }
+            }
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    /// Naive 2-D DFT of a real field, returned in this module's kx-major half layout.
+    fn naive_half_dft(field: &[f64], n: usize) -> Vec<Complex64> {
+        let h = n / 2 + 1;
+        let mut out = vec![Complex64::new(0.0, 0.0); h * n];
+        for kx in 0..h {
+            for ky in 0..n {
+                let mut acc = Complex64::new(0.0, 0.0);
+                for iy in 0..n {
+                    for ix in 0..n {
+                        let phase = -2.0 * PI * ((kx * ix + ky * iy) % n) as f64 / n as f64;
+                        acc += field[iy * n + ix] * Complex64::new(phase.cos(), phase.sin());
+                    }
+                }
+                out[kx * n + ky] = acc;
+            }
+        }
+        out
+    }
+
+    fn pseudo_random_field(n: usize) -> Vec<f64> {
+        // A fixed, platform-independent sequence (LCG) is enough for a transform test.
+        let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+        (0..n * n)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    #[test]
+    fn forward_matches_naive_dft_and_inverse_round_trips() {
+        for n in [2usize, 4, 6, 8, 16, 30, 64, 96] {
+            let field = pseudo_random_field(n);
+            let fft = Fft2::new(n);
+            let mut scratch = fft.make_scratch();
+            let mut spec = fft.make_spectrum();
+            fft.forward(&field, &mut spec, &mut scratch);
+            let reference = naive_half_dft(&field, n);
+            let scale = reference.iter().map(|c| c.norm()).fold(0.0, f64::max);
+            for (a, b) in spec.iter().zip(&reference) {
+                assert!((a - b).norm() <= 1e-12 * scale.max(1.0), "n={n}: {a} vs {b}");
+            }
+            let mut back = vec![0.0; n * n];
+            fft.inverse(&mut spec, &mut back, &mut scratch);
+            let norm = (n * n) as f64;
+            for (a, b) in back.iter().zip(&field) {
+                assert!((a / norm - b).abs() <= 1e-14, "n={n}: round trip {a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn transpose_handles_ragged_tiles() {
+        let (rows, cols) = (37usize, 70usize);
+        let src: Vec<Complex64> = (0..rows * cols).map(|i| Complex64::new(i as f64, -(i as f64))).collect();
+        let mut dst = vec![Complex64::new(0.0, 0.0); rows * cols];
+        transpose(&src, &mut dst, rows, cols);
+        for r in 0..rows {
+            for c in 0..cols {
+                assert_eq!(dst[c * rows + r], src[r * cols + c]);
+            }
+        }
+    }
+}

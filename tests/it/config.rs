@@ -1,0 +1,118 @@
+//! pipeline.yaml validation: every invalid value names its field path.
+
+use wearcoef::config::{ConfigError, Pipeline};
+
+const BASE: &str = r#"schema_version: 1
+material: {e_star: 1.0}
+solver: {tolerance: 1.0e-10, max_iterations: 1000}
+profiles: {quick: "q", default: "d"}
+studies:
+  s:
+    hurst: 0.8
+    lambda_l_over_lambda_s: 8
+    seed: 1
+    loads: {min: 0.001, max: 0.06, count: 5}
+    profiles:
+      quick: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 2}
+"#;
+
+fn field_of(text: &str) -> String {
+    match Pipeline::parse(text, "test.yaml") {
+        Err(ConfigError::Invalid { field, .. }) => field,
+        Err(ConfigError::Parse { message, .. }) => format!("PARSE: {message}"),
+        Err(other) => format!("OTHER: {other}"),
+        Ok(_) => "OK".to_string(),
+    }
+}
+
+#[test]
+fn the_base_file_is_valid_and_resolves() {
+    let p = Pipeline::parse(BASE, "test.yaml").unwrap();
+    let plans = p.plan("quick", "test.yaml").unwrap();
+    assert_eq!(plans.len(), 1);
+    let plan = &plans[0];
+    assert_eq!(plan.surface.n, 64);
+    assert_eq!(plan.surface.lambda_s_px, 4.0);
+    assert_eq!(plan.surface.lambda_l_px, 32.0);
+    assert_eq!(plan.loads.len(), 5);
+    assert_eq!(plan.loads[0], 0.001);
+    assert_eq!(plan.loads[4], 0.06);
+    let ratio = plan.loads[1] / plan.loads[0];
+    for w in plan.loads.windows(2) {
+        assert!((w[1] / w[0] / ratio - 1.0).abs() < 1e-12, "log spacing");
+    }
+    // A declared profile the study does not belong to has no studies.
+    assert!(p.plan("default", "test.yaml").unwrap().is_empty());
+}
+
+#[test]
+fn each_invalid_value_names_its_field() {
+    let cases: &[(&str, &str, &str)] = &[
+        ("hurst: 0.8", "hurst: 1.2", "studies.s.hurst"),
+        ("hurst: 0.8", "hurst: 0.0", "studies.s.hurst"),
+        ("lambda_s_over_dl: 4", "lambda_s_over_dl: 1.5", "studies.s.profiles.quick.lambda_s_over_dl"),
+        ("l_over_lambda_l: 2", "l_over_lambda_l: 0.5", "studies.s.profiles.quick.l_over_lambda_l"),
+        ("l_over_lambda_l: 2", "l_over_lambda_l: 2.1", "studies.s.profiles.quick.l_over_lambda_l"),
+        ("lambda_l_over_lambda_s: 8", "lambda_l_over_lambda_s: 1", "studies.s.lambda_l_over_lambda_s"),
+        ("realizations: 2", "realizations: 0", "studies.s.profiles.quick.realizations"),
+        ("min: 0.001", "min: -0.001", "studies.s.loads.min"),
+        ("max: 0.06", "max: 0.0001", "studies.s.loads.max"),
+        ("count: 5", "count: 1", "studies.s.loads.count"),
+        ("{min: 0.001, max: 0.06, count: 5}", "{values: [0.01, 0.01]}", "studies.s.loads.values[1]"),
+        ("{min: 0.001, max: 0.06, count: 5}", "{values: [0.02, 0.01]}", "studies.s.loads.values[1]"),
+        ("{min: 0.001, max: 0.06, count: 5}", "{values: [0.0]}", "studies.s.loads.values[0]"),
+        ("{min: 0.001, max: 0.06, count: 5}", "{min: 0.001, max: 0.06}", "studies.s.loads"),
+        ("e_star: 1.0", "e_star: 0.0", "material.e_star"),
+        ("tolerance: 1.0e-10", "tolerance: 2.0", "solver.tolerance"),
+        ("max_iterations: 1000", "max_iterations: 0", "solver.max_iterations"),
+        ("quick: {l_over", "fast: {l_over", "studies.s.profiles.fast"),
+        ("seed: 1", "seed: 1\n    method: spectral", "studies.s.method"),
+        ("seed: 1", "seed: 1\n    rolloff_over_lambda_l: 4", "studies.s.rolloff_over_lambda_l"),
+        ("schema_version: 1", "schema_version: 2", "schema_version"),
+    ];
+    for (from, to, field) in cases {
+        assert!(BASE.contains(from), "test case pattern {from} not in base");
+        let text = BASE.replacen(from, to, 1);
+        assert_eq!(&field_of(&text), field, "replacing {from} by {to}");
+    }
+}
+
+#[test]
+fn messages_state_the_allowed_range() {
+    let text = BASE.replacen("lambda_s_over_dl: 4", "lambda_s_over_dl: 1", 1);
+    let msg = Pipeline::parse(&text, "test.yaml").unwrap_err().to_string();
+    assert!(msg.contains("test.yaml"), "{msg}");
+    assert!(msg.contains("≥ 2"), "{msg}");
+}
+
+#[test]
+fn unknown_fields_and_bad_types_are_rejected_at_parse_time() {
+    for text in [
+        BASE.replacen("hurst: 0.8", "hurst: 0.8\n    hurts: 0.7", 1),
+        BASE.replacen("e_star: 1.0", "e_star: 1.0, nu: 0.3", 1),
+        BASE.replacen("seed: 1", "seed: one", 1),
+        "schema_version: 1\nmaterial: [".to_string(),
+    ] {
+        let f = field_of(&text);
+        assert!(f.starts_with("PARSE"), "{f} for\n{text}");
+    }
+    let msg = field_of(&BASE.replacen("hurst: 0.8", "hurst: 0.8\n    hurts: 0.7", 1));
+    assert!(msg.contains("hurts"), "the unknown field is named: {msg}");
+}
+
+#[test]
+fn unknown_profile_is_an_error_listing_the_known_ones() {
+    let p = Pipeline::parse(BASE, "test.yaml").unwrap();
+    let msg = p.plan("paper", "test.yaml").unwrap_err().to_string();
+    assert!(msg.contains("paper") && msg.contains("quick") && msg.contains("default"), "{msg}");
+}
+
+#[test]
+fn the_shipped_pipeline_is_valid_for_every_profile() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+    let p = Pipeline::load(&path).unwrap();
+    for profile in ["quick", "default", "paper"] {
+        let plans = p.plan(profile, "pipeline.yaml").unwrap();
+        assert!(!plans.is_empty(), "{profile} has studies");
+    }
+}

@@ -1,0 +1,65 @@
+//! Integration tests (one binary to save link time).
+
+mod cli;
+mod config;
+mod store;
+mod surface;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The wearcoef binary built for these tests.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_wearcoef"))
+}
+
+/// Run wearcoef in `dir` with `args`; returns the output.
+pub fn run_in(dir: &Path, args: &[&str]) -> Output {
+    bin().current_dir(dir).args(args).output().expect("wearcoef runs")
+}
+
+/// Parse stdout as one JSON value.
+pub fn stdout_json(out: &Output) -> serde_json::Value {
+    let text = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(text.trim()).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not JSON ({e}): {text}\nstderr: {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+/// A small pipeline file with two studies, for store tests.
+pub fn small_pipeline(hurst_b: f64, description_a: &str) -> String {
+    format!(
+        r#"schema_version: 1
+material: {{e_star: 1.0}}
+solver: {{tolerance: 1.0e-10, max_iterations: 1000}}
+profiles: {{t: "test"}}
+studies:
+  a:
+    description: "{description_a}"
+    hurst: 0.8
+    lambda_l_over_lambda_s: 4
+    seed: 7
+    loads: {{values: [0.01, 0.02]}}
+    profiles:
+      t: {{l_over_lambda_l: 2, lambda_s_over_dl: 8, realizations: 3}}
+  b:
+    hurst: {hurst_b}
+    lambda_l_over_lambda_s: 4
+    seed: 8
+    loads: {{values: [0.01]}}
+    profiles:
+      t: {{l_over_lambda_l: 2, lambda_s_over_dl: 8, realizations: 2}}
+"#
+    )
+}
+
+/// A fresh temporary directory holding `pipeline.yaml` with `text`.
+pub fn workdir(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("pipeline.yaml"), text).expect("write pipeline");
+    let path = dir.path().to_path_buf();
+    (dir, path)
+}

@@ -1,0 +1,274 @@
+//! The artifact store and runner, through the CLI: reuse, selective recomputation,
+//! verification, crash safety and concurrent runs.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use crate::{bin, run_in, small_pipeline, stdout_json, workdir};
+
+fn run_json(dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["run", "--profile", "t", "--json", "--quiet"];
+    args.extend_from_slice(extra);
+    let out = run_in(dir, &args);
+    assert!(out.status.success(), "run failed: {}", String::from_utf8_lossy(&out.stderr));
+    stdout_json(&out)
+}
+
+/// Every file under data/cache (relative path → bytes), manifests excluded (they hold
+/// wall times).
+fn artifacts(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let root = dir.join("data/cache");
+    let mut stack = vec![root.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.file_name().unwrap() != "manifest.json" {
+                out.insert(p.strip_prefix(&root).unwrap().display().to_string(), std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_instances() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "first"));
+    let first = run_json(&dir, &[]);
+    assert_eq!(first["computed"], 5);
+    assert_eq!(first["reused"], 0);
+    let keys_before: Vec<String> = std::fs::read_dir(dir.join("data/cache/surface"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+
+    let second = run_json(&dir, &[]);
+    assert_eq!(second["computed"], 0);
+    assert_eq!(second["reused"], 5);
+
+    // A parameter the surface stage does not read (a description, the loads) changes nothing.
+    std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.8, "renamed")).unwrap();
+    let third = run_json(&dir, &[]);
+    assert_eq!(third["computed"], 0);
+
+    // Study b's Hurst exponent: only b's two realizations are rebuilt.
+    std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.6, "renamed")).unwrap();
+    let fourth = run_json(&dir, &[]);
+    assert_eq!(fourth["computed"], 2);
+    assert_eq!(fourth["reused"], 3);
+
+    // The earlier keys are all still there (nothing was overwritten).
+    for k in keys_before {
+        assert!(dir.join("data/cache/surface").join(&k).join("manifest.json").exists());
+    }
+
+    // Targets: a study name limits the run to that study.
+    std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.5, "renamed")).unwrap();
+    let only_a = run_json(&dir, &["a"]);
+    assert_eq!(only_a["computed"], 0);
+    assert_eq!(only_a["instances"], 3);
+    let bad = run_in(&dir, &["run", "--profile", "t", "nosuchstudy"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("nosuchstudy"));
+}
+
+#[test]
+fn status_reports_present_and_missing() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    let out = run_in(&dir, &["status", "--profile", "t", "--json"]);
+    assert!(out.status.success());
+    let before = stdout_json(&out);
+    let missing: u64 = before["stages"].as_array().unwrap().iter().map(|l| l["missing"].as_u64().unwrap()).sum();
+    assert_eq!(missing, 5);
+    run_json(&dir, &["a"]);
+    let after = stdout_json(&run_in(&dir, &["status", "--profile", "t", "--json"]));
+    let lines = after["stages"].as_array().unwrap();
+    let a = lines.iter().find(|l| l["study"] == "a").unwrap();
+    let b = lines.iter().find(|l| l["study"] == "b").unwrap();
+    assert_eq!((a["present"].as_u64(), a["missing"].as_u64()), (Some(3), Some(0)));
+    assert_eq!((b["present"].as_u64(), b["missing"].as_u64()), (Some(0), Some(2)));
+}
+
+#[test]
+fn verify_names_each_damaged_entry_and_clean_corrupt_removes_it() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    run_json(&dir, &[]);
+    let ok = run_in(&dir, &["verify", "--json"]);
+    assert!(ok.status.success());
+    assert_eq!(stdout_json(&ok)["checked"], 5);
+
+    let entries: Vec<_> = std::fs::read_dir(dir.join("data/cache/surface"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    // Flip one byte of one artifact (same size) and break another entry's manifest.
+    let victim = entries[0].join("heights.npy");
+    let mut bytes = std::fs::read(&victim).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0x55;
+    std::fs::write(&victim, bytes).unwrap();
+    std::fs::write(entries[1].join("manifest.json"), "{ not json").unwrap();
+
+    let bad = run_in(&dir, &["verify"]);
+    assert!(!bad.status.success());
+    let text = String::from_utf8_lossy(&bad.stdout);
+    assert!(text.contains(&entries[0].display().to_string()), "{text}");
+    assert!(text.contains(&entries[1].display().to_string()), "{text}");
+    assert!(text.contains("2 problem"), "{text}");
+
+    // A run refuses to use a damaged entry and says how to fix it.
+    let run = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
+    assert!(!run.status.success());
+    assert!(String::from_utf8_lossy(&run.stderr).contains("clean --corrupt"));
+
+    assert!(run_in(&dir, &["clean", "--corrupt"]).status.success());
+    // The flipped byte is only caught by hashing, so one rerun rebuilds exactly the two.
+    let again = run_json(&dir, &[]);
+    assert_eq!(again["computed"], 2);
+    assert!(run_in(&dir, &["verify"]).status.success());
+}
+
+#[test]
+fn sigkill_in_the_middle_of_a_stage_then_rerun_gives_the_uninterrupted_result() {
+    let text = small_pipeline(0.8, "x");
+    let (_t1, reference) = workdir(&text);
+    run_json(&reference, &["--jobs", "1"]);
+
+    let (_t2, dir) = workdir(&text);
+    let mut child = bin()
+        .current_dir(&dir)
+        .args(["run", "--profile", "t", "--quiet", "--jobs", "1"])
+        .env("WEARCOEF_DEBUG_PAUSE_BEFORE_COMMIT_MS", "5000")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait until a temporary entry has all its files (manifest included) but is not yet
+    // renamed into place: the most dangerous moment to die.
+    let stage_dir = dir.join("data/cache/surface");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let pending = std::fs::read_dir(&stage_dir).ok().into_iter().flatten().any(|e| {
+            let p = e.unwrap().path();
+            p.file_name().unwrap().to_string_lossy().starts_with(".tmp-") && p.join("manifest.json").exists()
+        });
+        if pending {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no temporary entry appeared");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap(); // SIGKILL on Unix
+    child.wait().unwrap();
+
+    // Nothing that looks complete was left behind.
+    let complete = std::fs::read_dir(&stage_dir)
+        .unwrap()
+        .filter(|e| !e.as_ref().unwrap().file_name().to_string_lossy().starts_with('.'))
+        .count();
+    assert_eq!(complete, 0, "a killed run must leave no complete-looking entry");
+    assert!(run_in(&dir, &["verify"]).status.success());
+
+    let rerun = run_json(&dir, &[]);
+    assert_eq!(rerun["computed"], 5);
+    assert!(run_in(&dir, &["verify"]).status.success());
+    assert_eq!(artifacts(&dir), artifacts(&reference));
+    // The stale temporary directory of the dead process was cleaned up.
+    let leftovers = std::fs::read_dir(&stage_dir)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with(".tmp-"))
+        .count();
+    assert_eq!(leftovers, 0);
+}
+
+#[test]
+fn two_concurrent_runs_on_one_store_both_succeed() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    let spawn = || {
+        bin()
+            .current_dir(&dir)
+            .args(["run", "--profile", "t", "--quiet", "--jobs", "1"])
+            .env("WEARCOEF_DEBUG_PAUSE_BEFORE_COMMIT_MS", "50")
+            .output()
+    };
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(spawn);
+        let b = s.spawn(spawn);
+        (a.join().unwrap().unwrap(), b.join().unwrap().unwrap())
+    });
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    let v = run_in(&dir, &["verify", "--json"]);
+    assert!(v.status.success());
+    assert_eq!(stdout_json(&v)["checked"], 5);
+    let again = run_json(&dir, &[]);
+    assert_eq!(again["computed"], 0);
+}
+
+#[test]
+fn identical_artifacts_for_one_and_two_threads() {
+    let text = small_pipeline(0.8, "x");
+    let (_t1, one) = workdir(&text);
+    let (_t2, two) = workdir(&text);
+    let out1 = bin().current_dir(&one).env("RAYON_NUM_THREADS", "1").args(["run", "--profile", "t", "--quiet", "--jobs", "1"]).output().unwrap();
+    let out2 = bin().current_dir(&two).env("RAYON_NUM_THREADS", "2").args(["run", "--profile", "t", "--quiet", "--jobs", "2"]).output().unwrap();
+    assert!(out1.status.success() && out2.status.success());
+    assert_eq!(artifacts(&one), artifacts(&two));
+}
+
+#[test]
+fn catalog_reads_back_with_typed_columns() {
+    use polars::prelude::*;
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    run_json(&dir, &[]);
+    let file = std::fs::File::open(dir.join("data/t/index.parquet")).unwrap();
+    let df = ParquetReader::new(file).finish().unwrap();
+    assert_eq!(df.height(), 5);
+    for (name, dtype) in [
+        ("stage", DataType::String),
+        ("study", DataType::String),
+        ("realization", DataType::UInt32),
+        ("path", DataType::String),
+        ("key", DataType::String),
+        ("n", DataType::UInt64),
+        ("hurst", DataType::Float64),
+        ("seed", DataType::UInt64),
+        ("rms_slope", DataType::Float64),
+        ("hurst_fit", DataType::Float64),
+    ] {
+        let col = df.column(name).unwrap_or_else(|_| panic!("column {name}"));
+        assert_eq!(col.dtype(), &dtype, "{name}");
+    }
+    // Every path points at a file that exists, relative to the run directory.
+    let paths = df.column("path").unwrap().str().unwrap().clone();
+    for p in paths.into_iter() {
+        assert!(dir.join(p.unwrap()).exists());
+    }
+    let csv = std::fs::read_to_string(dir.join("data/t/index.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 6, "header + one row per artifact");
+}
+
+/// Keys must not drift between versions of the program unless a stage version or the salt
+/// is bumped on purpose: this pins the key of one surface instance.
+#[test]
+fn cache_key_is_stable() {
+    use wearcoef::pipeline::hash::instance_key;
+    use wearcoef::pipeline::stages::{surface_params_json, SURFACE_VERSION};
+    use wearcoef::surface::{Method, SurfaceParams};
+    let p = SurfaceParams {
+        n: 64,
+        hurst: 0.8,
+        lambda_l_px: 32.0,
+        lambda_s_px: 4.0,
+        rolloff_lambda_px: None,
+        method: Method::Filter,
+        seed: 1,
+    };
+    let key = instance_key("surface", SURFACE_VERSION, &surface_params_json(&p), &[]);
+    assert_eq!(key, PINNED_SURFACE_KEY, "surface keys changed: bump SURFACE_VERSION or the salt deliberately");
+}
+
+const PINNED_SURFACE_KEY: &str = "PIN";
