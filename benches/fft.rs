@@ -12,18 +12,27 @@ fn fft_pair(c: &mut Criterion) {
         let fft = Fft2::new(n);
         let mut scratch = fft.make_scratch();
         let mut spectrum = fft.make_spectrum();
-        let input: Vec<f64> = (0..n * n).map(|i| ((i * 7919) % 1013) as f64 / 1013.0 - 0.5).collect();
+        let input: Vec<f64> = (0..n * n)
+            .map(|i| ((i * 7919) % 1013) as f64 / 1013.0 - 0.5)
+            .collect();
         let mut output = vec![0.0; n * n];
         for threads in [1usize, 2] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            group.bench_with_input(BenchmarkId::new(format!("threads{threads}"), n), &n, |b, _| {
-                pool.install(|| {
-                    b.iter(|| {
-                        fft.forward(&input, &mut spectrum, &mut scratch);
-                        fft.inverse(&mut spectrum, &mut output, &mut scratch);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            group.bench_with_input(
+                BenchmarkId::new(format!("threads{threads}"), n),
+                &n,
+                |b, _| {
+                    pool.install(|| {
+                        b.iter(|| {
+                            fft.forward(&input, &mut spectrum, &mut scratch);
+                            fft.inverse(&mut spectrum, &mut output, &mut scratch);
+                        })
                     })
-                })
-            });
+                },
+            );
         }
     }
     group.finish();

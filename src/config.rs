@@ -215,10 +215,18 @@ impl Pipeline {
             ));
         }
         if self.profiles.is_empty() {
-            return Err(invalid("profiles".into(), "{}".into(), "declare at least one profile"));
+            return Err(invalid(
+                "profiles".into(),
+                "{}".into(),
+                "declare at least one profile",
+            ));
         }
         if self.studies.is_empty() {
-            return Err(invalid("studies".into(), "{}".into(), "declare at least one study"));
+            return Err(invalid(
+                "studies".into(),
+                "{}".into(),
+                "declare at least one study",
+            ));
         }
         for (name, study) in &self.studies {
             for profile in study.profiles.keys() {
@@ -261,7 +269,12 @@ impl Pipeline {
             .collect()
     }
 
-    fn resolve_study(&self, name: &str, profile: &str, origin: &str) -> Result<StudyPlan, ConfigError> {
+    fn resolve_study(
+        &self,
+        name: &str,
+        profile: &str,
+        origin: &str,
+    ) -> Result<StudyPlan, ConfigError> {
         let study = &self.studies[name];
         let sp = &study.profiles[profile];
         let base = format!("studies.{name}");
@@ -337,7 +350,7 @@ impl Pipeline {
             ));
         }
         let n = n as usize;
-        if n % 2 != 0 || n < 4 || n > MAX_N {
+        if !n.is_multiple_of(2) || !(4..=MAX_N).contains(&n) {
             return Err(invalid(
                 format!("{pbase}.l_over_lambda_l"),
                 box_ratio,
@@ -394,26 +407,44 @@ fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, C
     let values = match (&loads.values, loads.min, loads.max, loads.count) {
         (Some(v), None, None, None) => {
             if loads.spacing.is_some() {
-                return Err(invalid(".spacing", format!("{:?}", loads.spacing), "only applies to min/max/count ranges"));
+                return Err(invalid(
+                    ".spacing",
+                    format!("{:?}", loads.spacing),
+                    "only applies to min/max/count ranges",
+                ));
             }
             v.clone()
         }
         (None, Some(min), Some(max), Some(count)) => {
             if !(min.is_finite() && min > 0.0) {
-                return Err(invalid(".min", min.to_string(), "W/W0 must be finite and > 0"));
+                return Err(invalid(
+                    ".min",
+                    min.to_string(),
+                    "W/W0 must be finite and > 0",
+                ));
             }
             if !(max.is_finite() && max > min) {
-                return Err(invalid(".max", max.to_string(), &format!("must be finite and > min = {min}")));
+                return Err(invalid(
+                    ".max",
+                    max.to_string(),
+                    &format!("must be finite and > min = {min}"),
+                ));
             }
             if count < 2 {
-                return Err(invalid(".count", count.to_string(), "a range needs at least 2 loads"));
+                return Err(invalid(
+                    ".count",
+                    count.to_string(),
+                    "a range needs at least 2 loads",
+                ));
             }
             let spacing = loads.spacing.as_deref().unwrap_or("log");
             let m = (count - 1) as f64;
             match spacing {
                 "log" => (0..count)
                     .map(|i| {
-                        if i == count - 1 {
+                        if i == 0 {
+                            min
+                        } else if i == count - 1 {
                             max
                         } else {
                             (min.ln() + (max.ln() - min.ln()) * i as f64 / m).exp()
@@ -421,31 +452,48 @@ fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, C
                     })
                     .collect(),
                 "linear" => (0..count)
-                    .map(|i| if i == count - 1 { max } else { min + (max - min) * i as f64 / m })
+                    .map(|i| {
+                        if i == count - 1 {
+                            max
+                        } else {
+                            min + (max - min) * i as f64 / m
+                        }
+                    })
                     .collect(),
-                other => return Err(invalid(".spacing", other.to_string(), "must be `log` or `linear`")),
+                other => {
+                    return Err(invalid(
+                        ".spacing",
+                        other.to_string(),
+                        "must be `log` or `linear`",
+                    ))
+                }
             }
         }
-        _ => {
-            return Err(invalid(
-                "",
-                "(incomplete)".into(),
-                "give either `values: [..]` or all of `min`, `max`, `count` (and optionally `spacing`)",
-            ))
-        }
+        _ => return Err(invalid(
+            "",
+            "(incomplete)".into(),
+            "give either `values: [..]` or all of `min`, `max`, `count` (and optionally `spacing`)",
+        )),
     };
     if values.is_empty() {
         return Err(invalid(".values", "[]".into(), "give at least one load"));
     }
     for (i, &w) in values.iter().enumerate() {
         if !(w.is_finite() && w > 0.0) {
-            return Err(invalid(&format!(".values[{i}]"), w.to_string(), "every load W/W0 must be finite and > 0"));
+            return Err(invalid(
+                &format!(".values[{i}]"),
+                w.to_string(),
+                "every load W/W0 must be finite and > 0",
+            ));
         }
         if i > 0 && w <= values[i - 1] {
             return Err(invalid(
                 &format!(".values[{i}]"),
                 w.to_string(),
-                &format!("loads must be strictly increasing (previous value {})", values[i - 1]),
+                &format!(
+                    "loads must be strictly increasing (previous value {})",
+                    values[i - 1]
+                ),
             ));
         }
     }

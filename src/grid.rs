@@ -30,7 +30,7 @@ pub struct Grid {
 impl Grid {
     /// A grid of `n × n` nodes (n even) over a periodic box of side `size`.
     pub fn new(n: usize, size: f64) -> Result<Self, GridError> {
-        if n < 2 || n % 2 != 0 {
+        if n < 2 || !n.is_multiple_of(2) {
             return Err(GridError::BadSize(n));
         }
         if !(size.is_finite() && size > 0.0) {
@@ -123,7 +123,10 @@ mod tests {
         assert_eq!(Grid::new(3, 1.0), Err(GridError::BadSize(3)));
         assert_eq!(Grid::new(0, 1.0), Err(GridError::BadSize(0)));
         assert!(matches!(Grid::new(4, -1.0), Err(GridError::BadLength(_))));
-        assert!(matches!(Grid::new(4, f64::NAN), Err(GridError::BadLength(_))));
+        assert!(matches!(
+            Grid::new(4, f64::NAN),
+            Err(GridError::BadLength(_))
+        ));
     }
 
     #[test]

@@ -31,10 +31,13 @@ pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
         path: path.display().to_string(),
         message,
     };
-    let array: Array2<f64> = read_npy(path).map_err(|e| err(format!("not a 2-D float64 .npy file ({e})")))?;
+    let array: Array2<f64> =
+        read_npy(path).map_err(|e| err(format!("not a 2-D float64 .npy file ({e})")))?;
     let (rows, cols) = array.dim();
     if rows != cols || rows == 0 {
-        return Err(err(format!("expected a non-empty square array, got {rows} × {cols}")));
+        return Err(err(format!(
+            "expected a non-empty square array, got {rows} × {cols}"
+        )));
     }
     let values = if array.is_standard_layout() {
         array.into_raw_vec_and_offset().0

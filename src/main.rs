@@ -16,7 +16,11 @@ use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceError, SurfaceParams};
 
 #[derive(Parser)]
-#[command(name = "wearcoef", version, about = "Rough contact, cluster statistics and wear coefficients (Frérot et al., JMPS 2018), rebuilt reproducibly")]
+#[command(
+    name = "wearcoef",
+    version,
+    about = "Rough contact, cluster statistics and wear coefficients (Frérot et al., JMPS 2018), rebuilt reproducibly"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -139,13 +143,26 @@ fn load(path: &Path) -> anyhow::Result<Pipeline> {
 
 fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Command::Run { targets, store, profile, jobs, quiet, json } => {
+        Command::Run {
+            targets,
+            store,
+            profile,
+            jobs,
+            quiet,
+            json,
+        } => {
             let pipeline = load(&store.config)?;
-            let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let jobs =
+                jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             if jobs == 0 {
                 return Err(InputError("--jobs must be ≥ 1".into()).into());
             }
-            let opts = RunOptions { profile, targets, jobs, quiet };
+            let opts = RunOptions {
+                profile,
+                targets,
+                jobs,
+                quiet,
+            };
             let origin = store.config.display().to_string();
             let summary = runner::run(&pipeline, &origin, &Store::new(&store.data), &opts)?;
             if json {
@@ -154,16 +171,29 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 println!("{summary}");
             }
         }
-        Command::Status { store, profile, json } => {
+        Command::Status {
+            store,
+            profile,
+            json,
+        } => {
             let pipeline = load(&store.config)?;
             let origin = store.config.display().to_string();
             let lines = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
             if json {
-                println!("{}", serde_json::to_string(&json!({"profile": profile, "stages": lines}))?);
+                println!(
+                    "{}",
+                    serde_json::to_string(&json!({"profile": profile, "stages": lines}))?
+                );
             } else {
-                println!("{:<10} {:<24} {:>8} {:>8}", "stage", "study", "present", "missing");
+                println!(
+                    "{:<10} {:<24} {:>8} {:>8}",
+                    "stage", "study", "present", "missing"
+                );
                 for l in &lines {
-                    println!("{:<10} {:<24} {:>8} {:>8}", l.stage, l.study, l.present, l.missing);
+                    println!(
+                        "{:<10} {:<24} {:>8} {:>8}",
+                        l.stage, l.study, l.present, l.missing
+                    );
                 }
             }
         }
@@ -171,7 +201,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let store = Store::new(&data);
             let (checked, problems) = store.verify()?;
             if json {
-                println!("{}", serde_json::to_string(&json!({"checked": checked, "problems": problems}))?);
+                println!(
+                    "{}",
+                    serde_json::to_string(&json!({"checked": checked, "problems": problems}))?
+                );
             } else {
                 for p in &problems {
                     println!("MISMATCH {}: {}", p.path, p.reason);
@@ -187,13 +220,26 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             if corrupt {
                 let removed = store.remove_corrupt()?;
                 let stale = store.remove_stale_temporaries()?;
-                println!("removed {} corrupt entries and {stale} stale temporary directories", removed.len());
+                println!(
+                    "removed {} corrupt entries and {stale} stale temporary directories",
+                    removed.len()
+                );
             } else {
                 store.remove_all()?;
                 println!("removed {}", data.display());
             }
         }
-        Command::Surface { n, lambda_l_px, lambda_s_px, hurst, seed, rolloff_lambda_px, method, output, json } => {
+        Command::Surface {
+            n,
+            lambda_l_px,
+            lambda_s_px,
+            hurst,
+            seed,
+            rolloff_lambda_px,
+            method,
+            output,
+            json,
+        } => {
             let params = SurfaceParams {
                 n,
                 hurst,
@@ -210,7 +256,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let fft = Fft2::new(n);
             let mut scratch = fft.make_scratch();
             let s = surface::generate(&params, &fft, &mut scratch)?;
-            write_atomically(&output, |tmp| Ok(wearcoef::io::write_heights(tmp, n, s.heights.clone())?))?;
+            write_atomically(&output, |tmp| {
+                Ok(wearcoef::io::write_heights(tmp, n, s.heights.clone())?)
+            })?;
             if json {
                 let out = json!({
                     "n": n,
@@ -235,11 +283,23 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
 }
 
 /// Write through a temporary sibling file and rename, so a failure leaves no partial file.
-fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let name = path.file_name().context("output path has no file name")?;
-    let tmp = dir.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
-    let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display())));
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = write(&tmp).and_then(|_| {
+        std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
+    });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

@@ -56,7 +56,7 @@ impl Fft2 {
     /// # Panics
     /// If `n` is odd or below 2 (a [`crate::grid::Grid`] never is).
     pub fn new(n: usize) -> Self {
-        assert!(n >= 2 && n % 2 == 0, "Fft2 needs an even n ≥ 2, got {n}");
+        assert!(n >= 2 && n.is_multiple_of(2), "Fft2 needs an even n ≥ 2, got {n}");
         let mut real_planner = RealFftPlanner::<f64>::new();
         let mut planner = FftPlanner::<f64>::new();
         Self {
@@ -152,7 +152,12 @@ impl Fft2 {
     /// and holds garbage afterwards. The imaginary parts of the self-conjugate columns
     /// (kx = 0 and kx = n/2) are discarded, i.e. the spectrum is projected onto the
     /// Hermitian (real-field) subspace.
-    pub fn inverse(&self, spectrum: &mut [Complex64], output: &mut [f64], scratch: &mut Fft2Scratch) {
+    pub fn inverse(
+        &self,
+        spectrum: &mut [Complex64],
+        output: &mut [f64],
+        scratch: &mut Fft2Scratch,
+    ) {
         let n = self.n;
         let h = n / 2 + 1;
         self.check(output.len(), spectrum.len(), scratch);
@@ -176,7 +181,10 @@ impl Fft2 {
             .zip(output.par_chunks_mut(rpb * n))
             .zip(scratch.blocks.par_iter_mut())
             .for_each(|((rows_in, rows_out), block)| {
-                for (row_in, row_out) in rows_in.chunks_exact_mut(h).zip(rows_out.chunks_exact_mut(n)) {
+                for (row_in, row_out) in rows_in
+                    .chunks_exact_mut(h)
+                    .zip(rows_out.chunks_exact_mut(n))
+                {
                     row_in[0].im = 0.0;
                     row_in[h - 1].im = 0.0;
                     self.c2r
@@ -188,7 +196,11 @@ impl Fft2 {
 
     fn check(&self, real_len: usize, spec_len: usize, scratch: &Fft2Scratch) {
         assert_eq!(real_len, self.n * self.n, "real field must have n² values");
-        assert_eq!(spec_len, self.spectrum_len(), "spectrum must have (n/2+1)·n values");
+        assert_eq!(
+            spec_len,
+            self.spectrum_len(),
+            "spectrum must have (n/2+1)·n values"
+        );
         assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
     }
 }
@@ -245,7 +257,9 @@ mod tests {
         let mut state: u64 = 0x2545_f491_4f6c_dd1d;
         (0..n * n)
             .map(|_| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             })
             .collect()
@@ -262,13 +276,19 @@ mod tests {
             let reference = naive_half_dft(&field, n);
             let scale = reference.iter().map(|c| c.norm()).fold(0.0, f64::max);
             for (a, b) in spec.iter().zip(&reference) {
-                assert!((a - b).norm() <= 1e-12 * scale.max(1.0), "n={n}: {a} vs {b}");
+                assert!(
+                    (a - b).norm() <= 1e-12 * scale.max(1.0),
+                    "n={n}: {a} vs {b}"
+                );
             }
             let mut back = vec![0.0; n * n];
             fft.inverse(&mut spec, &mut back, &mut scratch);
             let norm = (n * n) as f64;
             for (a, b) in back.iter().zip(&field) {
-                assert!((a / norm - b).abs() <= 1e-14, "n={n}: round trip {a} vs {b}");
+                assert!(
+                    (a / norm - b).abs() <= 1e-14,
+                    "n={n}: round trip {a} vs {b}"
+                );
             }
         }
     }
@@ -276,7 +296,9 @@ mod tests {
     #[test]
     fn transpose_handles_ragged_tiles() {
         let (rows, cols) = (37usize, 70usize);
-        let src: Vec<Complex64> = (0..rows * cols).map(|i| Complex64::new(i as f64, -(i as f64))).collect();
+        let src: Vec<Complex64> = (0..rows * cols)
+            .map(|i| Complex64::new(i as f64, -(i as f64)))
+            .collect();
         let mut dst = vec![Complex64::new(0.0, 0.0); rows * cols];
         transpose(&src, &mut dst, rows, cols);
         for r in 0..rows {

@@ -97,11 +97,15 @@ fn bad(field: &'static str, value: impl ToString, allowed: impl Into<String>) ->
 impl SurfaceParams {
     /// Check every parameter; the first violation is returned with its allowed range.
     pub fn validate(&self) -> Result<(), SurfaceError> {
-        if self.n < 4 || self.n % 2 != 0 {
+        if self.n < 4 || !self.n.is_multiple_of(2) {
             return Err(bad("n", self.n, "must be an even integer ≥ 4"));
         }
         if !(self.hurst.is_finite() && self.hurst > 0.0 && self.hurst < 1.0) {
-            return Err(bad("hurst", self.hurst, "must lie in the open interval (0, 1)"));
+            return Err(bad(
+                "hurst",
+                self.hurst,
+                "must lie in the open interval (0, 1)",
+            ));
         }
         if !(self.lambda_s_px.is_finite() && self.lambda_s_px >= 2.0) {
             return Err(bad(
@@ -130,7 +134,10 @@ impl SurfaceParams {
                 return Err(bad(
                     "rolloff_lambda_px",
                     r,
-                    format!("the roll-off wavelength must lie in (λ_l, L] = ({}, {n}]", self.lambda_l_px),
+                    format!(
+                        "the roll-off wavelength must lie in (λ_l, L] = ({}, {n}]",
+                        self.lambda_l_px
+                    ),
                 ));
             }
         }
@@ -149,7 +156,8 @@ impl SurfaceParams {
 
     /// Wavenumber where the roll-off plateau starts (= k_l without roll-off).
     pub fn k_r(&self) -> f64 {
-        self.rolloff_lambda_px.map_or(self.k_l(), |r| self.n as f64 / r)
+        self.rolloff_lambda_px
+            .map_or(self.k_l(), |r| self.n as f64 / r)
     }
 
     /// Un-normalised PSD shape at wavenumber `k` (units of 2π/L). Band edges are inclusive
@@ -192,7 +200,10 @@ pub struct Surface {
 /// Seed of realization `index` of a study whose seed is `study_seed` (SplitMix64 of the
 /// pair): distinct, reproducible and independent of the order in which realizations run.
 pub fn realization_seed(study_seed: u64, index: u64) -> u64 {
-    let mut z = study_seed ^ index.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(0x6a09_e667_f3bc_c909);
+    let mut z = study_seed
+        ^ index
+            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            .wrapping_add(0x6a09_e667_f3bc_c909);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
@@ -212,7 +223,9 @@ pub fn generate(
 
     // White noise from a portable stream, in row-major order.
     let mut rng = ChaCha20Rng::seed_from_u64(params.seed);
-    let noise: Vec<f64> = (0..n * n).map(|_| StandardNormal.sample(&mut rng)).collect();
+    let noise: Vec<f64> = (0..n * n)
+        .map(|_| StandardNormal.sample(&mut rng))
+        .collect();
 
     let mut spectrum = fft.make_spectrum();
     fft.forward(&noise, &mut spectrum, scratch);
@@ -252,7 +265,11 @@ pub fn generate(
     }
 
     let stats = measure(&grid, &heights, params.k_l(), params.k_s(), fft, scratch);
-    Ok(Surface { grid, heights, stats })
+    Ok(Surface {
+        grid,
+        heights,
+        stats,
+    })
 }
 
 /// Realised statistics of a height field on `grid` (heights row-major), with the Hurst
@@ -317,7 +334,13 @@ pub fn radial_psd(grid: &Grid, spectrum: &[Complex64]) -> Vec<(f64, f64, f64)> {
         }
     }
     acc.into_iter()
-        .map(|(w, sk, sp)| if w > 0.0 { (w, sk / w, sp / w) } else { (0.0, 0.0, 0.0) })
+        .map(|(w, sk, sp)| {
+            if w > 0.0 {
+                (w, sk / w, sp / w)
+            } else {
+                (0.0, 0.0, 0.0)
+            }
+        })
         .collect()
 }
 
@@ -327,7 +350,9 @@ pub fn radial_psd(grid: &Grid, spectrum: &[Complex64]) -> Vec<(f64, f64, f64)> {
 pub fn fit_hurst(grid: &Grid, spectrum: &[Complex64], k_l: f64, k_s: f64) -> Option<f64> {
     let shells = radial_psd(grid, spectrum);
     let lo = k_l.floor() as usize + 1;
-    let hi = (k_s.ceil() as usize).saturating_sub(1).min(shells.len() - 1);
+    let hi = (k_s.ceil() as usize)
+        .saturating_sub(1)
+        .min(shells.len() - 1);
     let points: Vec<(f64, f64)> = (lo..=hi)
         .filter(|&s| shells[s].0 > 0.0 && shells[s].2 > 0.0)
         .map(|s| (shells[s].1.ln(), shells[s].2.ln()))

@@ -41,7 +41,9 @@ fn kind_of(values: &[Option<&Value>]) -> Kind {
         Kind::Bool
     } else if present.iter().all(|v| v.is_u64()) {
         Kind::UInt
-    } else if present.iter().all(|v| v.is_i64() || v.is_u64()) && present.iter().all(|v| v.as_i64().is_some()) {
+    } else if present.iter().all(|v| v.is_i64() || v.is_u64())
+        && present.iter().all(|v| v.as_i64().is_some())
+    {
         Kind::Int
     } else if present.iter().all(|v| v.is_number()) {
         Kind::Float
@@ -60,12 +62,30 @@ fn text(v: &Value) -> String {
 /// Build the catalog frame.
 pub fn frame(rows: &[Row]) -> PolarsResult<DataFrame> {
     let mut columns = vec![
-        Column::new("stage".into(), rows.iter().map(|r| r.stage.clone()).collect::<Vec<_>>()),
-        Column::new("study".into(), rows.iter().map(|r| r.study.clone()).collect::<Vec<_>>()),
-        Column::new("realization".into(), rows.iter().map(|r| r.realization).collect::<Vec<_>>()),
-        Column::new("file".into(), rows.iter().map(|r| r.file.clone()).collect::<Vec<_>>()),
-        Column::new("path".into(), rows.iter().map(|r| r.path.clone()).collect::<Vec<_>>()),
-        Column::new("key".into(), rows.iter().map(|r| r.key.clone()).collect::<Vec<_>>()),
+        Column::new(
+            "stage".into(),
+            rows.iter().map(|r| r.stage.clone()).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "study".into(),
+            rows.iter().map(|r| r.study.clone()).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "realization".into(),
+            rows.iter().map(|r| r.realization).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "file".into(),
+            rows.iter().map(|r| r.file.clone()).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "path".into(),
+            rows.iter().map(|r| r.path.clone()).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "key".into(),
+            rows.iter().map(|r| r.key.clone()).collect::<Vec<_>>(),
+        ),
     ];
     let names: BTreeSet<&String> = rows.iter().flat_map(|r| r.extra.keys()).collect();
     for name in names {
@@ -74,11 +94,38 @@ pub fn frame(rows: &[Row]) -> PolarsResult<DataFrame> {
             .map(|r| r.extra.get(name).filter(|v| !v.is_null()))
             .collect();
         let col = match kind_of(&values) {
-            Kind::Bool => Column::new(name.into(), values.iter().map(|v| v.and_then(Value::as_bool)).collect::<Vec<_>>()),
-            Kind::UInt => Column::new(name.into(), values.iter().map(|v| v.and_then(Value::as_u64)).collect::<Vec<_>>()),
-            Kind::Int => Column::new(name.into(), values.iter().map(|v| v.and_then(Value::as_i64)).collect::<Vec<_>>()),
-            Kind::Float => Column::new(name.into(), values.iter().map(|v| v.and_then(Value::as_f64)).collect::<Vec<_>>()),
-            Kind::Text => Column::new(name.into(), values.iter().map(|v| v.map(text)).collect::<Vec<_>>()),
+            Kind::Bool => Column::new(
+                name.into(),
+                values
+                    .iter()
+                    .map(|v| v.and_then(Value::as_bool))
+                    .collect::<Vec<_>>(),
+            ),
+            Kind::UInt => Column::new(
+                name.into(),
+                values
+                    .iter()
+                    .map(|v| v.and_then(Value::as_u64))
+                    .collect::<Vec<_>>(),
+            ),
+            Kind::Int => Column::new(
+                name.into(),
+                values
+                    .iter()
+                    .map(|v| v.and_then(Value::as_i64))
+                    .collect::<Vec<_>>(),
+            ),
+            Kind::Float => Column::new(
+                name.into(),
+                values
+                    .iter()
+                    .map(|v| v.and_then(Value::as_f64))
+                    .collect::<Vec<_>>(),
+            ),
+            Kind::Text => Column::new(
+                name.into(),
+                values.iter().map(|v| v.map(text)).collect::<Vec<_>>(),
+            ),
         };
         columns.push(col);
     }
@@ -103,7 +150,11 @@ pub fn write(dir: &Path, rows: &[Row]) -> anyhow::Result<()> {
     let tmp = dir.join(format!(".index.csv.{tag}"));
     {
         let mut w = csv::Writer::from_path(&tmp)?;
-        let names: Vec<String> = df.get_column_names().iter().map(|s| s.to_string()).collect();
+        let names: Vec<String> = df
+            .get_column_names()
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
         w.write_record(&names)?;
         for i in 0..df.height() {
             let record: Vec<String> = df

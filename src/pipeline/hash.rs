@@ -71,7 +71,10 @@ mod tests {
     #[test]
     fn canonical_json_sorts_keys_and_keeps_shortest_floats() {
         let a = json!({"b": 0.1, "a": {"z": 1, "y": 1e-10}, "c": 2.0});
-        assert_eq!(canonical_json(&a), r#"{"a":{"y":1e-10,"z":1},"b":0.1,"c":2.0}"#);
+        assert_eq!(
+            canonical_json(&a),
+            r#"{"a":{"y":1e-10,"z":1},"b":0.1,"c":2.0}"#
+        );
     }
 
     #[test]

@@ -42,7 +42,12 @@ impl std::fmt::Display for RunSummary {
         write!(
             f,
             "wearcoef run --profile {}: {} instances, {} computed, {} reused, {:.2} s; catalog {}",
-            self.profile, self.instances, self.computed, self.reused, self.wall_seconds, self.catalog
+            self.profile,
+            self.instances,
+            self.computed,
+            self.reused,
+            self.wall_seconds,
+            self.catalog
         )
     }
 }
@@ -73,7 +78,10 @@ fn select(
     let plans = if studies.is_empty() {
         plans
     } else {
-        plans.into_iter().filter(|p| studies.contains(&p.name)).collect()
+        plans
+            .into_iter()
+            .filter(|p| studies.contains(&p.name))
+            .collect()
     };
     // A stage target builds that stage and everything upstream of it.
     let last = stage_filter
@@ -85,7 +93,12 @@ fn select(
 }
 
 /// Build what is missing for a profile.
-pub fn run(pipeline: &Pipeline, origin: &str, store: &Store, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+pub fn run(
+    pipeline: &Pipeline,
+    origin: &str,
+    store: &Store,
+    opts: &RunOptions,
+) -> anyhow::Result<RunSummary> {
     let start = Instant::now();
     let (plans, wanted_stages) = select(pipeline, origin, &opts.profile, &opts.targets)?;
     store.remove_stale_temporaries()?;
@@ -228,7 +241,12 @@ pub struct StatusLine {
 }
 
 /// What is present or missing for a profile.
-pub fn status(pipeline: &Pipeline, origin: &str, store: &Store, profile: &str) -> anyhow::Result<Vec<StatusLine>> {
+pub fn status(
+    pipeline: &Pipeline,
+    origin: &str,
+    store: &Store,
+    profile: &str,
+) -> anyhow::Result<Vec<StatusLine>> {
     let plans = pipeline.plan(profile, origin)?;
     let all = stages::instances(&plans);
     let mut lines: Vec<StatusLine> = Vec::new();
@@ -240,7 +258,10 @@ pub fn status(pipeline: &Pipeline, origin: &str, store: &Store, profile: &str) -
                 present: 0,
                 missing: 0,
             };
-            for inst in all.iter().filter(|i| i.stage == *stage && i.studies.contains(&plan.name)) {
+            for inst in all
+                .iter()
+                .filter(|i| i.stage == *stage && i.studies.contains(&plan.name))
+            {
                 if store.lookup(inst.stage, &inst.key)?.is_some() {
                     line.present += 1;
                 } else {

@@ -163,15 +163,21 @@ impl Store {
     /// Path of an output of a complete entry after checking its SHA-256 against the manifest.
     pub fn read_output(&self, manifest: &Manifest, name: &str) -> Result<PathBuf, StoreError> {
         let path = self.entry_dir(&manifest.stage, &manifest.key).join(name);
-        let expected = manifest.outputs.get(name).ok_or_else(|| StoreError::Corrupt {
-            path: path.display().to_string(),
-            reason: "not listed in the manifest".into(),
-        })?;
+        let expected = manifest
+            .outputs
+            .get(name)
+            .ok_or_else(|| StoreError::Corrupt {
+                path: path.display().to_string(),
+                reason: "not listed in the manifest".into(),
+            })?;
         let (hash, _) = sha256_file(&path).map_err(io_err(&path))?;
         if hash != expected.sha256 {
             return Err(StoreError::Corrupt {
                 path: path.display().to_string(),
-                reason: format!("SHA-256 {hash} differs from the manifest's {}", expected.sha256),
+                reason: format!(
+                    "SHA-256 {hash} differs from the manifest's {}",
+                    expected.sha256
+                ),
             });
         }
         Ok(path)
@@ -199,10 +205,15 @@ impl Store {
         let mut removed = 0;
         for stage_dir in list_dirs(&self.cache_dir())? {
             for dir in list_dirs(&stage_dir)? {
-                let name = dir.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string();
+                let name = dir
+                    .file_name()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or_default()
+                    .to_string();
                 if let Some(rest) = name.strip_prefix(".tmp-") {
                     let pid = rest.split('-').nth(1).and_then(|p| p.parse::<u32>().ok());
-                    let alive = pid.is_some_and(|p| Path::new("/proc").join(p.to_string()).exists());
+                    let alive =
+                        pid.is_some_and(|p| Path::new("/proc").join(p.to_string()).exists());
                     if !alive {
                         std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
                         removed += 1;
@@ -264,7 +275,10 @@ impl Store {
 }
 
 fn file_name(p: &Path) -> String {
-    p.file_name().and_then(|s| s.to_str()).unwrap_or_default().to_string()
+    p.file_name()
+        .and_then(|s| s.to_str())
+        .unwrap_or_default()
+        .to_string()
 }
 
 fn list_dirs(dir: &Path) -> Result<Vec<PathBuf>, StoreError> {
@@ -304,20 +318,32 @@ fn check_entry(stage: &str, key: &str, dir: &Path) -> Result<(), String> {
     }
     let recomputed = instance_key(stage, manifest.version, &manifest.params, &manifest.inputs);
     if recomputed != key {
-        return Err(format!("manifest parameters hash to {recomputed}, not to the entry's key"));
+        return Err(format!(
+            "manifest parameters hash to {recomputed}, not to the entry's key"
+        ));
     }
     for (name, file) in &manifest.outputs {
         let path = dir.join(name);
         let (hash, bytes) = sha256_file(&path).map_err(|e| format!("{name}: unreadable ({e})"))?;
         if bytes != file.bytes {
-            return Err(format!("{name}: {bytes} bytes, manifest says {}", file.bytes));
+            return Err(format!(
+                "{name}: {bytes} bytes, manifest says {}",
+                file.bytes
+            ));
         }
         if hash != file.sha256 {
-            return Err(format!("{name}: SHA-256 {hash} differs from the manifest's {}", file.sha256));
+            return Err(format!(
+                "{name}: SHA-256 {hash} differs from the manifest's {}",
+                file.sha256
+            ));
         }
     }
     for entry in std::fs::read_dir(dir).map_err(|e| e.to_string())? {
-        let name = entry.map_err(|e| e.to_string())?.file_name().to_string_lossy().to_string();
+        let name = entry
+            .map_err(|e| e.to_string())?
+            .file_name()
+            .to_string_lossy()
+            .to_string();
         if name != MANIFEST && !manifest.outputs.contains_key(&name) {
             return Err(format!("{name}: file not listed in the manifest"));
         }

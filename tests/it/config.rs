@@ -50,24 +50,72 @@ fn each_invalid_value_names_its_field() {
     let cases: &[(&str, &str, &str)] = &[
         ("hurst: 0.8", "hurst: 1.2", "studies.s.hurst"),
         ("hurst: 0.8", "hurst: 0.0", "studies.s.hurst"),
-        ("lambda_s_over_dl: 4", "lambda_s_over_dl: 1.5", "studies.s.profiles.quick.lambda_s_over_dl"),
-        ("l_over_lambda_l: 2", "l_over_lambda_l: 0.5", "studies.s.profiles.quick.l_over_lambda_l"),
-        ("l_over_lambda_l: 2", "l_over_lambda_l: 2.1", "studies.s.profiles.quick.l_over_lambda_l"),
-        ("lambda_l_over_lambda_s: 8", "lambda_l_over_lambda_s: 1", "studies.s.lambda_l_over_lambda_s"),
-        ("realizations: 2", "realizations: 0", "studies.s.profiles.quick.realizations"),
+        (
+            "lambda_s_over_dl: 4",
+            "lambda_s_over_dl: 1.5",
+            "studies.s.profiles.quick.lambda_s_over_dl",
+        ),
+        (
+            "l_over_lambda_l: 2",
+            "l_over_lambda_l: 0.5",
+            "studies.s.profiles.quick.l_over_lambda_l",
+        ),
+        (
+            "l_over_lambda_l: 2",
+            "l_over_lambda_l: 2.1",
+            "studies.s.profiles.quick.l_over_lambda_l",
+        ),
+        (
+            "lambda_l_over_lambda_s: 8",
+            "lambda_l_over_lambda_s: 1",
+            "studies.s.lambda_l_over_lambda_s",
+        ),
+        (
+            "realizations: 2",
+            "realizations: 0",
+            "studies.s.profiles.quick.realizations",
+        ),
         ("min: 0.001", "min: -0.001", "studies.s.loads.min"),
         ("max: 0.06", "max: 0.0001", "studies.s.loads.max"),
         ("count: 5", "count: 1", "studies.s.loads.count"),
-        ("{min: 0.001, max: 0.06, count: 5}", "{values: [0.01, 0.01]}", "studies.s.loads.values[1]"),
-        ("{min: 0.001, max: 0.06, count: 5}", "{values: [0.02, 0.01]}", "studies.s.loads.values[1]"),
-        ("{min: 0.001, max: 0.06, count: 5}", "{values: [0.0]}", "studies.s.loads.values[0]"),
-        ("{min: 0.001, max: 0.06, count: 5}", "{min: 0.001, max: 0.06}", "studies.s.loads"),
+        (
+            "{min: 0.001, max: 0.06, count: 5}",
+            "{values: [0.01, 0.01]}",
+            "studies.s.loads.values[1]",
+        ),
+        (
+            "{min: 0.001, max: 0.06, count: 5}",
+            "{values: [0.02, 0.01]}",
+            "studies.s.loads.values[1]",
+        ),
+        (
+            "{min: 0.001, max: 0.06, count: 5}",
+            "{values: [0.0]}",
+            "studies.s.loads.values[0]",
+        ),
+        (
+            "{min: 0.001, max: 0.06, count: 5}",
+            "{min: 0.001, max: 0.06}",
+            "studies.s.loads",
+        ),
         ("e_star: 1.0", "e_star: 0.0", "material.e_star"),
         ("tolerance: 1.0e-10", "tolerance: 2.0", "solver.tolerance"),
-        ("max_iterations: 1000", "max_iterations: 0", "solver.max_iterations"),
+        (
+            "max_iterations: 1000",
+            "max_iterations: 0",
+            "solver.max_iterations",
+        ),
         ("quick: {l_over", "fast: {l_over", "studies.s.profiles.fast"),
-        ("seed: 1", "seed: 1\n    method: spectral", "studies.s.method"),
-        ("seed: 1", "seed: 1\n    rolloff_over_lambda_l: 4", "studies.s.rolloff_over_lambda_l"),
+        (
+            "seed: 1",
+            "seed: 1\n    method: spectral",
+            "studies.s.method",
+        ),
+        (
+            "seed: 1",
+            "seed: 1\n    rolloff_over_lambda_l: 4",
+            "studies.s.rolloff_over_lambda_l",
+        ),
         ("schema_version: 1", "schema_version: 2", "schema_version"),
     ];
     for (from, to, field) in cases {
@@ -104,7 +152,10 @@ fn unknown_fields_and_bad_types_are_rejected_at_parse_time() {
 fn unknown_profile_is_an_error_listing_the_known_ones() {
     let p = Pipeline::parse(BASE, "test.yaml").unwrap();
     let msg = p.plan("paper", "test.yaml").unwrap_err().to_string();
-    assert!(msg.contains("paper") && msg.contains("quick") && msg.contains("default"), "{msg}");
+    assert!(
+        msg.contains("paper") && msg.contains("quick") && msg.contains("default"),
+        "{msg}"
+    );
 }
 
 #[test]

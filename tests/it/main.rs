@@ -15,7 +15,11 @@ pub fn bin() -> Command {
 
 /// Run wearcoef in `dir` with `args`; returns the output.
 pub fn run_in(dir: &Path, args: &[&str]) -> Output {
-    bin().current_dir(dir).args(args).output().expect("wearcoef runs")
+    bin()
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("wearcoef runs")
 }
 
 /// Parse stdout as one JSON value.
