@@ -56,7 +56,10 @@ impl Fft2 {
     /// # Panics
     /// If `n` is odd or below 2 (a [`crate::grid::Grid`] never is).
     pub fn new(n: usize) -> Self {
-        assert!(n >= 2 && n.is_multiple_of(2), "Fft2 needs an even n ≥ 2, got {n}");
+        assert!(
+            n >= 2 && n.is_multiple_of(2),
+            "Fft2 needs an even n ≥ 2, got {n}"
+        );
         let mut real_planner = RealFftPlanner::<f64>::new();
         let mut planner = FftPlanner::<f64>::new();
         Self {
