@@ -21,6 +21,7 @@
 //! - Loads are `W/W0` with `W0 = E* · rms slope · L²`.
 
 pub mod config;
+pub mod contact;
 pub mod grid;
 pub mod io;
 pub mod pipeline;

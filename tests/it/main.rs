@@ -2,6 +2,7 @@
 
 mod cli;
 mod config;
+mod contact;
 mod store;
 mod surface;
 

@@ -336,3 +336,35 @@ fn cache_key_is_stable() {
 }
 
 const PINNED_SURFACE_KEY: &str = "8aa76b2801a9988576896a292e010b73809f1fcc17df8449f5e5ef3ed57c3342";
+
+/// Every parameter the surface stage reads changes its key.
+#[test]
+fn every_surface_parameter_changes_the_key() {
+    use wearcoef::pipeline::hash::instance_key;
+    use wearcoef::pipeline::stages::{surface_params_json, SURFACE_VERSION};
+    use wearcoef::surface::{Method, SurfaceParams};
+    let base = SurfaceParams {
+        n: 64,
+        hurst: 0.8,
+        lambda_l_px: 32.0,
+        lambda_s_px: 4.0,
+        rolloff_lambda_px: None,
+        method: Method::Filter,
+        seed: 1,
+    };
+    let key = |p: &SurfaceParams| instance_key("surface", SURFACE_VERSION, &surface_params_json(p), &[]);
+    let variants = [
+        SurfaceParams { n: 128, ..base.clone() },
+        SurfaceParams { hurst: 0.8000000000000002, ..base.clone() },
+        SurfaceParams { lambda_l_px: 16.0, ..base.clone() },
+        SurfaceParams { lambda_s_px: 8.0, ..base.clone() },
+        SurfaceParams { rolloff_lambda_px: Some(64.0), ..base.clone() },
+        SurfaceParams { method: Method::RandomPhase, ..base.clone() },
+        SurfaceParams { seed: 2, ..base.clone() },
+    ];
+    let mut keys = std::collections::BTreeSet::new();
+    keys.insert(key(&base));
+    for v in &variants {
+        assert!(keys.insert(key(v)), "{v:?} did not change the key");
+    }
+}
