@@ -46,3 +46,25 @@ pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
     };
     Ok((rows, values))
 }
+
+/// Write any float64 array of the given shape (C order) as `.npy`.
+pub fn write_f64(path: &Path, shape: &[usize], values: Vec<f64>) -> Result<(), IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), values)
+        .map_err(|e| err(e.to_string()))?;
+    write_npy(path, &array).map_err(|e| err(e.to_string()))
+}
+
+/// Write any uint8 array of the given shape (C order) as `.npy`.
+pub fn write_u8(path: &Path, shape: &[usize], values: Vec<u8>) -> Result<(), IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), values)
+        .map_err(|e| err(e.to_string()))?;
+    write_npy(path, &array).map_err(|e| err(e.to_string()))
+}

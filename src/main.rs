@@ -10,6 +10,10 @@ use clap::{Parser, Subcommand, ValueEnum};
 use serde_json::json;
 
 use wearcoef::config::{ConfigError, Pipeline};
+use wearcoef::contact::elastic::ElasticOperator;
+use wearcoef::contact::solver::SolverConfig;
+use wearcoef::contact::sweep::{sweep, SweepError};
+use wearcoef::grid::Grid;
 use wearcoef::pipeline::runner::{self, RunOptions};
 use wearcoef::pipeline::store::Store;
 use wearcoef::spectral::Fft2;
@@ -79,6 +83,8 @@ enum Command {
         #[arg(long)]
         corrupt: bool,
     },
+    /// Solve the contact of a surface file at one or several loads.
+    Solve(SolveArgs),
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).
     Surface {
         /// Grid nodes per side (even).
@@ -110,6 +116,35 @@ enum Command {
     },
 }
 
+#[derive(clap::Args)]
+struct SolveArgs {
+    /// Heights (float64 .npy, square, taken as they are; periodic box of side 1).
+    #[arg(long)]
+    surface: PathBuf,
+    /// Loads W/W0, comma separated, solved in this order as one warm-started sweep
+    /// (W0 = E*·spectral rms slope·L²).
+    #[arg(long, value_delimiter = ',', required = true)]
+    loads: Vec<f64>,
+    /// Tolerance on the complementarity error (docs/CONVENTIONS.md).
+    #[arg(long, default_value_t = 1e-8)]
+    tol: f64,
+    /// Iteration cap per load.
+    #[arg(long, default_value_t = 5000)]
+    max_iter: usize,
+    /// Effective modulus E* (pressures are written in its unit).
+    #[arg(long, default_value_t = 1.0)]
+    e_star: f64,
+    /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.
+    #[arg(long)]
+    pressure_out: Option<PathBuf>,
+    /// Contact-map output: uint8 0/1, (n, n) for one load, (loads, n, n) for several.
+    #[arg(long)]
+    contact_out: Option<PathBuf>,
+    /// Print one JSON object per load, as a JSON array.
+    #[arg(long)]
+    json: bool,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum MethodArg {
     Filter,
@@ -131,6 +166,11 @@ fn main() -> ExitCode {
                 c.downcast_ref::<ConfigError>().is_some()
                     || c.downcast_ref::<SurfaceError>().is_some()
                     || c.downcast_ref::<InputError>().is_some()
+                    || c.downcast_ref::<wearcoef::io::IoError>().is_some()
+                    || matches!(
+                        c.downcast_ref::<SweepError>(),
+                        Some(SweepError::Input(_)) | Some(SweepError::BadLoad { .. })
+                    )
             });
             ExitCode::from(if is_input { 2 } else { 1 })
         }
@@ -229,6 +269,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 println!("removed {}", data.display());
             }
         }
+        Command::Solve(args) => solve(args)?,
         Command::Surface {
             n,
             lambda_l_px,
@@ -280,6 +321,85 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     }
     std::io::stdout().flush().ok();
     Ok(ExitCode::SUCCESS)
+}
+
+fn solve(args: SolveArgs) -> anyhow::Result<()> {
+    let (n, heights) = wearcoef::io::read_square_f64(&args.surface)?;
+    if n < 2 || n % 2 != 0 {
+        return Err(InputError(format!(
+            "{}: the grid side must be even and ≥ 2, got {n}",
+            args.surface.display()
+        ))
+        .into());
+    }
+    if !(args.e_star.is_finite() && args.e_star > 0.0) {
+        return Err(InputError(format!("--e-star {} must be finite and > 0", args.e_star)).into());
+    }
+    if !(args.tol.is_finite() && args.tol > 0.0) || args.max_iter == 0 {
+        return Err(InputError("--tol must be finite and > 0 and --max-iter ≥ 1".into()).into());
+    }
+    let grid = Grid::unit(n)?;
+    if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(InputError(format!(
+            "{}: height at row {}, column {} is {v}; heights must be finite",
+            args.surface.display(),
+            i / n,
+            i % n
+        ))
+        .into());
+    }
+    let slope = wearcoef::surface::rms_slope(&grid, &heights);
+    let op = ElasticOperator::new(grid, args.e_star);
+    let cfg = SolverConfig {
+        tolerance: args.tol,
+        max_iterations: args.max_iter,
+        ..SolverConfig::default()
+    };
+    let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
+    let mut pressures = Vec::new();
+    let mut contacts = Vec::new();
+    let results = sweep(&op, &heights, slope, &args.loads, &cfg, |_, solver, _| {
+        if keep_fields {
+            pressures.extend_from_slice(solver.pressure());
+            contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
+        }
+        Ok(())
+    })?;
+    let shape: Vec<usize> = if args.loads.len() == 1 {
+        vec![n, n]
+    } else {
+        vec![args.loads.len(), n, n]
+    };
+    if let Some(path) = &args.pressure_out {
+        write_atomically(path, |tmp| {
+            Ok(wearcoef::io::write_f64(tmp, &shape, pressures)?)
+        })?;
+    }
+    if let Some(path) = &args.contact_out {
+        write_atomically(path, |tmp| {
+            Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)
+        })?;
+    }
+    if args.json {
+        let rows: Vec<_> = results
+            .iter()
+            .map(|r| {
+                json!({
+                    "w_over_w0": r.w_over_w0,
+                    "mean_pressure": r.mean_pressure,
+                    "area_fraction": r.area_fraction,
+                    "n_contact_px": r.n_contact_px,
+                    "iterations": r.report.iterations,
+                    "convolutions": r.report.convolutions,
+                    "error": r.report.error,
+                    "converged": r.report.converged(),
+                    "seconds": r.seconds,
+                })
+            })
+            .collect();
+        println!("{}", serde_json::to_string(&rows)?);
+    }
+    Ok(())
 }
 
 /// Write through a temporary sibling file and rename, so a failure leaves no partial file.

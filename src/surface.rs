@@ -295,6 +295,15 @@ pub fn measure(
     }
 }
 
+/// rms slope sqrt(<|∇h|²>) of a row-major height field on `grid`, computed spectrally.
+pub fn rms_slope(grid: &Grid, heights: &[f64]) -> f64 {
+    let fft = Fft2::new(grid.n());
+    let mut scratch = fft.make_scratch();
+    let mut spectrum = fft.make_spectrum();
+    fft.forward(heights, &mut spectrum, &mut scratch);
+    rms_slope_from_spectrum(grid, &spectrum)
+}
+
 /// rms slope sqrt(<|∇h|²>) of the real field whose unnormalised half spectrum (kx-major)
 /// is `spectrum`: `<|∇h|²> = Σ_k |q_k|² |H_k|² / n⁴` over the full spectrum (Parseval).
 pub fn rms_slope_from_spectrum(grid: &Grid, spectrum: &[Complex64]) -> f64 {

@@ -36,7 +36,10 @@ pub struct OperatorWorkspace {
 impl ElasticOperator {
     /// Plan the operator for `grid` and effective modulus `e_star` (> 0).
     pub fn new(grid: Grid, e_star: f64) -> Self {
-        assert!(e_star.is_finite() && e_star > 0.0, "E* must be finite and > 0");
+        assert!(
+            e_star.is_finite() && e_star > 0.0,
+            "E* must be finite and > 0"
+        );
         let n = grid.n();
         let fft = Fft2::new(n);
         let norm = 1.0 / (n * n) as f64;
@@ -46,7 +49,11 @@ impl ElasticOperator {
             let w = grid.half_weight(jx);
             for iy in 0..n {
                 let q = grid.q_norm(jx, iy);
-                let g = if q > 0.0 { 2.0 / (e_star * q) * norm } else { 0.0 };
+                let g = if q > 0.0 {
+                    2.0 / (e_star * q) * norm
+                } else {
+                    0.0
+                };
                 multiplier[jx * n + iy] = g;
                 sum += w * g;
             }
@@ -122,7 +129,10 @@ mod tests {
             op.apply(&p, &mut u, &mut ws);
             let expected = 2.0 / (e_star * q);
             for (ui, pi) in u.iter().zip(&p) {
-                assert!((ui - expected * pi).abs() <= 1e-12 * expected, "mode ({a},{b})");
+                assert!(
+                    (ui - expected * pi).abs() <= 1e-12 * expected,
+                    "mode ({a},{b})"
+                );
             }
         }
     }

@@ -1,7 +1,8 @@
 //! Frictionless normal contact of a rigid rough surface on an elastic half-space:
-//! the periodic FFT operator ([`elastic`]), the Polonsky–Keer solver ([`solver`]) and
-//! analytic references ([`reference`]).
+//! the periodic FFT operator ([`elastic`]), the Polonsky–Keer solver ([`solver`]), load
+//! sweeps and contact-map packing ([`sweep`]) and analytic references ([`reference`]).
 
 pub mod elastic;
 pub mod reference;
 pub mod solver;
+pub mod sweep;

@@ -97,28 +97,52 @@ mod tests {
 
     #[test]
     fn hertz_pressure_integrates_to_the_load() {
-        let h = Hertz { load: 2.5, r_curv: 0.7, e_star: 3.0 };
+        let h = Hertz {
+            load: 2.5,
+            r_curv: 0.7,
+            e_star: 3.0,
+        };
         let a = h.contact_radius();
         // ∫ p 2πr dr with r = a sin θ removes the edge singularity of the derivative.
-        let total = simpson(|t| h.pressure(a * t.sin()) * 2.0 * PI * a * t.sin() * a * t.cos(), 0.0, PI / 2.0, 2000);
+        let total = simpson(
+            |t| h.pressure(a * t.sin()) * 2.0 * PI * a * t.sin() * a * t.cos(),
+            0.0,
+            PI / 2.0,
+            2000,
+        );
         assert!((total / h.load - 1.0).abs() < 1e-10, "{total}");
-        assert!((h.peak_pressure() - 2.0 * h.e_star * a / (PI * h.r_curv)).abs() < 1e-12 * h.peak_pressure());
+        assert!(
+            (h.peak_pressure() - 2.0 * h.e_star * a / (PI * h.r_curv)).abs()
+                < 1e-12 * h.peak_pressure()
+        );
     }
 
     #[test]
     fn westergaard_pressure_averages_to_the_mean() {
-        let w = Westergaard { amplitude: 0.01, wavelength: 1.0, e_star: 2.0 };
+        let w = Westergaard {
+            amplitude: 0.01,
+            wavelength: 1.0,
+            e_star: 2.0,
+        };
         let p_star = w.full_contact_pressure();
         for ratio in [0.05, 0.2, 0.5, 0.9, 1.3] {
             let mean = ratio * p_star;
             let avg = if ratio < 1.0 {
                 // x = a sin θ on [−a, a] removes the square-root edges.
                 let a = w.half_width(mean);
-                simpson(|t| w.pressure(a * t.sin(), mean) * a * t.cos(), -PI / 2.0, PI / 2.0, 4000) / w.wavelength
+                simpson(
+                    |t| w.pressure(a * t.sin(), mean) * a * t.cos(),
+                    -PI / 2.0,
+                    PI / 2.0,
+                    4000,
+                ) / w.wavelength
             } else {
                 simpson(|x| w.pressure(x, mean), -0.5, 0.5, 4000)
             };
-            assert!((avg / mean - 1.0).abs() < 1e-9, "ratio {ratio}: {avg} vs {mean}");
+            assert!(
+                (avg / mean - 1.0).abs() < 1e-9,
+                "ratio {ratio}: {avg} vs {mean}"
+            );
         }
     }
 }

@@ -33,6 +33,9 @@ use super::elastic::{ElasticOperator, OperatorWorkspace};
 
 /// Elements per reduction chunk (fixed, so sums do not depend on the thread count).
 const CHUNK: usize = 8192;
+/// Independent accumulators per reduction (breaks floating-point dependency chains; the
+/// summation order stays fixed).
+const LANES: usize = 8;
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub const RESYNC: usize = 32;
 
@@ -149,10 +152,13 @@ impl<'a> Solver<'a> {
             });
         }
         let mean = heights.iter().sum::<f64>() / len as f64;
-        let height_std = (heights.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / len as f64).sqrt();
+        let height_std =
+            (heights.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / len as f64).sqrt();
         let (lo, hi) = heights
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
         Ok(Self {
             op,
             heights,
@@ -190,7 +196,11 @@ impl<'a> Solver<'a> {
 
     /// Solve for the mean pressure `mean_pressure` (≥ 0), warm-starting from the previous
     /// solution scaled to the new load if there is one.
-    pub fn solve(&mut self, mean_pressure: f64, cfg: &SolverConfig) -> Result<SolveReport, ContactError> {
+    pub fn solve(
+        &mut self,
+        mean_pressure: f64,
+        cfg: &SolverConfig,
+    ) -> Result<SolveReport, ContactError> {
         if !(mean_pressure.is_finite() && mean_pressure >= 0.0) {
             return Err(ContactError::BadLoad(mean_pressure));
         }
@@ -229,7 +239,8 @@ impl<'a> Solver<'a> {
             self.pressure.fill(target);
         }
         self.has_solution = false;
-        self.op.apply(&self.pressure, &mut self.deflection, &mut self.ws);
+        self.op
+            .apply(&self.pressure, &mut self.deflection, &mut self.ws);
         report.convolutions += 1;
 
         let mut pending = Pending::Exact;
@@ -253,7 +264,8 @@ impl<'a> Solver<'a> {
 
             if error <= cfg.tolerance && !exact {
                 // Confirm with an exact deflection before declaring convergence.
-                self.op.apply(&self.pressure, &mut self.deflection, &mut self.ws);
+                self.op
+                    .apply(&self.pressure, &mut self.deflection, &mut self.ws);
                 report.convolutions += 1;
                 exact = true;
                 linear_steps = 0;
@@ -283,7 +295,11 @@ impl<'a> Solver<'a> {
             report.iterations += 1;
 
             // Pass 2: conjugate direction on the contact set.
-            let beta = if restart || g_norm_old <= 0.0 { 0.0 } else { g_norm / g_norm_old };
+            let beta = if restart || g_norm_old <= 0.0 {
+                0.0
+            } else {
+                g_norm / g_norm_old
+            };
             g_norm_old = g_norm;
             let numerator = self.pass_direction(shift + mean_g, beta);
 
@@ -304,7 +320,8 @@ impl<'a> Solver<'a> {
             shift += mean_g;
             if total <= 0.0 {
                 self.pressure.fill(target);
-                self.op.apply(&self.pressure, &mut self.deflection, &mut self.ws);
+                self.op
+                    .apply(&self.pressure, &mut self.deflection, &mut self.ws);
                 report.convolutions += 1;
                 exact = true;
                 restart = true;
@@ -312,7 +329,8 @@ impl<'a> Solver<'a> {
             }
             let scale = target * len as f64 / total;
             if clipped > 0.0 || readmitted > 0.0 || linear_steps + 1 >= RESYNC {
-                self.op.apply(&self.pressure, &mut self.deflection, &mut self.ws);
+                self.op
+                    .apply(&self.pressure, &mut self.deflection, &mut self.ws);
                 report.convolutions += 1;
                 pending = Pending::Scale(scale);
                 exact = true;
@@ -349,31 +367,65 @@ impl<'a> Solver<'a> {
             .zip(self.work.par_chunks(CHUNK))
             .zip(self.partials.par_iter_mut())
             .for_each(|((((pc, uc), hc), rc), part)| {
-                let (mut n, mut sg, mut sg2, mut spg, mut sp, mut min) = (0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY);
-                for i in 0..pc.len() {
-                    match pending {
-                        Pending::Exact => {}
-                        Pending::Scale(s) => {
-                            pc[i] *= s;
-                            uc[i] *= s;
-                        }
-                        Pending::Linear { tau, scale } => {
-                            pc[i] *= scale;
-                            uc[i] = scale * (uc[i] - tau * rc[i]);
+                match pending {
+                    Pending::Exact => {}
+                    Pending::Scale(s) => {
+                        for (p, u) in pc.iter_mut().zip(uc.iter_mut()) {
+                            *p *= s;
+                            *u *= s;
                         }
                     }
-                    let g = uc[i] - hc[i] - shift;
-                    min = min.min(g);
-                    let p = pc[i];
-                    if p > 0.0 {
-                        n += 1.0;
-                        sg += g;
-                        sg2 += g * g;
-                        spg += p * g;
-                        sp += p;
+                    Pending::Linear { tau, scale } => {
+                        for ((p, u), r) in pc.iter_mut().zip(uc.iter_mut()).zip(rc) {
+                            *p *= scale;
+                            *u = scale * (*u - tau * r);
+                        }
                     }
                 }
-                *part = [n, sg, sg2, spg, sp, min];
+                let (mut n, mut sg, mut sg2, mut spg, mut sp) = (
+                    [0.0f64; LANES],
+                    [0.0; LANES],
+                    [0.0; LANES],
+                    [0.0; LANES],
+                    [0.0; LANES],
+                );
+                let mut min = [f64::INFINITY; LANES];
+                let mut step = |p: &[f64], u: &[f64], h: &[f64]| {
+                    for l in 0..p.len() {
+                        let g = u[l] - h[l] - shift;
+                        let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
+                        min[l] = if g < min[l] { g } else { min[l] };
+                        n[l] += m;
+                        sg[l] += m * g;
+                        sg2[l] += m * g * g;
+                        spg[l] += p[l] * g;
+                        sp[l] += p[l];
+                    }
+                };
+                let (pe, ue, he) = (
+                    pc.chunks_exact(LANES),
+                    uc.chunks_exact(LANES),
+                    hc.chunks_exact(LANES),
+                );
+                let (pr, ur, hr) = (pe.remainder(), ue.remainder(), he.remainder());
+                for ((p, u), h) in pe.zip(ue).zip(he) {
+                    let (p, u, h): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
+                        p.try_into().unwrap(),
+                        u.try_into().unwrap(),
+                        h.try_into().unwrap(),
+                    );
+                    step(p, u, h);
+                }
+                step(pr, ur, hr);
+                let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
+                *part = [
+                    sum(n),
+                    sum(sg),
+                    sum(sg2),
+                    sum(spg),
+                    sum(sp),
+                    min.iter().fold(f64::INFINITY, |a, &b| a.min(b)),
+                ];
             });
         let mut acc = [0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY];
         for part in &self.partials {
@@ -395,23 +447,39 @@ impl<'a> Solver<'a> {
             .zip(h.par_chunks(CHUNK))
             .zip(self.partials.par_iter_mut())
             .for_each(|((((tc, pc), uc), hc), part)| {
-                let mut num = 0.0;
-                for i in 0..tc.len() {
-                    if pc[i] > 0.0 {
-                        let gc = uc[i] - hc[i] - level;
-                        let t = gc + beta * tc[i];
-                        tc[i] = t;
-                        num += gc * t;
-                    } else {
-                        tc[i] = 0.0;
+                let mut num = [0.0f64; LANES];
+                let mut step = |t: &mut [f64], p: &[f64], u: &[f64], h: &[f64]| {
+                    for l in 0..t.len() {
+                        let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
+                        let gc = u[l] - h[l] - level;
+                        let tn = m * (gc + beta * t[l]);
+                        t[l] = tn;
+                        num[l] += gc * tn;
                     }
+                };
+                let mut te = tc.chunks_exact_mut(LANES);
+                let (pe, ue, he) = (
+                    pc.chunks_exact(LANES),
+                    uc.chunks_exact(LANES),
+                    hc.chunks_exact(LANES),
+                );
+                let (pr, ur, hr) = (pe.remainder(), ue.remainder(), he.remainder());
+                for (((t, p), u), h) in (&mut te).zip(pe).zip(ue).zip(he) {
+                    let t: &mut [f64; LANES] = t.try_into().unwrap();
+                    let (p, u, h): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
+                        p.try_into().unwrap(),
+                        u.try_into().unwrap(),
+                        h.try_into().unwrap(),
+                    );
+                    step(t, p, u, h);
                 }
-                part[0] = num;
+                step(te.into_remainder(), pr, ur, hr);
+                part[0] = num.iter().sum();
             });
         self.partials.iter().map(|p| p[0]).sum()
     }
 
-    /// Over S: `Σ r, Σ r t, Σ t` with `r = K t` in `work`.
+    /// Over S: `Σ r, Σ r t, Σ t` with `r = K t` in `work` (t is 0 off S).
     fn pass_curvature(&mut self) -> [f64; 6] {
         self.work
             .par_chunks(CHUNK)
@@ -419,15 +487,32 @@ impl<'a> Solver<'a> {
             .zip(self.pressure.par_chunks(CHUNK))
             .zip(self.partials.par_iter_mut())
             .for_each(|(((rc, tc), pc), part)| {
-                let (mut sr, mut srt, mut st) = (0.0, 0.0, 0.0);
-                for i in 0..rc.len() {
-                    if pc[i] > 0.0 {
-                        sr += rc[i];
-                        srt += rc[i] * tc[i];
-                        st += tc[i];
+                let (mut sr, mut srt, mut st) = ([0.0f64; LANES], [0.0; LANES], [0.0; LANES]);
+                let mut step = |r: &[f64], t: &[f64], p: &[f64]| {
+                    for l in 0..r.len() {
+                        let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
+                        sr[l] += m * r[l];
+                        srt[l] += r[l] * t[l];
+                        st[l] += t[l];
                     }
+                };
+                let (re, te, pe) = (
+                    rc.chunks_exact(LANES),
+                    tc.chunks_exact(LANES),
+                    pc.chunks_exact(LANES),
+                );
+                let (rr, tr, pr) = (re.remainder(), te.remainder(), pe.remainder());
+                for ((r, t), p) in re.zip(te).zip(pe) {
+                    let (r, t, p): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
+                        r.try_into().unwrap(),
+                        t.try_into().unwrap(),
+                        p.try_into().unwrap(),
+                    );
+                    step(r, t, p);
                 }
-                *part = [sr, srt, st, 0.0, 0.0, 0.0];
+                step(rr, tr, pr);
+                let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
+                *part = [sum(sr), sum(srt), sum(st), 0.0, 0.0, 0.0];
             });
         let mut acc = [0.0; 6];
         for part in &self.partials {
@@ -449,27 +534,45 @@ impl<'a> Solver<'a> {
             .zip(h.par_chunks(CHUNK))
             .zip(self.partials.par_iter_mut())
             .for_each(|((((pc, tc), uc), hc), part)| {
-                let (mut total, mut clipped, mut readmitted) = (0.0, 0.0, 0.0);
-                for i in 0..pc.len() {
-                    let mut p = pc[i];
-                    if p > 0.0 {
-                        p -= tau * tc[i];
-                        if p <= 0.0 {
-                            p = 0.0;
-                            clipped += 1.0;
-                        }
+                let (mut total, mut clipped, mut readmitted) =
+                    ([0.0f64; LANES], [0.0; LANES], [0.0; LANES]);
+                let mut step = |p: &mut [f64], t: &[f64], u: &[f64], h: &[f64]| {
+                    for l in 0..p.len() {
+                        let old = p[l];
+                        let stepped = old - tau * t[l]; // t = 0 off S, so p stays 0 there
+                        let kept = if stepped > 0.0 { stepped } else { 0.0 };
+                        let gc = u[l] - h[l] - level;
+                        let readmit = kept == 0.0 && gc < 0.0;
+                        let new = if readmit { -tau * gc } else { kept };
+                        p[l] = new;
+                        total[l] += new;
+                        clipped[l] += if old > 0.0 && stepped <= 0.0 {
+                            1.0
+                        } else {
+                            0.0
+                        };
+                        readmitted[l] += if readmit { 1.0 } else { 0.0 };
                     }
-                    if p == 0.0 {
-                        let gc = uc[i] - hc[i] - level;
-                        if gc < 0.0 {
-                            p = -tau * gc;
-                            readmitted += 1.0;
-                        }
-                    }
-                    pc[i] = p;
-                    total += p;
+                };
+                let mut pe = pc.chunks_exact_mut(LANES);
+                let (te, ue, he) = (
+                    tc.chunks_exact(LANES),
+                    uc.chunks_exact(LANES),
+                    hc.chunks_exact(LANES),
+                );
+                let (tr, ur, hr) = (te.remainder(), ue.remainder(), he.remainder());
+                for (((p, t), u), h) in (&mut pe).zip(te).zip(ue).zip(he) {
+                    let p: &mut [f64; LANES] = p.try_into().unwrap();
+                    let (t, u, h): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
+                        t.try_into().unwrap(),
+                        u.try_into().unwrap(),
+                        h.try_into().unwrap(),
+                    );
+                    step(p, t, u, h);
                 }
-                *part = [total, clipped, readmitted, 0.0, 0.0, 0.0];
+                step(pe.into_remainder(), tr, ur, hr);
+                let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
+                *part = [sum(total), sum(clipped), sum(readmitted), 0.0, 0.0, 0.0];
             });
         let mut acc = [0.0; 6];
         for part in &self.partials {

@@ -51,7 +51,10 @@ fn paraboloid(n: usize, r_curv: f64) -> Vec<f64> {
     let dx = 1.0 / n as f64;
     (0..n * n)
         .map(|i| {
-            let (y, x) = (((i / n) as f64 - (n / 2) as f64) * dx, ((i % n) as f64 - (n / 2) as f64) * dx);
+            let (y, x) = (
+                ((i / n) as f64 - (n / 2) as f64) * dx,
+                ((i % n) as f64 - (n / 2) as f64) * dx,
+            );
             -(x * x + y * y) / (2.0 * r_curv)
         })
         .collect()
@@ -61,9 +64,13 @@ fn paraboloid(n: usize, r_curv: f64) -> Vec<f64> {
 fn hertz_on_a_periodic_grid() {
     // L/a = 10, a/Δ = 25.6 (VALIDATION §3a row N = 256).
     let n = 256;
-    let (r_curv, e_star, a_target) = (1.0, 1.0, 0.1);
+    let (r_curv, e_star, a_target) = (1.0, 1.0, 0.1f64);
     let load = 4.0 * a_target.powi(3) * e_star / (3.0 * r_curv);
-    let hertz = Hertz { load, r_curv, e_star };
+    let hertz = Hertz {
+        load,
+        r_curv,
+        e_star,
+    };
     let h = paraboloid(n, r_curv);
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), e_star);
     let mut solver = Solver::new(&op, &h).unwrap();
@@ -73,18 +80,28 @@ fn hertz_on_a_periodic_grid() {
     let dx = 1.0 / n as f64;
     let a = hertz.contact_radius();
     let a_num = (solver.contact_count() as f64 * dx * dx / PI).sqrt();
-    assert!((a_num / a - 1.0).abs() <= 0.02, "contact radius {a_num} vs {a}");
+    assert!(
+        (a_num / a - 1.0).abs() <= 0.02,
+        "contact radius {a_num} vs {a}"
+    );
     let p_max = p.iter().cloned().fold(0.0, f64::max);
-    assert!((p_max / hertz.peak_pressure() - 1.0).abs() <= 0.005, "peak {p_max} vs {}", hertz.peak_pressure());
+    assert!(
+        (p_max / hertz.peak_pressure() - 1.0).abs() <= 0.005,
+        "peak {p_max} vs {}",
+        hertz.peak_pressure()
+    );
     let (mut num, mut den, mut inner) = (0.0, 0.0, 0.0f64);
-    for i in 0..n * n {
-        let (y, x) = (((i / n) as f64 - (n / 2) as f64) * dx, ((i % n) as f64 - (n / 2) as f64) * dx);
+    for (i, pi) in p.iter().enumerate() {
+        let (y, x) = (
+            ((i / n) as f64 - (n / 2) as f64) * dx,
+            ((i % n) as f64 - (n / 2) as f64) * dx,
+        );
         let r = (x * x + y * y).sqrt();
         let exact = hertz.pressure(r);
-        num += (p[i] - exact).powi(2);
+        num += (pi - exact).powi(2);
         den += exact * exact;
         if r < 0.9 * a {
-            inner = inner.max((p[i] - exact).abs() / hertz.peak_pressure());
+            inner = inner.max((pi - exact).abs() / hertz.peak_pressure());
         }
     }
     let l2 = (num / den).sqrt();
@@ -93,13 +110,19 @@ fn hertz_on_a_periodic_grid() {
 }
 
 fn westergaard_surface(n: usize, h0: f64) -> Vec<f64> {
-    (0..n * n).map(|i| h0 * (2.0 * PI * (i % n) as f64 / n as f64).cos()).collect()
+    (0..n * n)
+        .map(|i| h0 * (2.0 * PI * (i % n) as f64 / n as f64).cos())
+        .collect()
 }
 
 #[test]
 fn westergaard_partial_contact() {
     for (n, ratio) in [(256usize, 0.1), (256, 0.5), (512, 0.3), (256, 0.8)] {
-        let w = Westergaard { amplitude: 0.01, wavelength: 1.0, e_star: 1.0 };
+        let w = Westergaard {
+            amplitude: 0.01,
+            wavelength: 1.0,
+            e_star: 1.0,
+        };
         let mean = ratio * w.full_contact_pressure();
         let h = westergaard_surface(n, w.amplitude);
         let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
@@ -108,7 +131,11 @@ fn westergaard_partial_contact() {
         assert!(report.converged(), "{report:?}");
         let p = &solver.pressure()[..n]; // one row: the field is invariant along y
         for row in 1..n {
-            assert_eq!(&solver.pressure()[row * n..(row + 1) * n], p, "rows must agree");
+            assert_eq!(
+                &solver.pressure()[row * n..(row + 1) * n],
+                p,
+                "rows must agree"
+            );
         }
         let dx = 1.0 / n as f64;
         let (mut num, mut den) = (0.0, 0.0);
@@ -121,17 +148,27 @@ fn westergaard_partial_contact() {
         assert!(l2 <= 0.006, "N = {n}, p̄/p* = {ratio}: L2 {l2}");
         let width = p.iter().filter(|&&v| v > 0.0).count() as f64 * dx;
         let exact_width = 2.0 * w.half_width(mean);
-        assert!((width - exact_width).abs() <= 2.0 * dx, "N = {n}: width {width} vs {exact_width}");
+        assert!(
+            (width - exact_width).abs() <= 2.0 * dx,
+            "N = {n}: width {width} vs {exact_width}"
+        );
         let p_max = p.iter().cloned().fold(0.0, f64::max);
         let exact_max = w.pressure(0.0, mean);
-        assert!((p_max / exact_max - 1.0).abs() <= 1e-3, "peak {p_max} vs {exact_max}");
+        assert!(
+            (p_max / exact_max - 1.0).abs() <= 1e-3,
+            "peak {p_max} vs {exact_max}"
+        );
     }
 }
 
 #[test]
 fn westergaard_full_contact_is_exact() {
     let n = 128;
-    let w = Westergaard { amplitude: 0.01, wavelength: 1.0, e_star: 2.0 };
+    let w = Westergaard {
+        amplitude: 0.01,
+        wavelength: 1.0,
+        e_star: 2.0,
+    };
     let mean = 1.2 * w.full_contact_pressure();
     let h = westergaard_surface(n, w.amplitude);
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
@@ -140,7 +177,10 @@ fn westergaard_full_contact_is_exact() {
     assert!(report.converged());
     for (i, p) in solver.pressure().iter().enumerate() {
         let exact = w.pressure((i % n) as f64 / n as f64, mean);
-        assert!((p - exact).abs() <= 1e-12 * mean, "node {i}: {p} vs {exact}");
+        assert!(
+            (p - exact).abs() <= 1e-12 * mean,
+            "node {i}: {p} vs {exact}"
+        );
     }
     assert_eq!(solver.contact_count(), n * n);
 }
@@ -148,7 +188,11 @@ fn westergaard_full_contact_is_exact() {
 #[test]
 fn westergaard_mean_gap() {
     let n = 512;
-    let w = Westergaard { amplitude: 0.01, wavelength: 1.0, e_star: 1.0 };
+    let w = Westergaard {
+        amplitude: 0.01,
+        wavelength: 1.0,
+        e_star: 1.0,
+    };
     let h = westergaard_surface(n, w.amplitude);
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
     let mut solver = Solver::new(&op, &h).unwrap();
@@ -159,7 +203,10 @@ fn westergaard_mean_gap() {
         let exact = w.mean_gap_over_2h0(mean) * 2.0 * w.amplitude;
         // VALIDATION §1.3: 1e-6 of 2h0 at N = 1024; at N = 512 the discretisation error is
         // about four times larger.
-        assert!((gap - exact).abs() <= 1e-5 * 2.0 * w.amplitude, "p̄/p* = {ratio}: {gap} vs {exact}");
+        assert!(
+            (gap - exact).abs() <= 1e-5 * 2.0 * w.amplitude,
+            "p̄/p* = {ratio}: {gap} vs {exact}"
+        );
     }
 }
 
@@ -177,16 +224,29 @@ fn eggbox_full_contact_threshold() {
     let p_star = 2f64.sqrt() * PI * e_star * d; // λ = L = 1
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), e_star);
     let mut solver = Solver::new(&op, &h).unwrap();
-    assert!(solver.solve(1.02 * p_star, &cfg(1e-12)).unwrap().converged());
-    assert_eq!(solver.contact_count(), n * n, "above p* the contact is complete");
+    assert!(solver
+        .solve(1.02 * p_star, &cfg(1e-12))
+        .unwrap()
+        .converged());
+    assert_eq!(
+        solver.contact_count(),
+        n * n,
+        "above p* the contact is complete"
+    );
     for (i, p) in solver.pressure().iter().enumerate() {
         let (y, x) = ((i / n) as f64 / n as f64, (i % n) as f64 / n as f64);
         let exact = 1.02 * p_star + p_star * (k * x).cos() * (k * y).cos();
         assert!((p - exact).abs() <= 1e-12 * p_star, "{p} vs {exact}");
     }
-    assert!(solver.solve(0.98 * p_star, &cfg(1e-12)).unwrap().converged());
+    assert!(solver
+        .solve(0.98 * p_star, &cfg(1e-12))
+        .unwrap()
+        .converged());
     let fraction = solver.contact_count() as f64 / (n * n) as f64;
-    assert!(fraction < 1.0 && fraction > 0.95, "below p* the contact is partial: {fraction}");
+    assert!(
+        fraction < 1.0 && fraction > 0.95,
+        "below p* the contact is partial: {fraction}"
+    );
 }
 
 #[test]
@@ -201,12 +261,19 @@ fn rough_surface_load_balance_and_complementarity() {
         assert!(report.converged(), "{report:?}");
         let p = solver.pressure();
         let mean_p = p.iter().sum::<f64>() / p.len() as f64;
-        assert!((mean_p / mean - 1.0).abs() <= 1e-12, "load balance {mean_p} vs {mean}");
+        assert!(
+            (mean_p / mean - 1.0).abs() <= 1e-12,
+            "load balance {mean_p} vs {mean}"
+        );
         assert!(p.iter().all(|&v| v >= 0.0));
         assert!(solver.gap().iter().all(|&g| g >= 0.0));
         let err = independent_error(&op, &h, p);
         assert!(err <= 1e-10 * 1.01, "complementarity recomputed: {err}");
-        assert!((err - report.error).abs() <= 1e-12, "reported {} vs recomputed {err}", report.error);
+        assert!(
+            (err - report.error).abs() <= 1e-12,
+            "reported {} vs recomputed {err}",
+            report.error
+        );
     }
 }
 
@@ -226,10 +293,23 @@ fn warm_started_sweep_matches_cold_solves() {
         cold_iters += rc.iterations;
         assert_eq!(warm.contact_count(), cold.contact_count(), "W/W0 = {w}");
         let norm: f64 = cold.pressure().iter().map(|p| p * p).sum::<f64>().sqrt();
-        let diff: f64 = warm.pressure().iter().zip(cold.pressure()).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
-        assert!(diff / norm < 1e-8, "W/W0 = {w}: relative difference {}", diff / norm);
+        let diff: f64 = warm
+            .pressure()
+            .iter()
+            .zip(cold.pressure())
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            diff / norm < 1e-8,
+            "W/W0 = {w}: relative difference {}",
+            diff / norm
+        );
     }
-    assert!(warm_iters < cold_iters, "warm start must save iterations: {warm_iters} vs {cold_iters}");
+    assert!(
+        warm_iters < cold_iters,
+        "warm start must save iterations: {warm_iters} vs {cold_iters}"
+    );
 }
 
 #[test]
@@ -243,7 +323,10 @@ fn zero_load_gives_no_contact_and_no_nan() {
     assert!(solver.pressure().iter().all(|&p| p == 0.0));
     let max_h = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     for (g, hi) in solver.gap().iter().zip(&h) {
-        assert!((g - (max_h - hi)).abs() < 1e-15, "gap is the distance to the highest point");
+        assert!(
+            (g - (max_h - hi)).abs() < 1e-15,
+            "gap is the distance to the highest point"
+        );
     }
 }
 
@@ -261,7 +344,10 @@ fn tiny_load_on_one_node_is_exact() {
     assert_eq!(solver.contact_count(), 1);
     let apex = (n / 2) * n + n / 2;
     assert!((solver.pressure()[apex] / (mean * (n * n) as f64) - 1.0).abs() < 1e-12);
-    assert_eq!(r.error, 0.0, "the single-node state is the exact discrete solution");
+    assert_eq!(
+        r.error, 0.0,
+        "the single-node state is the exact discrete solution"
+    );
 }
 
 #[test]
@@ -298,14 +384,32 @@ fn invalid_input_is_an_error_before_solving() {
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let mut h = vec![0.0; n * n];
     h[3 * n + 5] = f64::NAN;
-    assert!(matches!(Solver::new(&op, &h), Err(ContactError::NonFinite { row: 3, col: 5, .. })));
+    assert!(matches!(
+        Solver::new(&op, &h),
+        Err(ContactError::NonFinite { row: 3, col: 5, .. })
+    ));
     h[3 * n + 5] = f64::INFINITY;
-    assert!(matches!(Solver::new(&op, &h), Err(ContactError::NonFinite { .. })));
-    assert!(matches!(Solver::new(&op, &h[..10]), Err(ContactError::BadLength { expected: 256, got: 10 })));
+    assert!(matches!(
+        Solver::new(&op, &h),
+        Err(ContactError::NonFinite { .. })
+    ));
+    assert!(matches!(
+        Solver::new(&op, &h[..10]),
+        Err(ContactError::BadLength {
+            expected: 256,
+            got: 10
+        })
+    ));
     let ok = vec![0.0; n * n];
     let mut s = Solver::new(&op, &ok).unwrap();
-    assert_eq!(s.solve(-1.0, &cfg(1e-10)).err(), Some(ContactError::BadLoad(-1.0)));
-    assert!(matches!(s.solve(f64::NAN, &cfg(1e-10)), Err(ContactError::BadLoad(_))));
+    assert_eq!(
+        s.solve(-1.0, &cfg(1e-10)).err(),
+        Some(ContactError::BadLoad(-1.0))
+    );
+    assert!(matches!(
+        s.solve(f64::NAN, &cfg(1e-10)),
+        Err(ContactError::BadLoad(_))
+    ));
 }
 
 #[test]
@@ -315,7 +419,14 @@ fn non_convergence_is_reported_not_hidden() {
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let mut solver = Solver::new(&op, &h).unwrap();
     let r = solver
-        .solve(0.05, &SolverConfig { tolerance: 1e-14, max_iterations: 3, stall_window: 1000 })
+        .solve(
+            0.05,
+            &SolverConfig {
+                tolerance: 1e-14,
+                max_iterations: 3,
+                stall_window: 1000,
+            },
+        )
         .unwrap();
     assert_eq!(r.status, Status::MaxIterations);
     assert!(!r.converged());
@@ -327,12 +438,23 @@ fn identical_bits_for_one_and_two_threads() {
     let n = 256;
     let h = rough_surface(n, 64.0, 8.0, 9);
     let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
-            let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-            let mut solver = Solver::new(&op, &h).unwrap();
-            let r = solver.solve(0.02, &cfg(1e-10)).unwrap();
-            (r.iterations, solver.pressure().iter().map(|p| p.to_bits()).collect::<Vec<_>>())
-        })
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+                let mut solver = Solver::new(&op, &h).unwrap();
+                let r = solver.solve(0.02, &cfg(1e-10)).unwrap();
+                (
+                    r.iterations,
+                    solver
+                        .pressure()
+                        .iter()
+                        .map(|p| p.to_bits())
+                        .collect::<Vec<_>>(),
+                )
+            })
     };
     assert_eq!(run(1), run(2));
 }

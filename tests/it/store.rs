@@ -352,15 +352,37 @@ fn every_surface_parameter_changes_the_key() {
         method: Method::Filter,
         seed: 1,
     };
-    let key = |p: &SurfaceParams| instance_key("surface", SURFACE_VERSION, &surface_params_json(p), &[]);
+    let key =
+        |p: &SurfaceParams| instance_key("surface", SURFACE_VERSION, &surface_params_json(p), &[]);
     let variants = [
-        SurfaceParams { n: 128, ..base.clone() },
-        SurfaceParams { hurst: 0.8000000000000002, ..base.clone() },
-        SurfaceParams { lambda_l_px: 16.0, ..base.clone() },
-        SurfaceParams { lambda_s_px: 8.0, ..base.clone() },
-        SurfaceParams { rolloff_lambda_px: Some(64.0), ..base.clone() },
-        SurfaceParams { method: Method::RandomPhase, ..base.clone() },
-        SurfaceParams { seed: 2, ..base.clone() },
+        SurfaceParams {
+            n: 128,
+            ..base.clone()
+        },
+        SurfaceParams {
+            hurst: 0.8000000000000002,
+            ..base.clone()
+        },
+        SurfaceParams {
+            lambda_l_px: 16.0,
+            ..base.clone()
+        },
+        SurfaceParams {
+            lambda_s_px: 8.0,
+            ..base.clone()
+        },
+        SurfaceParams {
+            rolloff_lambda_px: Some(64.0),
+            ..base.clone()
+        },
+        SurfaceParams {
+            method: Method::RandomPhase,
+            ..base.clone()
+        },
+        SurfaceParams {
+            seed: 2,
+            ..base.clone()
+        },
     ];
     let mut keys = std::collections::BTreeSet::new();
     keys.insert(key(&base));

@@ -1,0 +1,140 @@
+//! Load sweeps: one surface, a list of loads W/W0 solved in the order given, each step
+//! warm-started from the previous solution scaled to the new load.
+
+use super::elastic::ElasticOperator;
+use super::solver::{ContactError, SolveReport, Solver, SolverConfig};
+
+/// One solved load.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct LoadResult {
+    /// Dimensionless load W/W0, W0 = E*·rms slope·L².
+    pub w_over_w0: f64,
+    /// Imposed mean pressure p̄ = (W/W0)·E*·rms slope, in the unit of E*.
+    pub mean_pressure: f64,
+    /// Fraction of nodes with p > 0.
+    pub area_fraction: f64,
+    /// Number of nodes with p > 0.
+    pub n_contact_px: usize,
+    pub report: SolveReport,
+    /// Wall time of this solve.
+    pub seconds: f64,
+}
+
+/// A sweep that could not be completed.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error(transparent)]
+    Input(#[from] ContactError),
+    #[error("load {index} (W/W0 = {w_over_w0}) did not converge: {status:?} after {iterations} iterations, error {error:e} > tolerance {tolerance:e}")]
+    NotConverged {
+        index: usize,
+        w_over_w0: f64,
+        status: super::solver::Status,
+        iterations: usize,
+        error: f64,
+        tolerance: f64,
+    },
+    #[error("load {index}: W/W0 = {value} must be finite and ≥ 0")]
+    BadLoad { index: usize, value: f64 },
+    #[error("{0}")]
+    Callback(String),
+}
+
+/// Solve every load of `loads` (W/W0) on `heights` with rms slope `rms_slope`. After each
+/// converged load, `on_load(index, solver, result)` may store fields; the first load that
+/// does not converge stops the sweep with an error (nothing is passed on for it).
+pub fn sweep(
+    op: &ElasticOperator,
+    heights: &[f64],
+    rms_slope: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    mut on_load: impl FnMut(usize, &Solver, &LoadResult) -> Result<(), String>,
+) -> Result<Vec<LoadResult>, SweepError> {
+    if let Some((index, &value)) = loads
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+    {
+        return Err(SweepError::BadLoad { index, value });
+    }
+    let mut solver = Solver::new(op, heights)?;
+    let nodes = heights.len() as f64;
+    let mut out = Vec::with_capacity(loads.len());
+    for (index, &w) in loads.iter().enumerate() {
+        let mean_pressure = w * op.e_star() * rms_slope;
+        let start = std::time::Instant::now();
+        let report = solver.solve(mean_pressure, cfg)?;
+        let seconds = start.elapsed().as_secs_f64();
+        if !report.converged() {
+            return Err(SweepError::NotConverged {
+                index,
+                w_over_w0: w,
+                status: report.status,
+                iterations: report.iterations,
+                error: report.error,
+                tolerance: cfg.tolerance,
+            });
+        }
+        let n_contact_px = solver.contact_count();
+        let result = LoadResult {
+            w_over_w0: w,
+            mean_pressure,
+            area_fraction: n_contact_px as f64 / nodes,
+            n_contact_px,
+            report,
+            seconds,
+        };
+        on_load(index, &solver, &result).map_err(SweepError::Callback)?;
+        out.push(result);
+    }
+    Ok(out)
+}
+
+/// Pack a contact map (`p > 0`) row by row into bits, numpy `packbits` convention: each row
+/// of `n` nodes becomes `ceil(n/8)` bytes, most significant bit first, the last byte padded
+/// with zeros. `numpy.unpackbits(a, axis=1, count=n).astype(bool)` recovers the map.
+pub fn pack_contact(pressure: &[f64], n: usize) -> Vec<u8> {
+    let row_bytes = n.div_ceil(8);
+    let mut out = vec![0u8; n * row_bytes];
+    for (row, chunk) in pressure.chunks_exact(n).enumerate() {
+        for (col, &p) in chunk.iter().enumerate() {
+            if p > 0.0 {
+                out[row * row_bytes + col / 8] |= 0x80 >> (col % 8);
+            }
+        }
+    }
+    out
+}
+
+/// Inverse of [`pack_contact`]: `n × n` booleans, row-major.
+pub fn unpack_contact(bytes: &[u8], n: usize) -> Vec<bool> {
+    let row_bytes = n.div_ceil(8);
+    (0..n * n)
+        .map(|i| {
+            let (row, col) = (i / n, i % n);
+            bytes[row * row_bytes + col / 8] & (0x80 >> (col % 8)) != 0
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packing_round_trips_and_follows_numpy_bit_order() {
+        let n = 10;
+        let pressure: Vec<f64> = (0..n * n)
+            .map(|i| if (i * 7) % 3 == 0 { 1.0 } else { 0.0 })
+            .collect();
+        let packed = pack_contact(&pressure, n);
+        assert_eq!(packed.len(), n * 2);
+        let map = unpack_contact(&packed, n);
+        for (p, m) in pressure.iter().zip(&map) {
+            assert_eq!(*p > 0.0, *m);
+        }
+        // Row 0: nodes 0, 3, 6, 9 in contact → 0b1001_0010, 0b0100_0000.
+        assert_eq!(&packed[..2], &[0b1001_0010, 0b0100_0000]);
+    }
+}
