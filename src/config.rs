@@ -90,6 +90,11 @@ pub struct Study {
     pub seed: u64,
     /// Loads W/W0, shared by all profiles unless a profile overrides them.
     pub loads: Loads,
+    /// Loads (W/W0 values) whose full pressure fields are stored: each value selects the
+    /// study's load nearest to it in log scale (it must lie within the load range).
+    /// Contact maps are stored for every load.
+    #[serde(default)]
+    pub keep_pressure: Vec<f64>,
     /// Profile name → sizes for that profile. A study without an entry for a profile is not
     /// part of that profile.
     pub profiles: BTreeMap<String, StudyProfile>,
@@ -143,6 +148,13 @@ pub struct StudyPlan {
     pub surface: SurfaceParams,
     /// W/W0, strictly increasing.
     pub loads: Vec<f64>,
+    /// Indices into `loads` whose pressure fields are stored.
+    pub keep_pressure: Vec<usize>,
+    /// Effective modulus E*.
+    pub e_star: f64,
+    /// Solver tolerance and iteration cap.
+    pub tolerance: f64,
+    pub max_iterations: u32,
 }
 
 impl StudyPlan {
@@ -369,6 +381,27 @@ impl Pipeline {
             }
         };
         let loads = resolve_loads(loads, &loads_field, origin)?;
+        let mut keep_pressure = Vec::new();
+        for (i, &w) in study.keep_pressure.iter().enumerate() {
+            let (lo, hi) = (loads[0], loads[loads.len() - 1]);
+            if !(w.is_finite() && w >= lo * (1.0 - 1e-9) && w <= hi * (1.0 + 1e-9)) {
+                return Err(invalid(
+                    format!("{base}.keep_pressure[{i}]"),
+                    w,
+                    format!("must lie within the loads of profile '{profile}', [{lo}, {hi}] ({loads_field})"),
+                ));
+            }
+            let nearest = (0..loads.len())
+                .min_by(|&a, &b| {
+                    let da = (loads[a] / w).ln().abs();
+                    let db = (loads[b] / w).ln().abs();
+                    da.total_cmp(&db)
+                })
+                .expect("at least one load");
+            keep_pressure.push(nearest);
+        }
+        keep_pressure.sort_unstable();
+        keep_pressure.dedup();
         let lambda_s_px = res;
         let lambda_l_px = res * ratio;
         let surface = SurfaceParams {
@@ -393,6 +426,10 @@ impl Pipeline {
             seed: study.seed,
             surface,
             loads,
+            keep_pressure,
+            e_star: self.material.e_star,
+            tolerance: self.solver.tolerance,
+            max_iterations: self.solver.max_iterations,
         })
     }
 }

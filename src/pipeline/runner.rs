@@ -173,12 +173,12 @@ fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {
 fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
     let start = Instant::now();
     let entry = store.begin(inst.stage, &inst.key)?;
-    let results = stages::compute(inst, entry.path()).map_err(|e| {
+    let results = stages::compute(inst, entry.path(), store).map_err(|e| {
         anyhow::anyhow!(
-            "stage {} (studies {}, realization {:?}) failed: {e}",
+            "stage {} (studies {}, realization {}) failed: {e}",
             inst.stage,
             inst.studies.join(", "),
-            inst.realization
+            inst.realization.map_or("-".to_string(), |r| r.to_string())
         )
     })?;
     let manifest = Manifest {
@@ -214,8 +214,22 @@ fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
             }
         }
         let dir = store.entry_dir(inst.stage, &inst.key);
+        let loads = match &inst.job {
+            stages::Job::Contact(job) => Some(&job.loads),
+            _ => None,
+        };
         for study in &inst.studies {
             for file in manifest.outputs.keys() {
+                let mut extra = extra.clone();
+                // Per-load files carry their load index in the name (`contact_007.npy`).
+                let index = file
+                    .rsplit_once('_')
+                    .and_then(|(_, rest)| rest.strip_suffix(".npy"))
+                    .and_then(|d| d.parse::<usize>().ok());
+                if let (Some(i), Some(loads)) = (index, loads) {
+                    extra.insert("load_index".into(), Value::from(i as u64));
+                    extra.insert("w_over_w0".into(), Value::from(loads[i]));
+                }
                 rows.push(Row {
                     stage: inst.stage.to_string(),
                     study: study.clone(),
@@ -223,7 +237,7 @@ fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
                     file: file.clone(),
                     path: dir.join(file).display().to_string(),
                     key: inst.key.clone(),
-                    extra: extra.clone(),
+                    extra,
                 });
             }
         }

@@ -5,21 +5,42 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
+use polars::prelude::*;
+
 use super::hash::instance_key;
+use super::store::Store;
 use crate::config::StudyPlan;
+use crate::contact::elastic::ElasticOperator;
+use crate::contact::solver::SolverConfig;
+use crate::contact::sweep::{pack_contact, sweep, LoadResult};
+use crate::grid::Grid;
 use crate::spectral::Fft2;
 use crate::surface::{self, SurfaceParams};
 
 /// Stages in dependency order.
-pub const STAGES: &[&str] = &["surface"];
+pub const STAGES: &[&str] = &["surface", "contact"];
 
 /// Version of the surface stage; bump when its algorithm or outputs change.
 pub const SURFACE_VERSION: u32 = 1;
+/// Version of the contact stage.
+pub const CONTACT_VERSION: u32 = 1;
+
+/// What a contact instance computes.
+#[derive(Debug, Clone)]
+pub struct ContactJob {
+    pub surface_key: String,
+    pub loads: Vec<f64>,
+    pub keep_pressure: Vec<usize>,
+    pub e_star: f64,
+    pub tolerance: f64,
+    pub max_iterations: u32,
+}
 
 /// What an instance computes.
 #[derive(Debug, Clone)]
 pub enum Job {
     Surface(SurfaceParams),
+    Contact(ContactJob),
 }
 
 /// One stage instance of a profile.
@@ -49,6 +70,32 @@ pub fn surface_params_json(p: &SurfaceParams) -> Value {
     })
 }
 
+/// Parameters the contact stage reads, as they enter its key.
+pub fn contact_params_json(job: &ContactJob) -> Value {
+    json!({
+        "loads_w_over_w0": job.loads,
+        "keep_pressure": job.keep_pressure,
+        "e_star": job.e_star,
+        "tolerance": job.tolerance,
+        "max_iterations": job.max_iterations,
+    })
+}
+
+/// Add an instance, or record one more study for an existing one with the same key.
+fn push_unique(out: &mut Vec<Instance>, inst: Instance) -> String {
+    let key = inst.key.clone();
+    if let Some(existing) = out.iter_mut().find(|i| i.key == key) {
+        for s in inst.studies {
+            if !existing.studies.contains(&s) {
+                existing.studies.push(s);
+            }
+        }
+    } else {
+        out.push(inst);
+    }
+    key
+}
+
 /// Every instance the given studies need, deduplicated by key, in stage order.
 pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
     let mut out: Vec<Instance> = Vec::new();
@@ -56,33 +103,171 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
         for r in 0..plan.realizations {
             let params = plan.surface_for(r);
             let params_json = surface_params_json(&params);
-            let key = instance_key("surface", SURFACE_VERSION, &params_json, &[]);
-            if let Some(existing) = out.iter_mut().find(|i| i.key == key) {
-                if !existing.studies.contains(&plan.name) {
-                    existing.studies.push(plan.name.clone());
-                }
-                continue;
-            }
-            out.push(Instance {
-                stage: "surface",
-                version: SURFACE_VERSION,
-                params: params_json,
-                inputs: Vec::new(),
-                key,
-                studies: vec![plan.name.clone()],
-                realization: Some(r),
-                job: Job::Surface(params),
-            });
+            let surface_key = push_unique(
+                &mut out,
+                Instance {
+                    stage: "surface",
+                    version: SURFACE_VERSION,
+                    key: instance_key("surface", SURFACE_VERSION, &params_json, &[]),
+                    params: params_json,
+                    inputs: Vec::new(),
+                    studies: vec![plan.name.clone()],
+                    realization: Some(r),
+                    job: Job::Surface(params),
+                },
+            );
+            let job = ContactJob {
+                surface_key: surface_key.clone(),
+                loads: plan.loads.clone(),
+                keep_pressure: plan.keep_pressure.clone(),
+                e_star: plan.e_star,
+                tolerance: plan.tolerance,
+                max_iterations: plan.max_iterations,
+            };
+            let params_json = contact_params_json(&job);
+            let inputs = vec![surface_key];
+            push_unique(
+                &mut out,
+                Instance {
+                    stage: "contact",
+                    version: CONTACT_VERSION,
+                    key: instance_key("contact", CONTACT_VERSION, &params_json, &inputs),
+                    params: params_json,
+                    inputs,
+                    studies: vec![plan.name.clone()],
+                    realization: Some(r),
+                    job: Job::Contact(job),
+                },
+            );
         }
     }
     out
 }
 
-/// Compute an instance into `dir`; returns the stage's results for the manifest.
-pub fn compute(instance: &Instance, dir: &Path) -> anyhow::Result<Value> {
+/// Compute an instance into `dir`, reading its inputs from `store`; returns the stage's
+/// results for the manifest.
+pub fn compute(instance: &Instance, dir: &Path, store: &Store) -> anyhow::Result<Value> {
     match &instance.job {
         Job::Surface(params) => compute_surface(params, dir),
+        Job::Contact(job) => compute_contact(job, dir, store),
     }
+}
+
+/// File name of the packed contact map of load `index`.
+pub fn contact_file(index: usize) -> String {
+    format!("contact_{index:03}.npy")
+}
+
+/// File name of the pressure field of load `index`.
+pub fn pressure_file(index: usize) -> String {
+    format!("pressure_{index:03}.npy")
+}
+
+fn compute_contact(job: &ContactJob, dir: &Path, store: &Store) -> anyhow::Result<Value> {
+    let manifest = store.lookup("surface", &job.surface_key)?.ok_or_else(|| {
+        anyhow::anyhow!(
+            "input surface {} is missing from the store",
+            job.surface_key
+        )
+    })?;
+    let path = store.read_output(&manifest, "heights.npy")?;
+    let (n, heights) = crate::io::read_square_f64(&path)?;
+    let grid = Grid::unit(n)?;
+    let slope = surface::rms_slope(&grid, &heights);
+    let op = ElasticOperator::new(grid, job.e_star);
+    let cfg = SolverConfig {
+        tolerance: job.tolerance,
+        max_iterations: job.max_iterations as usize,
+        ..SolverConfig::default()
+    };
+    let row_bytes = n.div_ceil(8);
+    let results = sweep(
+        &op,
+        &heights,
+        slope,
+        &job.loads,
+        &cfg,
+        |index, solver, _| {
+            let packed = pack_contact(solver.pressure(), n);
+            crate::io::write_u8(&dir.join(contact_file(index)), &[n, row_bytes], packed)
+                .map_err(|e| e.to_string())?;
+            if job.keep_pressure.contains(&index) {
+                crate::io::write_f64(
+                    &dir.join(pressure_file(index)),
+                    &[n, n],
+                    solver.pressure().to_vec(),
+                )
+                .map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        },
+    )?;
+    let mut df = df_loads(&results)?;
+    let file = std::fs::File::create(dir.join("loads.parquet"))?;
+    ParquetWriter::new(file).finish(&mut df)?;
+    Ok(json!({
+        "n": n,
+        "rms_slope": slope,
+        "w0_over_e_star_l2": slope,
+        "total_iterations": results.iter().map(|r| r.report.iterations).sum::<usize>(),
+        "solve_seconds": results.iter().map(|r| r.seconds).collect::<Vec<_>>(),
+    }))
+}
+
+fn df_loads(results: &[LoadResult]) -> PolarsResult<DataFrame> {
+    DataFrame::new(
+        results.len(),
+        vec![
+            Column::new(
+                "load_index".into(),
+                (0..results.len() as u32).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "w_over_w0".into(),
+                results.iter().map(|r| r.w_over_w0).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "mean_pressure".into(),
+                results.iter().map(|r| r.mean_pressure).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "area_fraction".into(),
+                results.iter().map(|r| r.area_fraction).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "n_contact_px".into(),
+                results
+                    .iter()
+                    .map(|r| r.n_contact_px as u64)
+                    .collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "iterations".into(),
+                results
+                    .iter()
+                    .map(|r| r.report.iterations as u32)
+                    .collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "convolutions".into(),
+                results
+                    .iter()
+                    .map(|r| r.report.convolutions as u32)
+                    .collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "error".into(),
+                results.iter().map(|r| r.report.error).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "converged".into(),
+                results
+                    .iter()
+                    .map(|r| r.report.converged())
+                    .collect::<Vec<_>>(),
+            ),
+        ],
+    )
 }
 
 fn compute_surface(params: &SurfaceParams, dir: &Path) -> anyhow::Result<Value> {

@@ -45,7 +45,7 @@ fn artifacts(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_instances() {
     let (_t, dir) = workdir(&small_pipeline(0.8, "first"));
     let first = run_json(&dir, &[]);
-    assert_eq!(first["computed"], 5);
+    assert_eq!(first["computed"], 10, "5 surfaces and 5 contact sweeps");
     assert_eq!(first["reused"], 0);
     let keys_before: Vec<String> = std::fs::read_dir(dir.join("data/cache/surface"))
         .unwrap()
@@ -54,18 +54,26 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
 
     let second = run_json(&dir, &[]);
     assert_eq!(second["computed"], 0);
-    assert_eq!(second["reused"], 5);
+    assert_eq!(second["reused"], 10);
 
-    // A parameter the surface stage does not read (a description, the loads) changes nothing.
+    // A parameter no stage reads (a description) changes nothing.
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.8, "renamed")).unwrap();
     let third = run_json(&dir, &[]);
     assert_eq!(third["computed"], 0);
 
-    // Study b's Hurst exponent: only b's two realizations are rebuilt.
+    // Study b's loads: only b's two contact sweeps are rebuilt, not its surfaces.
+    let text = small_pipeline(0.8, "renamed")
+        .replace("loads: {values: [0.01]}", "loads: {values: [0.01, 0.03]}");
+    std::fs::write(dir.join("pipeline.yaml"), &text).unwrap();
+    let loads_changed = run_json(&dir, &[]);
+    assert_eq!(loads_changed["computed"], 2);
+    assert_eq!(loads_changed["reused"], 8);
+
+    // Study b's Hurst exponent: b's two surfaces and the two sweeps on them are rebuilt.
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.6, "renamed")).unwrap();
     let fourth = run_json(&dir, &[]);
-    assert_eq!(fourth["computed"], 2);
-    assert_eq!(fourth["reused"], 3);
+    assert_eq!(fourth["computed"], 4);
+    assert_eq!(fourth["reused"], 6);
 
     // The earlier keys are all still there (nothing was overwritten).
     for k in keys_before {
@@ -80,7 +88,11 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.5, "renamed")).unwrap();
     let only_a = run_json(&dir, &["a"]);
     assert_eq!(only_a["computed"], 0);
-    assert_eq!(only_a["instances"], 3);
+    assert_eq!(only_a["instances"], 6);
+    // A stage target builds that stage and what it needs, nothing downstream.
+    let surfaces = run_json(&dir, &["surface"]);
+    assert_eq!(surfaces["instances"], 5);
+    assert_eq!(surfaces["computed"], 2);
     let bad = run_in(&dir, &["run", "--profile", "t", "nosuchstudy"]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("nosuchstudy"));
@@ -98,12 +110,18 @@ fn status_reports_present_and_missing() {
         .iter()
         .map(|l| l["missing"].as_u64().unwrap())
         .sum();
-    assert_eq!(missing, 5);
+    assert_eq!(missing, 10, "5 surfaces and 5 sweeps");
     run_json(&dir, &["a"]);
     let after = stdout_json(&run_in(&dir, &["status", "--profile", "t", "--json"]));
     let lines = after["stages"].as_array().unwrap();
-    let a = lines.iter().find(|l| l["study"] == "a").unwrap();
-    let b = lines.iter().find(|l| l["study"] == "b").unwrap();
+    let a = lines
+        .iter()
+        .find(|l| l["study"] == "a" && l["stage"] == "surface")
+        .unwrap();
+    let b = lines
+        .iter()
+        .find(|l| l["study"] == "b" && l["stage"] == "surface")
+        .unwrap();
     assert_eq!(
         (a["present"].as_u64(), a["missing"].as_u64()),
         (Some(3), Some(0))
@@ -120,7 +138,7 @@ fn verify_names_each_damaged_entry_and_clean_corrupt_removes_it() {
     run_json(&dir, &[]);
     let ok = run_in(&dir, &["verify", "--json"]);
     assert!(ok.status.success());
-    assert_eq!(stdout_json(&ok)["checked"], 5);
+    assert_eq!(stdout_json(&ok)["checked"], 10);
 
     let entries: Vec<_> = std::fs::read_dir(dir.join("data/cache/surface"))
         .unwrap()
@@ -153,7 +171,7 @@ fn verify_names_each_damaged_entry_and_clean_corrupt_removes_it() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("clean --corrupt"));
 
     assert!(run_in(&dir, &["clean", "--corrupt"]).status.success());
-    // The flipped byte is only caught by hashing, so one rerun rebuilds exactly the two.
+    // Both damaged surfaces are rebuilt; their contact sweeps are intact and reused.
     let again = run_json(&dir, &[]);
     assert_eq!(again["computed"], 2);
     assert!(run_in(&dir, &["verify"]).status.success());
@@ -218,7 +236,7 @@ fn sigkill_in_the_middle_of_a_stage_then_rerun_gives_the_uninterrupted_result() 
     assert!(run_in(&dir, &["verify"]).status.success());
 
     let rerun = run_json(&dir, &[]);
-    assert_eq!(rerun["computed"], 5);
+    assert_eq!(rerun["computed"], 10);
     assert!(run_in(&dir, &["verify"]).status.success());
     assert_eq!(artifacts(&dir), artifacts(&reference));
     // The stale temporary directory of the dead process was cleaned up.
@@ -254,7 +272,7 @@ fn two_concurrent_runs_on_one_store_both_succeed() {
     assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
     let v = run_in(&dir, &["verify", "--json"]);
     assert!(v.status.success());
-    assert_eq!(stdout_json(&v)["checked"], 5);
+    assert_eq!(stdout_json(&v)["checked"], 10);
     let again = run_json(&dir, &[]);
     assert_eq!(again["computed"], 0);
 }
@@ -287,7 +305,9 @@ fn catalog_reads_back_with_typed_columns() {
     run_json(&dir, &[]);
     let file = std::fs::File::open(dir.join("data/t/index.parquet")).unwrap();
     let df = ParquetReader::new(file).finish().unwrap();
-    assert_eq!(df.height(), 5);
+    // 5 surfaces; 5 sweeps, each with loads.parquet and one contact map per load
+    // (study a: 3 realizations × 2 loads, study b: 2 × 1).
+    assert_eq!(df.height(), 5 + 5 + 3 * 2 + 2);
     for (name, dtype) in [
         ("stage", DataType::String),
         ("study", DataType::String),
@@ -309,7 +329,17 @@ fn catalog_reads_back_with_typed_columns() {
         assert!(dir.join(p.unwrap()).exists());
     }
     let csv = std::fs::read_to_string(dir.join("data/t/index.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 6, "header + one row per artifact");
+    assert_eq!(
+        csv.lines().count(),
+        1 + df.height(),
+        "header + one row per artifact"
+    );
+    // Contact maps carry their load.
+    let w = df.column("w_over_w0").unwrap().f64().unwrap().clone();
+    let files = df.column("file").unwrap().str().unwrap().clone();
+    for (f, w) in files.iter().zip(w.iter()) {
+        assert_eq!(f.unwrap().starts_with("contact_"), w.is_some(), "{f:?}");
+    }
 }
 
 /// Keys must not drift between versions of the program unless a stage version or the salt
@@ -389,4 +419,37 @@ fn every_surface_parameter_changes_the_key() {
     for v in &variants {
         assert!(keys.insert(key(v)), "{v:?} did not change the key");
     }
+}
+
+#[test]
+fn a_sweep_that_does_not_converge_stops_the_stage_and_stores_nothing() {
+    let text = small_pipeline(0.8, "x").replace("max_iterations: 1000", "max_iterations: 2");
+    let (_t, dir) = workdir(&text);
+    let out = run_in(&dir, &["run", "--profile", "t", "--quiet", "--jobs", "1"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("stage contact")
+            && err.contains("realization")
+            && err.contains("W/W0 = 0.01")
+            && err.contains("did not converge"),
+        "{err}"
+    );
+    let stored = std::fs::read_dir(dir.join("data/cache/contact"))
+        .map(|d| {
+            d.filter(|e| {
+                !e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with('.')
+            })
+            .count()
+        })
+        .unwrap_or(0);
+    assert_eq!(
+        stored, 0,
+        "no contact entry may be stored for a failed sweep"
+    );
+    assert!(run_in(&dir, &["verify"]).status.success());
 }
