@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test fmt clippy bench bench-fft clean
+.PHONY: figures build test fmt clippy bench bench-fft bench-solver bench-peers clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -19,14 +19,22 @@ test:
 	cargo fmt --check
 	cargo clippy --locked --all-targets -- -D warnings
 	cargo test --locked
+	cargo test --locked --release --test it -- --ignored
 
 fmt:
 	cargo fmt
 
-bench: bench-fft
+bench: bench-fft bench-solver bench-peers
 
 bench-fft:
 	bash benches/fft_compare.sh
+
+bench-solver:
+	cargo bench --bench solver -- --noplot
+
+# Contact sweeps of wearcoef and Tamaas (PyPI) on the same surfaces, in the same run.
+bench-peers:
+	bash benches/peers/run.sh 256 512 1024
 
 clean:
 	$(BIN) clean || rm -rf data

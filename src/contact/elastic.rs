@@ -8,6 +8,7 @@
 //! continuous kernel at the discrete wavevectors ("spectral" / point-value scheme, as
 //! Tamaas), with the Nyquist index taken as `|k| = n/2`.
 
+use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
 use crate::grid::Grid;
@@ -18,12 +19,12 @@ pub struct ElasticOperator {
     grid: Grid,
     e_star: f64,
     fft: Fft2,
-    /// `2/(E*|q|) / n²` on the half spectrum (kx-major), 0 at q = 0; includes the
-    /// normalisation of the unnormalised FFT pair.
+    /// `2/(E*|q|) / n²` for kx ∈ 0..=n/2 and |ky| ∈ 0..=n/2 (the multiplier depends on
+    /// |ky| only), row-major by kx; 0 at q = 0. Includes the `1/n²` of the FFT pair.
     multiplier: Vec<f64>,
-    /// Self-influence `K_ii = mean of the multiplier over the full spectrum · n²/n²`: the
-    /// deflection of a node under a unit pressure on that node alone.
-    self_influence: f64,
+    /// Response to a unit pressure on node (0, 0): `kernel[|dy| * (n/2+1) + |dx|]` with
+    /// the periodic distances `|dx|, |dy| ∈ 0..=n/2` (the response is even in both).
+    kernel: Vec<f64>,
 }
 
 /// Working memory of [`ElasticOperator::apply`]; allocate once with
@@ -31,6 +32,7 @@ pub struct ElasticOperator {
 pub struct OperatorWorkspace {
     spectrum: Vec<Complex64>,
     scratch: Fft2Scratch,
+    partials: Vec<f64>,
 }
 
 impl ElasticOperator {
@@ -41,30 +43,34 @@ impl ElasticOperator {
             "E* must be finite and > 0"
         );
         let n = grid.n();
+        let h = grid.half_len();
         let fft = Fft2::new(n);
         let norm = 1.0 / (n * n) as f64;
-        let mut multiplier = vec![0.0; fft.spectrum_len()];
-        let mut sum = 0.0;
-        for jx in 0..grid.half_len() {
-            let w = grid.half_weight(jx);
-            for iy in 0..n {
-                let q = grid.q_norm(jx, iy);
-                let g = if q > 0.0 {
+        let mut multiplier = vec![0.0; h * h];
+        for jx in 0..h {
+            for ky in 0..h {
+                let q = grid.q_norm(jx, ky);
+                multiplier[jx * h + ky] = if q > 0.0 {
                     2.0 / (e_star * q) * norm
                 } else {
                     0.0
                 };
-                multiplier[jx * n + iy] = g;
-                sum += w * g;
             }
         }
-        Self {
+        let mut op = Self {
             grid,
             e_star,
             fft,
             multiplier,
-            self_influence: sum,
-        }
+            kernel: Vec::new(),
+        };
+        let mut ws = op.make_workspace();
+        let mut unit = vec![0.0; n * n];
+        unit[0] = 1.0;
+        let mut response = vec![0.0; n * n];
+        op.apply(&unit, &mut response, &mut ws);
+        op.kernel = (0..h * h).map(|i| response[(i / h) * n + i % h]).collect();
+        op
     }
 
     pub fn grid(&self) -> &Grid {
@@ -77,29 +83,75 @@ impl ElasticOperator {
 
     /// Deflection at a node per unit pressure applied on that node alone (`K_ii`).
     pub fn self_influence(&self) -> f64 {
-        self.self_influence
+        self.kernel[0]
     }
 
     pub fn make_workspace(&self) -> OperatorWorkspace {
         OperatorWorkspace {
             spectrum: self.fft.make_spectrum(),
             scratch: self.fft.make_scratch(),
+            partials: vec![0.0; self.grid.half_len()],
         }
     }
 
     /// `output = K input` (row-major `n × n` fields). Allocates nothing.
     pub fn apply(&self, input: &[f64], output: &mut [f64], ws: &mut OperatorWorkspace) {
+        self.apply_with_energy(input, output, ws);
+    }
+
+    /// `output = K input`, returning `Σ_i input_i output_i` computed by Parseval in the
+    /// spectral domain at no extra memory traffic (fixed summation order).
+    pub fn apply_with_energy(
+        &self,
+        input: &[f64],
+        output: &mut [f64],
+        ws: &mut OperatorWorkspace,
+    ) -> f64 {
+        let n = self.grid.n();
+        let h = self.grid.half_len();
         self.fft.forward(input, &mut ws.spectrum, &mut ws.scratch);
-        use rayon::prelude::*;
         ws.spectrum
-            .par_chunks_mut(self.grid.n())
-            .zip(self.multiplier.par_chunks(self.grid.n()))
-            .for_each(|(s, m)| {
-                for (c, g) in s.iter_mut().zip(m) {
-                    *c *= *g;
+            .par_chunks_mut(n)
+            .zip(self.multiplier.par_chunks(h))
+            .zip(ws.partials.par_iter_mut())
+            .enumerate()
+            .for_each(|(jx, ((row, m), part))| {
+                let mut energy = 0.0;
+                for (iy, c) in row.iter_mut().enumerate() {
+                    let g = m[iy.min(n - iy)];
+                    energy += g * c.norm_sqr();
+                    *c *= g;
                 }
+                *part = self.grid.half_weight(jx) * energy;
             });
+        let energy = ws.partials.iter().sum();
         self.fft.inverse(&mut ws.spectrum, output, &mut ws.scratch);
+        energy
+    }
+
+    /// `output += K Δ` for a few point loads `(node index, Δp)`, by direct summation of the
+    /// real-space response (cost: one pass over the field per load). Loads are added in
+    /// the order given, so the result does not depend on the thread count.
+    pub fn add_point_loads(&self, loads: &[(usize, f64)], output: &mut [f64]) {
+        let n = self.grid.n();
+        let h = self.grid.half_len();
+        output.par_chunks_mut(n).enumerate().for_each(|(iy, row)| {
+            for &(node, dp) in loads {
+                let (jy, jx) = (node / n, node % n);
+                let d = (iy + n - jy) % n;
+                let k = &self.kernel[d.min(n - d) * h..(d.min(n - d) + 1) * h];
+                // Periodic distance d = (ix − jx) mod n without a division: the row splits
+                // into ix ≥ jx (d = ix − jx) and ix < jx (d = ix + n − jx).
+                let (before, after) = row.split_at_mut(jx);
+                for (d, v) in after.iter_mut().enumerate() {
+                    *v += dp * k[d.min(n - d)];
+                }
+                for (i, v) in before.iter_mut().enumerate() {
+                    let d = i + n - jx;
+                    *v += dp * k[d.min(n - d)];
+                }
+            }
+        });
     }
 }
 
@@ -158,5 +210,40 @@ mod tests {
         let mut u = vec![0.0; n * n];
         op.apply(&p, &mut u, &mut ws);
         assert!((u[5 * n + 9] - op.self_influence()).abs() < 1e-14 * op.self_influence());
+        // The same response by direct summation of the real-space kernel.
+        let mut direct = vec![0.0; n * n];
+        op.add_point_loads(&[(5 * n + 9, 1.0)], &mut direct);
+        for (a, b) in u.iter().zip(&direct) {
+            assert!((a - b).abs() <= 1e-15 * op.self_influence(), "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn parseval_energy_matches_the_real_space_product() {
+        let n = 32;
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.5);
+        let mut ws = op.make_workspace();
+        let p: Vec<f64> = (0..n * n)
+            .map(|i| ((i * 37 % 101) as f64 / 101.0 - 0.3).max(0.0))
+            .collect();
+        let mut u = vec![0.0; n * n];
+        let energy = op.apply_with_energy(&p, &mut u, &mut ws);
+        let direct: f64 = p.iter().zip(&u).map(|(a, b)| a * b).sum();
+        assert!(
+            (energy - direct).abs() <= 1e-13 * direct.abs(),
+            "{energy} vs {direct}"
+        );
+        // Several point loads by direct summation equal the FFT convolution.
+        let loads = [(3usize, 0.5), (n * n - 1, -1.25), (17 * n + 30, 2.0)];
+        let mut sparse = vec![0.0; n * n];
+        for &(i, v) in &loads {
+            sparse[i] = v;
+        }
+        op.apply(&sparse, &mut u, &mut ws);
+        let mut direct = vec![0.0; n * n];
+        op.add_point_loads(&loads, &mut direct);
+        for (a, b) in u.iter().zip(&direct) {
+            assert!((a - b).abs() <= 1e-14 * op.self_influence());
+        }
     }
 }

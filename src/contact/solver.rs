@@ -10,11 +10,15 @@
 //! Tamaas's measure (which divides by the `ddof = 1` deviation), so a tolerance here is at
 //! least as strict as the same tolerance there.
 //!
-//! **Cost.** One convolution (`K t`) per iteration, plus one more only in iterations whose
-//! projection changed the contact set; otherwise the deflection is updated by linearity,
-//! `u ← s (u − τ K t)`, and recomputed exactly every [`RESYNC`] such steps and before
-//! convergence is declared. All reductions use a fixed chunking, so results are bit-identical
-//! whatever the number of threads.
+//! **Cost.** One convolution (`K t`) per iteration. The deflection is updated by linearity,
+//! `u ← s (u − τ K t + K Δ)`, where `Δ` is the departure of the projected pressure from the
+//! linear step at the few nodes that left or re-entered the contact set (summed directly
+//! when there are at most [`MAX_SPARSE`] of them, otherwise `u = K p` is recomputed by FFT),
+//! and recomputed exactly every [`RESYNC`] steps and before convergence is declared. The
+//! curvature `⟨t, K t⟩` comes from Parseval's identity inside the convolution. The search
+//! direction is kept centred on the contact set (the projected conjugate gradient), so the
+//! step preserves the load. All reductions use a fixed chunking, so results are
+//! bit-identical whatever the number of threads.
 //!
 //! **Defined behaviour where the method breaks down**:
 //! - zero load: `p = 0`, no contact, converged in 0 iterations;
@@ -27,6 +31,10 @@
 //! - no progress for `stall_window` iterations, or a non-finite error: `Stalled`;
 //!   `max_iterations` reached: `MaxIterations`. Neither is ever a result that looks valid.
 
+// Lane loops index several fixed-size arrays in lockstep; iterator chains would hide the
+// structure the compiler vectorises.
+#![allow(clippy::needless_range_loop)]
+
 use rayon::prelude::*;
 
 use super::elastic::{ElasticOperator, OperatorWorkspace};
@@ -35,7 +43,71 @@ use super::elastic::{ElasticOperator, OperatorWorkspace};
 const CHUNK: usize = 8192;
 /// Independent accumulators per reduction (breaks floating-point dependency chains; the
 /// summation order stays fixed).
-const LANES: usize = 8;
+const LANES: usize = 4;
+
+/// A block of `LANES` values (fields have n² values with n even, a multiple of 4).
+#[inline(always)]
+fn lanes(slice: &[f64]) -> [f64; LANES] {
+    slice.try_into().expect("blocks of LANES values")
+}
+
+/// Per-lane accumulators of the gradient statistics `|S|, Σg, Σg², Σpg, Σp, min g`.
+struct GradientLanes {
+    n: [f64; LANES],
+    sg: [f64; LANES],
+    sg2: [f64; LANES],
+    spg: [f64; LANES],
+    sp: [f64; LANES],
+    min: [f64; LANES],
+}
+
+impl GradientLanes {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            n: [0.0; LANES],
+            sg: [0.0; LANES],
+            sg2: [0.0; LANES],
+            spg: [0.0; LANES],
+            sp: [0.0; LANES],
+            min: [f64::INFINITY; LANES],
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, p: &[f64; LANES], g: &[f64; LANES]) {
+        for l in 0..LANES {
+            let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
+            self.min[l] = if g[l] < self.min[l] {
+                g[l]
+            } else {
+                self.min[l]
+            };
+            self.n[l] += m;
+            self.sg[l] += m * g[l];
+            self.sg2[l] += m * g[l] * g[l];
+            self.spg[l] += p[l] * g[l];
+            self.sp[l] += p[l];
+        }
+    }
+
+    #[inline(always)]
+    fn finish(&self) -> [f64; 6] {
+        let sum = |a: &[f64; LANES]| a.iter().sum::<f64>();
+        [
+            sum(&self.n),
+            sum(&self.sg),
+            sum(&self.sg2),
+            sum(&self.spg),
+            sum(&self.sp),
+            self.min.iter().fold(f64::INFINITY, |a, &b| a.min(b)),
+        ]
+    }
+}
+/// When at most this many nodes leave or re-enter the contact set in an iteration, the
+/// deflection is corrected by direct summation (one field pass per node) instead of a
+/// new convolution.
+pub const MAX_SPARSE: usize = 6;
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub const RESYNC: usize = 32;
 
@@ -119,6 +191,12 @@ pub struct Solver<'a> {
     /// `K t` during iterations; the gap after a solve.
     work: Vec<f64>,
     partials: Vec<[f64; 6]>,
+    /// Gradient statistics per chunk gathered by the update pass for the next iteration.
+    next_partials: Vec<[f64; 6]>,
+    /// Per chunk: up to [`MAX_SPARSE`] nodes whose projection departed from the linear step.
+    changes: Vec<[(usize, f64); MAX_SPARSE]>,
+    change_counts: Vec<usize>,
+    sparse: Vec<(usize, f64)>,
     has_solution: bool,
 }
 
@@ -128,8 +206,6 @@ enum Pending {
     Exact,
     /// `p ← s p`, `u ← s u` (after an exact convolution of the unscaled `p`).
     Scale(f64),
-    /// `p ← s p`, `u ← s (u − τ K t)` (linear update, no projection happened).
-    Linear { tau: f64, scale: f64 },
 }
 
 impl<'a> Solver<'a> {
@@ -170,6 +246,10 @@ impl<'a> Solver<'a> {
             direction: vec![0.0; len],
             work: vec![0.0; len],
             partials: vec![[0.0; 6]; len.div_ceil(CHUNK)],
+            next_partials: vec![[0.0; 6]; len.div_ceil(CHUNK)],
+            changes: vec![[(0, 0.0); MAX_SPARSE]; len.div_ceil(CHUNK)],
+            change_counts: vec![0; len.div_ceil(CHUNK)],
+            sparse: Vec::with_capacity(MAX_SPARSE),
             has_solution: false,
         })
     }
@@ -251,11 +331,16 @@ impl<'a> Solver<'a> {
         let mut g_norm_old = 0.0f64;
         let mut best = f64::INFINITY;
         let mut best_at = 0usize;
+        let mut direction_mean = 0.0f64;
+        let mut next_stats: Option<[f64; 6]> = None;
         let self_influence = self.op.self_influence();
 
         loop {
             // Pass 1: apply the pending update; gradient statistics on the contact set.
-            let s1 = self.pass_gradient(pending, shift);
+            let s1 = match next_stats.take() {
+                Some(stats) => stats,
+                None => self.pass_gradient(pending, shift),
+            };
             pending = Pending::Exact;
             let [n_s, sum_g, sum_g2, sum_pg, sum_p, min_g] = s1;
             let mean_g = sum_g / n_s;
@@ -263,10 +348,12 @@ impl<'a> Solver<'a> {
             let error = (sum_pg - min_g * sum_p) / (sum_p * self.height_std);
 
             if error <= cfg.tolerance && !exact {
-                // Confirm with an exact deflection before declaring convergence.
+                // Confirm with an exact deflection (and the exact load) before declaring
+                // convergence.
                 self.op
                     .apply(&self.pressure, &mut self.deflection, &mut self.ws);
                 report.convolutions += 1;
+                pending = Pending::Scale(target * len as f64 / sum_p);
                 exact = true;
                 linear_steps = 0;
                 continue;
@@ -294,30 +381,35 @@ impl<'a> Solver<'a> {
             }
             report.iterations += 1;
 
-            // Pass 2: conjugate direction on the contact set.
+            // Pass 2: conjugate direction on the contact set, kept centred there.
             let beta = if restart || g_norm_old <= 0.0 {
                 0.0
             } else {
                 g_norm / g_norm_old
             };
             g_norm_old = g_norm;
-            let numerator = self.pass_direction(shift + mean_g, beta);
+            let numerator = self.pass_direction(shift + mean_g, beta, direction_mean);
 
-            // K t, then the exact line search with the direction's image centred on S.
-            self.op.apply(&self.direction, &mut self.work, &mut self.ws);
+            // K t and the curvature ⟨t, K t⟩ (Parseval), then the exact line search.
+            let denominator =
+                self.op
+                    .apply_with_energy(&self.direction, &mut self.work, &mut self.ws);
             report.convolutions += 1;
-            let [sum_r, sum_rt, sum_t, _, _, _] = self.pass_curvature();
-            let denominator = sum_rt - sum_r / n_s * sum_t;
             let tau = if denominator > 0.0 && denominator.is_finite() && numerator.is_finite() {
                 numerator / denominator
             } else {
                 1.0 / self_influence
             };
 
-            // Pass 4: step, project, re-admit interpenetrating nodes.
-            let [total, clipped, readmitted, _, _, _] = self.pass_update(tau, shift + mean_g);
+            // Pass 3: step, project, re-admit interpenetrating nodes; speculatively update
+            // the deflection linearly (u − τ K t) and gather the next gradient statistics.
+            let new_shift = shift + mean_g;
+            let [total, kept_t, kept_n, readmitted, changed, _] =
+                self.pass_update(tau, shift + mean_g, new_shift);
+            let stats = self.reduce_gradient();
+            direction_mean = if kept_n > 0.0 { kept_t / kept_n } else { 0.0 };
             restart = readmitted > 0.0;
-            shift += mean_g;
+            shift = new_shift;
             if total <= 0.0 {
                 self.pressure.fill(target);
                 self.op
@@ -328,17 +420,28 @@ impl<'a> Solver<'a> {
                 continue;
             }
             let scale = target * len as f64 / total;
-            if clipped > 0.0 || readmitted > 0.0 || linear_steps + 1 >= RESYNC {
+            if changed == 0.0 && linear_steps + 1 < RESYNC {
+                // Nothing left or entered the set: p and u are both exact linear updates and
+                // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next
+                // exact step.
+                next_stats = Some(stats);
+                exact = false;
+                linear_steps += 1;
+            } else if changed as usize <= MAX_SPARSE
+                && linear_steps + 1 < RESYNC
+                && self.gather_changes()
+            {
+                self.op.add_point_loads(&self.sparse, &mut self.deflection);
+                pending = Pending::Scale(scale);
+                exact = false;
+                linear_steps += 1;
+            } else {
                 self.op
                     .apply(&self.pressure, &mut self.deflection, &mut self.ws);
                 report.convolutions += 1;
                 pending = Pending::Scale(scale);
                 exact = true;
                 linear_steps = 0;
-            } else {
-                pending = Pending::Linear { tau, scale };
-                exact = false;
-                linear_steps += 1;
             }
         }
 
@@ -364,71 +467,35 @@ impl<'a> Solver<'a> {
             .par_chunks_mut(CHUNK)
             .zip(self.deflection.par_chunks_mut(CHUNK))
             .zip(h.par_chunks(CHUNK))
-            .zip(self.work.par_chunks(CHUNK))
             .zip(self.partials.par_iter_mut())
-            .for_each(|((((pc, uc), hc), rc), part)| {
-                match pending {
-                    Pending::Exact => {}
-                    Pending::Scale(s) => {
-                        for (p, u) in pc.iter_mut().zip(uc.iter_mut()) {
-                            *p *= s;
-                            *u *= s;
-                        }
-                    }
-                    Pending::Linear { tau, scale } => {
-                        for ((p, u), r) in pc.iter_mut().zip(uc.iter_mut()).zip(rc) {
-                            *p *= scale;
-                            *u = scale * (*u - tau * r);
-                        }
+            .for_each(|(((pc, uc), hc), part)| {
+                if let Pending::Scale(s) = pending {
+                    for (p, u) in pc.iter_mut().zip(uc.iter_mut()) {
+                        *p *= s;
+                        *u *= s;
                     }
                 }
-                let (mut n, mut sg, mut sg2, mut spg, mut sp) = (
-                    [0.0f64; LANES],
-                    [0.0; LANES],
-                    [0.0; LANES],
-                    [0.0; LANES],
-                    [0.0; LANES],
-                );
-                let mut min = [f64::INFINITY; LANES];
-                let mut step = |p: &[f64], u: &[f64], h: &[f64]| {
-                    for l in 0..p.len() {
-                        let g = u[l] - h[l] - shift;
-                        let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
-                        min[l] = if g < min[l] { g } else { min[l] };
-                        n[l] += m;
-                        sg[l] += m * g;
-                        sg2[l] += m * g * g;
-                        spg[l] += p[l] * g;
-                        sp[l] += p[l];
+                let mut acc = GradientLanes::new();
+                for ((p, u), h) in pc
+                    .chunks_exact(LANES)
+                    .zip(uc.chunks_exact(LANES))
+                    .zip(hc.chunks_exact(LANES))
+                {
+                    let (p, u, h) = (lanes(p), lanes(u), lanes(h));
+                    let mut g = [0.0; LANES];
+                    for l in 0..LANES {
+                        g[l] = u[l] - h[l] - shift;
                     }
-                };
-                let (pe, ue, he) = (
-                    pc.chunks_exact(LANES),
-                    uc.chunks_exact(LANES),
-                    hc.chunks_exact(LANES),
-                );
-                let (pr, ur, hr) = (pe.remainder(), ue.remainder(), he.remainder());
-                for ((p, u), h) in pe.zip(ue).zip(he) {
-                    let (p, u, h): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
-                        p.try_into().unwrap(),
-                        u.try_into().unwrap(),
-                        h.try_into().unwrap(),
-                    );
-                    step(p, u, h);
+                    acc.add(&p, &g);
                 }
-                step(pr, ur, hr);
-                let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
-                *part = [
-                    sum(n),
-                    sum(sg),
-                    sum(sg2),
-                    sum(spg),
-                    sum(sp),
-                    min.iter().fold(f64::INFINITY, |a, &b| a.min(b)),
-                ];
+                *part = acc.finish();
             });
+        Self::sum_gradient(&self.partials)
+    }
+
+    fn sum_gradient(partials: &[[f64; 6]]) -> [f64; 6] {
         let mut acc = [0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY];
-        for part in &self.partials {
+        for part in partials {
             for k in 0..5 {
                 acc[k] += part[k];
             }
@@ -437,8 +504,15 @@ impl<'a> Solver<'a> {
         acc
     }
 
-    /// `t ← (g − ḡ_S) + β t` on S, 0 elsewhere; returns `Σ_S (g − ḡ_S) t`.
-    fn pass_direction(&mut self, level: f64, beta: f64) -> f64 {
+    /// Gradient statistics gathered by the last [`Self::pass_update`].
+    fn reduce_gradient(&self) -> [f64; 6] {
+        Self::sum_gradient(&self.next_partials)
+    }
+
+    /// `t ← (g − ḡ_S) + β (t − t̄_S)` on S, 0 elsewhere (`t̄_S = direction_mean`, the mean
+    /// of the old direction over the current contact set, so that `Σ_S t = 0`); returns
+    /// `Σ_S (g − ḡ_S) t`.
+    fn pass_direction(&mut self, level: f64, beta: f64, direction_mean: f64) -> f64 {
         let h = self.heights;
         self.direction
             .par_chunks_mut(CHUNK)
@@ -448,139 +522,76 @@ impl<'a> Solver<'a> {
             .zip(self.partials.par_iter_mut())
             .for_each(|((((tc, pc), uc), hc), part)| {
                 let mut num = [0.0f64; LANES];
-                let mut step = |t: &mut [f64], p: &[f64], u: &[f64], h: &[f64]| {
-                    for l in 0..t.len() {
+                for (((t, p), u), h) in tc
+                    .chunks_exact_mut(LANES)
+                    .zip(pc.chunks_exact(LANES))
+                    .zip(uc.chunks_exact(LANES))
+                    .zip(hc.chunks_exact(LANES))
+                {
+                    let (p, u, h) = (lanes(p), lanes(u), lanes(h));
+                    let mut tn = lanes(t);
+                    for l in 0..LANES {
                         let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
                         let gc = u[l] - h[l] - level;
-                        let tn = m * (gc + beta * t[l]);
-                        t[l] = tn;
-                        num[l] += gc * tn;
+                        tn[l] = m * (gc + beta * (tn[l] - direction_mean));
+                        num[l] += gc * tn[l];
                     }
-                };
-                let mut te = tc.chunks_exact_mut(LANES);
-                let (pe, ue, he) = (
-                    pc.chunks_exact(LANES),
-                    uc.chunks_exact(LANES),
-                    hc.chunks_exact(LANES),
-                );
-                let (pr, ur, hr) = (pe.remainder(), ue.remainder(), he.remainder());
-                for (((t, p), u), h) in (&mut te).zip(pe).zip(ue).zip(he) {
-                    let t: &mut [f64; LANES] = t.try_into().unwrap();
-                    let (p, u, h): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
-                        p.try_into().unwrap(),
-                        u.try_into().unwrap(),
-                        h.try_into().unwrap(),
-                    );
-                    step(t, p, u, h);
+                    t.copy_from_slice(&tn);
                 }
-                step(te.into_remainder(), pr, ur, hr);
                 part[0] = num.iter().sum();
             });
         self.partials.iter().map(|p| p[0]).sum()
     }
 
-    /// Over S: `Σ r, Σ r t, Σ t` with `r = K t` in `work` (t is 0 off S).
-    fn pass_curvature(&mut self) -> [f64; 6] {
-        self.work
-            .par_chunks(CHUNK)
+    /// `p ← max(p − τ t, 0)` on S; nodes with `p = 0` and `g − level < 0` are re-admitted
+    /// with `p = −τ (g − level)`. Records the nodes where the result departs from the
+    /// linear step. Also `u ← u − τ K t` and, into `next_partials`, the gradient statistics
+    /// of [`Self::pass_gradient`] for the new state with `g = u − h − next_shift` (exact if
+    /// no node changed). Returns `[Σp, Σ t over the new S, |new S|, #re-admitted, #changed, 0]`.
+    fn pass_update(&mut self, tau: f64, level: f64, next_shift: f64) -> [f64; 6] {
+        let h = self.heights;
+        self.pressure
+            .par_chunks_mut(CHUNK)
+            .zip(self.deflection.par_chunks_mut(CHUNK))
             .zip(self.direction.par_chunks(CHUNK))
-            .zip(self.pressure.par_chunks(CHUNK))
+            .zip(self.work.par_chunks(CHUNK))
+            .zip(h.par_chunks(CHUNK))
             .zip(self.partials.par_iter_mut())
-            .for_each(|(((rc, tc), pc), part)| {
-                let (mut sr, mut srt, mut st) = ([0.0f64; LANES], [0.0; LANES], [0.0; LANES]);
-                let mut step = |r: &[f64], t: &[f64], p: &[f64]| {
-                    for l in 0..r.len() {
-                        let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
-                        sr[l] += m * r[l];
-                        srt[l] += r[l] * t[l];
-                        st[l] += t[l];
-                    }
-                };
-                let (re, te, pe) = (
-                    rc.chunks_exact(LANES),
-                    tc.chunks_exact(LANES),
-                    pc.chunks_exact(LANES),
-                );
-                let (rr, tr, pr) = (re.remainder(), te.remainder(), pe.remainder());
-                for ((r, t), p) in re.zip(te).zip(pe) {
-                    let (r, t, p): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
-                        r.try_into().unwrap(),
-                        t.try_into().unwrap(),
-                        p.try_into().unwrap(),
-                    );
-                    step(r, t, p);
-                }
-                step(rr, tr, pr);
-                let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
-                *part = [sum(sr), sum(srt), sum(st), 0.0, 0.0, 0.0];
-            });
+            .zip(self.next_partials.par_iter_mut())
+            .zip(self.changes.par_iter_mut())
+            .zip(self.change_counts.par_iter_mut())
+            .enumerate()
+            .for_each(
+                |(chunk, ((((((((pc, uc), tc), rc), hc), part), next), changes), count))| {
+                    let args = UpdateArgs {
+                        tau,
+                        level,
+                        next_shift,
+                        base: chunk * CHUNK,
+                    };
+                    dispatch_update(&args, pc, uc, tc, rc, hc, part, next, changes, count);
+                },
+            );
         let mut acc = [0.0; 6];
         for part in &self.partials {
-            for k in 0..3 {
+            for k in 0..5 {
                 acc[k] += part[k];
             }
         }
         acc
     }
 
-    /// `p ← max(p − τ t, 0)` on S; nodes with `p = 0` and `g − level < 0` are re-admitted
-    /// with `p = −τ (g − level)`. Returns `[Σp, #clipped, #re-admitted, …]`.
-    fn pass_update(&mut self, tau: f64, level: f64) -> [f64; 6] {
-        let h = self.heights;
-        self.pressure
-            .par_chunks_mut(CHUNK)
-            .zip(self.direction.par_chunks(CHUNK))
-            .zip(self.deflection.par_chunks(CHUNK))
-            .zip(h.par_chunks(CHUNK))
-            .zip(self.partials.par_iter_mut())
-            .for_each(|((((pc, tc), uc), hc), part)| {
-                let (mut total, mut clipped, mut readmitted) =
-                    ([0.0f64; LANES], [0.0; LANES], [0.0; LANES]);
-                let mut step = |p: &mut [f64], t: &[f64], u: &[f64], h: &[f64]| {
-                    for l in 0..p.len() {
-                        let old = p[l];
-                        let stepped = old - tau * t[l]; // t = 0 off S, so p stays 0 there
-                        let kept = if stepped > 0.0 { stepped } else { 0.0 };
-                        let gc = u[l] - h[l] - level;
-                        let readmit = kept == 0.0 && gc < 0.0;
-                        let new = if readmit { -tau * gc } else { kept };
-                        p[l] = new;
-                        total[l] += new;
-                        clipped[l] += if old > 0.0 && stepped <= 0.0 {
-                            1.0
-                        } else {
-                            0.0
-                        };
-                        readmitted[l] += if readmit { 1.0 } else { 0.0 };
-                    }
-                };
-                let mut pe = pc.chunks_exact_mut(LANES);
-                let (te, ue, he) = (
-                    tc.chunks_exact(LANES),
-                    uc.chunks_exact(LANES),
-                    hc.chunks_exact(LANES),
-                );
-                let (tr, ur, hr) = (te.remainder(), ue.remainder(), he.remainder());
-                for (((p, t), u), h) in (&mut pe).zip(te).zip(ue).zip(he) {
-                    let p: &mut [f64; LANES] = p.try_into().unwrap();
-                    let (t, u, h): (&[f64; LANES], &[f64; LANES], &[f64; LANES]) = (
-                        t.try_into().unwrap(),
-                        u.try_into().unwrap(),
-                        h.try_into().unwrap(),
-                    );
-                    step(p, t, u, h);
-                }
-                step(pe.into_remainder(), tr, ur, hr);
-                let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
-                *part = [sum(total), sum(clipped), sum(readmitted), 0.0, 0.0, 0.0];
-            });
-        let mut acc = [0.0; 6];
-        for part in &self.partials {
-            for k in 0..3 {
-                acc[k] += part[k];
+    /// Collect the changed nodes of the last update in index order; false if a chunk
+    /// overflowed its slots (then a full convolution is needed).
+    fn gather_changes(&mut self) -> bool {
+        self.sparse.clear();
+        for (slots, &count) in self.changes.iter().zip(&self.change_counts) {
+            if count > MAX_SPARSE || self.sparse.len() + count > MAX_SPARSE {
+                return false;
             }
+            self.sparse.extend_from_slice(&slots[..count]);
         }
-        acc
+        true
     }
 
     /// `work ← (u − h) − min(u − h)` (the gap; `u` must be exact).
@@ -598,4 +609,134 @@ impl<'a> Solver<'a> {
             .zip(h.par_iter())
             .for_each(|((g, u), h)| *g = (u - h) - min);
     }
+}
+
+/// Scalars of one update pass.
+struct UpdateArgs {
+    tau: f64,
+    level: f64,
+    next_shift: f64,
+    base: usize,
+}
+
+/// Run [`update_chunk`] with AVX2 code generation where the processor has it. IEEE
+/// arithmetic without fused multiply-add gives the same bits on either path.
+#[allow(clippy::too_many_arguments)]
+fn dispatch_update(
+    a: &UpdateArgs,
+    pc: &mut [f64],
+    uc: &mut [f64],
+    tc: &[f64],
+    rc: &[f64],
+    hc: &[f64],
+    part: &mut [f64; 6],
+    next: &mut [f64; 6],
+    changes: &mut [(usize, f64); MAX_SPARSE],
+    count: &mut usize,
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (checked just above).
+            unsafe { update_chunk_avx2(a, pc, uc, tc, rc, hc, part, next, changes, count) };
+            return;
+        }
+    }
+    update_chunk(a, pc, uc, tc, rc, hc, part, next, changes, count);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn update_chunk_avx2(
+    a: &UpdateArgs,
+    pc: &mut [f64],
+    uc: &mut [f64],
+    tc: &[f64],
+    rc: &[f64],
+    hc: &[f64],
+    part: &mut [f64; 6],
+    next: &mut [f64; 6],
+    changes: &mut [(usize, f64); MAX_SPARSE],
+    count: &mut usize,
+) {
+    update_chunk(a, pc, uc, tc, rc, hc, part, next, changes, count)
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn update_chunk(
+    a: &UpdateArgs,
+    pc: &mut [f64],
+    uc: &mut [f64],
+    tc: &[f64],
+    rc: &[f64],
+    hc: &[f64],
+    part: &mut [f64; 6],
+    next: &mut [f64; 6],
+    changes: &mut [(usize, f64); MAX_SPARSE],
+    count: &mut usize,
+) {
+    let (tau, level, next_shift) = (a.tau, a.level, a.next_shift);
+
+    let (mut kept_t, mut readmitted, mut changed_lanes) =
+        ([0.0f64; LANES], [0.0; LANES], [0.0; LANES]);
+    let mut acc = GradientLanes::new();
+    let mut changed = 0usize;
+    for (block, ((((p, u), t), r), h)) in pc
+        .chunks_exact_mut(LANES)
+        .zip(uc.chunks_exact_mut(LANES))
+        .zip(tc.chunks_exact(LANES))
+        .zip(rc.chunks_exact(LANES))
+        .zip(hc.chunks_exact(LANES))
+        .enumerate()
+    {
+        let (t, r, h) = (lanes(t), lanes(r), lanes(h));
+        let (mut pn, mut un) = (lanes(p), lanes(u));
+        let mut g = [0.0; LANES];
+        let mut delta = [0.0; LANES];
+        let mut any = 0.0;
+        for l in 0..LANES {
+            let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
+            let kept = if stepped > 0.0 { stepped } else { 0.0 };
+            let gc = un[l] - h[l] - level;
+            let readmit = kept == 0.0 && gc < 0.0;
+            let new = if readmit { -tau * gc } else { kept };
+            pn[l] = new;
+            delta[l] = new - stepped;
+            let m = if new > 0.0 { 1.0 } else { 0.0 };
+            kept_t[l] += m * t[l];
+            readmitted[l] += if readmit { 1.0 } else { 0.0 };
+            let c = if new != stepped { 1.0 } else { 0.0 };
+            changed_lanes[l] += c;
+            any += c;
+            un[l] -= tau * r[l];
+            g[l] = un[l] - h[l] - next_shift;
+        }
+        acc.add(&pn, &g);
+        p.copy_from_slice(&pn);
+        u.copy_from_slice(&un);
+        if any > 0.0 {
+            for l in 0..LANES {
+                if delta[l] != 0.0 {
+                    if changed < MAX_SPARSE {
+                        changes[changed] = (a.base + block * LANES + l, delta[l]);
+                    }
+                    changed += 1;
+                }
+            }
+        }
+    }
+    *count = changed;
+    let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
+    let stats = acc.finish();
+    *part = [
+        stats[4],
+        sum(kept_t),
+        stats[0],
+        sum(readmitted),
+        sum(changed_lanes),
+        0.0,
+    ];
+    *next = stats;
 }

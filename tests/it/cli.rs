@@ -112,3 +112,168 @@ fn run_prints_a_one_line_summary() {
         "{text}"
     );
 }
+
+fn write_surface(dir: &std::path::Path, n: usize) -> std::path::PathBuf {
+    let out = run_in(
+        dir,
+        &[
+            "surface",
+            "--n",
+            &n.to_string(),
+            "--lambda-l-px",
+            "32",
+            "--lambda-s-px",
+            "4",
+            "--hurst",
+            "0.8",
+            "--seed",
+            "3",
+            "-o",
+            "h.npy",
+        ],
+    );
+    assert!(out.status.success());
+    dir.join("h.npy")
+}
+
+#[test]
+fn solve_command_prints_one_object_per_load_and_writes_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    write_surface(dir.path(), 64);
+    let out = run_in(
+        dir.path(),
+        &[
+            "solve",
+            "--surface",
+            "h.npy",
+            "--loads",
+            "0.001,0.01,0.06",
+            "--tol",
+            "1e-9",
+            "--pressure-out",
+            "p.npy",
+            "--contact-out",
+            "c.npy",
+            "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows = stdout_json(&out);
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for (row, w) in rows.iter().zip([0.001, 0.01, 0.06]) {
+        for key in [
+            "w_over_w0",
+            "mean_pressure",
+            "area_fraction",
+            "n_contact_px",
+            "iterations",
+            "error",
+            "converged",
+            "seconds",
+        ] {
+            assert!(row.get(key).is_some(), "missing {key}");
+        }
+        assert_eq!(row["w_over_w0"].as_f64().unwrap(), w);
+        assert!(row["converged"].as_bool().unwrap());
+        assert!(row["error"].as_f64().unwrap() <= 1e-9);
+        // Unit rms slope and E* = 1: the mean pressure equals W/W0.
+        assert!((row["mean_pressure"].as_f64().unwrap() / w - 1.0).abs() < 1e-12);
+    }
+    // The area grows with the load.
+    let areas: Vec<f64> = rows
+        .iter()
+        .map(|r| r["area_fraction"].as_f64().unwrap())
+        .collect();
+    assert!(areas[0] < areas[1] && areas[1] < areas[2]);
+    // Stacked fields (loads, n, n); contact = pressure > 0 and its count matches the JSON.
+    let bytes = std::fs::read(dir.path().join("c.npy")).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..128]).to_string();
+    assert!(
+        header.contains("'descr': '|u1'") && header.contains("(3, 64, 64)"),
+        "{header}"
+    );
+    let data = &bytes[bytes.len() - 3 * 64 * 64..];
+    for (k, row) in rows.iter().enumerate() {
+        let count = data[k * 4096..(k + 1) * 4096]
+            .iter()
+            .filter(|&&b| b == 1)
+            .count();
+        assert_eq!(count as u64, row["n_contact_px"].as_u64().unwrap());
+    }
+    let p = std::fs::read(dir.path().join("p.npy")).unwrap();
+    assert!(String::from_utf8_lossy(&p[..128]).contains("(3, 64, 64)"));
+}
+
+#[test]
+fn solve_command_fails_loudly_when_a_load_does_not_converge() {
+    let dir = tempfile::tempdir().unwrap();
+    write_surface(dir.path(), 64);
+    let out = run_in(
+        dir.path(),
+        &[
+            "solve",
+            "--surface",
+            "h.npy",
+            "--loads",
+            "0.01",
+            "--tol",
+            "1e-14",
+            "--max-iter",
+            "3",
+            "--pressure-out",
+            "p.npy",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("did not converge") && err.contains("W/W0 = 0.01"),
+        "{err}"
+    );
+    assert!(
+        !dir.path().join("p.npy").exists(),
+        "no field written for a failed solve"
+    );
+}
+
+#[test]
+fn solve_command_rejects_bad_surfaces_with_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    // NaN height.
+    let mut h = vec![0.0; 16 * 16];
+    h[17] = f64::NAN;
+    wearcoef::io::write_f64(&dir.path().join("nan.npy"), &[16, 16], h).unwrap();
+    let out = run_in(
+        dir.path(),
+        &["solve", "--surface", "nan.npy", "--loads", "0.01"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("row 1, column 1"));
+    // Non-square.
+    wearcoef::io::write_f64(&dir.path().join("rect.npy"), &[16, 8], vec![0.0; 128]).unwrap();
+    let out = run_in(
+        dir.path(),
+        &["solve", "--surface", "rect.npy", "--loads", "0.01"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("square"));
+    // Not a .npy file at all.
+    std::fs::write(dir.path().join("junk.npy"), b"not numpy").unwrap();
+    let out = run_in(
+        dir.path(),
+        &["solve", "--surface", "junk.npy", "--loads", "0.01"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    // Negative load.
+    write_surface(dir.path(), 32);
+    let out = run_in(
+        dir.path(),
+        &["solve", "--surface", "h.npy", "--loads", "-0.01"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -458,3 +458,29 @@ fn identical_bits_for_one_and_two_threads() {
     };
     assert_eq!(run(1), run(2));
 }
+
+/// Small-load area–load slope κ = (A/A0)/(W/W0) on 512² H = 0.8 surfaces with λ_s = 8Δ
+/// and λ_l = 128Δ (VALIDATION §3d: BEM setups give 2.2–2.5 with a seed-to-seed scatter of a
+/// few percent; accept the ensemble mean in [2.0, 2.7]). The mean over three realizations is
+/// tested, as one realization can stray (seed 21 gives 2.72 at W/W0 = 0.005).
+#[test]
+#[ignore = "slow in debug builds: run by `make test` in release (cargo test --release -- --ignored)"]
+fn area_load_slope_at_small_loads() {
+    let n = 512;
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let loads = [0.005, 0.01, 0.02, 0.04];
+    let mut mean = [0.0; 4];
+    for seed in [1, 2, 3] {
+        let h = rough_surface(n, 128.0, 8.0, seed);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        for (k, w) in loads.iter().enumerate() {
+            assert!(solver.solve(*w, &cfg(1e-8)).unwrap().converged());
+            mean[k] += solver.contact_count() as f64 / (n * n) as f64 / w / 3.0;
+        }
+    }
+    for (w, kappa) in loads.iter().zip(mean) {
+        assert!((2.0..=2.7).contains(&kappa), "W/W0 = {w}: mean κ = {kappa}");
+    }
+    // κ decreases slightly with load (VALIDATION §3d).
+    assert!(mean[0] > mean[3], "{mean:?}");
+}

@@ -1,0 +1,143 @@
+"""Side-by-side contact sweeps: wearcoef vs Tamaas (PyPI) on the same surfaces.
+
+For each N: wearcoef generates a surface (H = 0.8, lambda_l = N/4, lambda_s = 8 grid
+spacings, unit rms slope); both codes solve the same 30-load sweep, W/W0 log-spaced in
+[0.001, 0.06], warm-started, tolerance TOL on each code's own error (ours is never smaller
+than Tamaas's at the same state, so equal tolerances favour Tamaas). Each solve runs in its
+own process so that its peak memory (ru_maxrss from wait4) can be read; the memory of the
+same program at N = 32 is subtracted as its baseline.
+
+Usage: python contact_peers.py WEARCOEF_BIN OUTDIR [N ...]
+Prints a markdown table.
+"""
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+TOL = 1e-8
+LOADS = np.exp(np.linspace(np.log(0.001), np.log(0.06), 30))
+
+
+def run_child(args, env=None):
+    """Run a command; return (stdout, max RSS in bytes)."""
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    out, err = proc.stdout.read(), proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{args[0]} failed: {err.decode()[-2000:]}")
+    return out.decode(), usage.ru_maxrss * 1024
+
+
+def tamaas_child(path, tol):
+    """Solve the sweep with Tamaas in this process; print JSON."""
+    import tamaas as tm
+
+    h = np.load(path)
+    n = h.shape[0]
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
+    model.E, model.nu = 1.0, 0.0
+    # W0 = E* rms slope L^2 with the spectral rms slope (as wearcoef computes it).
+    q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
+    qx, qy = np.meshgrid(q, q)
+    slope = np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
+    solver = tm.PolonskyKeerRey(model, h, tol)
+    solver.max_iter = 5000
+    # Iterations are only printed by Tamaas's logger (C level); capture fd 1 and 2.
+    log = os.open(path + ".tamaas.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
+    saved = os.dup(1), os.dup(2)
+    rows = []
+    for w in LOADS:
+        os.dup2(log, 1)
+        os.dup2(log, 2)
+        start = time.perf_counter()
+        err = solver.solve(w * model.E_star * slope)
+        seconds = time.perf_counter() - start
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        rows.append({"w_over_w0": w, "seconds": seconds, "error": err,
+                     "n_contact_px": int((model.traction > 0).sum())})
+    os.close(log)
+    # The log holds, per solve, a header and lines "iter cost error"; the last line of
+    # each solve carries its final iteration count.
+    iters, last = [], None
+    with open(path + ".tamaas.log") as f:
+        for line in f:
+            parts = line.split()
+            if parts[:1] == ["Iter"]:
+                if last is not None:
+                    iters.append(last)
+                last = None
+            elif len(parts) == 3 and parts[0].isdigit():
+                last = int(parts[0])
+    iters.append(last)
+    for row, it in zip(rows, iters):
+        row["iterations"] = it
+        row["converged"] = row["error"] <= tol
+    print(json.dumps(rows))
+
+
+def main():
+    if sys.argv[1] == "--tamaas-child":
+        tamaas_child(sys.argv[2], float(sys.argv[3]))
+        return
+    wearcoef, outdir = sys.argv[1], sys.argv[2]
+    sizes = [int(s) for s in sys.argv[3:]] or [256, 512, 1024]
+    os.makedirs(outdir, exist_ok=True)
+    loads = ",".join(repr(float(w)) for w in LOADS)
+
+    def surface(n):
+        path = os.path.join(outdir, f"surface_{n}.npy")
+        subprocess.run([wearcoef, "surface", "--n", str(n), "--lambda-l-px", str(max(n // 4, 16)),
+                        "--lambda-s-px", "8", "--hurst", "0.8", "--seed", "1", "-o", path],
+                       check=True)
+        return path
+
+    def ours(path, threads):
+        env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
+        out, rss = run_child([wearcoef, "solve", "--surface", path, "--loads", loads,
+                              "--tol", repr(TOL), "--json"], env)
+        return json.loads(out), rss
+
+    def theirs(path):
+        out, rss = run_child([sys.executable, __file__, "--tamaas-child", path, repr(TOL)])
+        return json.loads(out), rss
+
+    base = surface(32)
+    _, base_ours = ours(base, 1)
+    _, base_theirs = theirs(base)
+
+    import tamaas
+    print(f"Tamaas {tamaas.__version__} (1 thread, FFTW) vs wearcoef; 30 loads W/W0 in "
+          f"[0.001, 0.06], tol {TOL:g}\n")
+    print("| N | ratio 1T | ratio 2T | iterations/load ours | iterations/load Tamaas | "
+          "ms/iteration ours 1T | ms/iteration Tamaas | memory ours (N² doubles) | "
+          "memory Tamaas (N² doubles) | max rel. diff. area | loads with equal pixel counts |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for n in sizes:
+        path = surface(n)
+        r1, rss1 = ours(path, 1)
+        r2, _ = ours(path, 2)
+        rt, rsst = theirs(path)
+        assert all(r["converged"] for r in r1 + r2), "wearcoef did not converge"
+        assert all(r["converged"] for r in rt), "Tamaas did not converge"
+        t1 = sum(r["seconds"] for r in r1)
+        t2 = sum(r["seconds"] for r in r2)
+        tt = sum(r["seconds"] for r in rt)
+        it1 = sum(r["iterations"] for r in r1)
+        itt = sum(r["iterations"] for r in rt)
+        diff = max(abs(a["n_contact_px"] - b["n_contact_px"]) / b["n_contact_px"] for a, b in zip(r1, rt))
+        equal = sum(a["n_contact_px"] == b["n_contact_px"] for a, b in zip(r1, rt))
+        mem = lambda rss, b: (rss - b) / (8 * n * n)
+        print(f"| {n} | {t1 / tt:.3f} | {t2 / tt:.3f} | {it1 / len(r1):.1f} | {itt / len(rt):.1f} | "
+              f"{t1 / it1 * 1e3:.2f} | {tt / itt * 1e3:.2f} | {mem(rss1, base_ours):.1f} | "
+              f"{mem(rsst, base_theirs):.1f} | {diff:.2e} | {equal}/{len(r1)} |")
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
