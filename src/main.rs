@@ -394,12 +394,21 @@ fn solve(args: SolveArgs) -> anyhow::Result<()> {
                     "error": r.report.error,
                     "converged": r.report.converged(),
                     "seconds": r.seconds,
+                    "peak_rss_bytes": peak_rss_bytes(),
                 })
             })
             .collect();
         println!("{}", serde_json::to_string(&rows)?);
     }
     Ok(())
+}
+
+/// The process's peak resident memory (`VmHWM` of /proc/self/status, Linux), if known.
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// Write through a temporary sibling file and rename, so a failure leaves no partial file.

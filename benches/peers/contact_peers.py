@@ -4,8 +4,10 @@ For each N: wearcoef generates a surface (H = 0.8, lambda_l = N/4, lambda_s = 8 
 spacings, unit rms slope); both codes solve the same 30-load sweep, W/W0 log-spaced in
 [0.001, 0.06], warm-started, tolerance TOL on each code's own error (ours is never smaller
 than Tamaas's at the same state, so equal tolerances favour Tamaas). Each solve runs in its
-own process so that its peak memory (ru_maxrss from wait4) can be read; the memory of the
-same program at N = 32 is subtracted as its baseline.
+own process, which reports its own peak resident memory (VmHWM, reset at exec, unlike
+ru_maxrss which keeps the forking parent's pages); the memory of the same program at N/2 is
+subtracted, so that the memory reported is the marginal cost per grid node, in units of N²
+doubles (fixed costs such as the binary or the interpreter cancel).
 
 Usage: python contact_peers.py WEARCOEF_BIN OUTDIR [N ...]
 Prints a markdown table.
@@ -22,15 +24,22 @@ TOL = 1e-8
 LOADS = np.exp(np.linspace(np.log(0.001), np.log(0.06), 30))
 
 
+def peak_rss_bytes():
+    """This process's peak resident memory (VmHWM)."""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    return None
+
+
 def run_child(args, env=None):
-    """Run a command; return (stdout, max RSS in bytes)."""
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
-    out, err = proc.stdout.read(), proc.stderr.read()
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
+    """Run a command printing a JSON list of per-load rows; return (rows, peak memory)."""
+    proc = subprocess.run(args, capture_output=True, env=env)
     if proc.returncode != 0:
-        raise RuntimeError(f"{args[0]} failed: {err.decode()[-2000:]}")
-    return out.decode(), usage.ru_maxrss * 1024
+        raise RuntimeError(f"{args[0]} failed: {proc.stderr.decode()[-2000:]}")
+    rows = json.loads(proc.stdout)
+    return rows, max(r["peak_rss_bytes"] for r in rows)
 
 
 def tamaas_child(path, tol):
@@ -78,6 +87,7 @@ def tamaas_child(path, tol):
     for row, it in zip(rows, iters):
         row["iterations"] = it
         row["converged"] = row["error"] <= tol
+        row["peak_rss_bytes"] = peak_rss_bytes()
     print(json.dumps(rows))
 
 
@@ -99,17 +109,11 @@ def main():
 
     def ours(path, threads):
         env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
-        out, rss = run_child([wearcoef, "solve", "--surface", path, "--loads", loads,
-                              "--tol", repr(TOL), "--json"], env)
-        return json.loads(out), rss
+        return run_child([wearcoef, "solve", "--surface", path, "--loads", loads,
+                          "--tol", repr(TOL), "--json"], env)
 
     def theirs(path):
-        out, rss = run_child([sys.executable, __file__, "--tamaas-child", path, repr(TOL)])
-        return json.loads(out), rss
-
-    base = surface(32)
-    _, base_ours = ours(base, 1)
-    _, base_theirs = theirs(base)
+        return run_child([sys.executable, __file__, "--tamaas-child", path, repr(TOL)])
 
     import tamaas
     print(f"Tamaas {tamaas.__version__} (1 thread, FFTW) vs wearcoef; 30 loads W/W0 in "
@@ -120,9 +124,12 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for n in sizes:
         path = surface(n)
+        half = surface(n // 2)
         r1, rss1 = ours(path, 1)
         r2, _ = ours(path, 2)
         rt, rsst = theirs(path)
+        _, rss1_half = ours(half, 1)
+        _, rsst_half = theirs(half)
         assert all(r["converged"] for r in r1 + r2), "wearcoef did not converge"
         assert all(r["converged"] for r in rt), "Tamaas did not converge"
         t1 = sum(r["seconds"] for r in r1)
@@ -132,10 +139,10 @@ def main():
         itt = sum(r["iterations"] for r in rt)
         diff = max(abs(a["n_contact_px"] - b["n_contact_px"]) / b["n_contact_px"] for a, b in zip(r1, rt))
         equal = sum(a["n_contact_px"] == b["n_contact_px"] for a, b in zip(r1, rt))
-        mem = lambda rss, b: (rss - b) / (8 * n * n)
+        mem = lambda big, small: (big - small) / (8 * (n * n - (n // 2) ** 2))
         print(f"| {n} | {t1 / tt:.3f} | {t2 / tt:.3f} | {it1 / len(r1):.1f} | {itt / len(rt):.1f} | "
-              f"{t1 / it1 * 1e3:.2f} | {tt / itt * 1e3:.2f} | {mem(rss1, base_ours):.1f} | "
-              f"{mem(rsst, base_theirs):.1f} | {diff:.2e} | {equal}/{len(r1)} |")
+              f"{t1 / it1 * 1e3:.2f} | {tt / itt * 1e3:.2f} | {mem(rss1, rss1_half):.1f} | "
+              f"{mem(rsst, rsst_half):.1f} | {diff:.2e} | {equal}/{len(r1)} |")
         sys.stdout.flush()
 
 

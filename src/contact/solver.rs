@@ -679,10 +679,9 @@ fn update_chunk(
 ) {
     let (tau, level, next_shift) = (a.tau, a.level, a.next_shift);
 
-    let (mut kept_t, mut readmitted, mut changed_lanes) =
-        ([0.0f64; LANES], [0.0; LANES], [0.0; LANES]);
+    let mut kept_t = [0.0f64; LANES];
     let mut acc = GradientLanes::new();
-    let mut changed = 0usize;
+    let (mut changed, mut readmitted) = (0usize, 0usize);
     for (block, ((((p, u), t), r), h)) in pc
         .chunks_exact_mut(LANES)
         .zip(uc.chunks_exact_mut(LANES))
@@ -695,47 +694,49 @@ fn update_chunk(
         let (mut pn, mut un) = (lanes(p), lanes(u));
         let mut g = [0.0; LANES];
         let mut delta = [0.0; LANES];
-        let mut any = 0.0;
         for l in 0..LANES {
             let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
             let kept = if stepped > 0.0 { stepped } else { 0.0 };
             let gc = un[l] - h[l] - level;
-            let readmit = kept == 0.0 && gc < 0.0;
-            let new = if readmit { -tau * gc } else { kept };
+            let new = if kept == 0.0 && gc < 0.0 {
+                -tau * gc
+            } else {
+                kept
+            };
             pn[l] = new;
             delta[l] = new - stepped;
             let m = if new > 0.0 { 1.0 } else { 0.0 };
             kept_t[l] += m * t[l];
-            readmitted[l] += if readmit { 1.0 } else { 0.0 };
-            let c = if new != stepped { 1.0 } else { 0.0 };
-            changed_lanes[l] += c;
-            any += c;
             un[l] -= tau * r[l];
             g[l] = un[l] - h[l] - next_shift;
         }
         acc.add(&pn, &g);
         p.copy_from_slice(&pn);
         u.copy_from_slice(&un);
-        if any > 0.0 {
+        // Rare path: a node left or (re-)entered the contact set.
+        if delta.iter().any(|&d| d != 0.0) {
             for l in 0..LANES {
                 if delta[l] != 0.0 {
                     if changed < MAX_SPARSE {
                         changes[changed] = (a.base + block * LANES + l, delta[l]);
                     }
                     changed += 1;
+                    // Re-admitted: positive now although the linear step left it at ≤ 0.
+                    if pn[l] > 0.0 {
+                        readmitted += 1;
+                    }
                 }
             }
         }
     }
     *count = changed;
-    let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
     let stats = acc.finish();
     *part = [
         stats[4],
-        sum(kept_t),
+        kept_t.iter().sum(),
         stats[0],
-        sum(readmitted),
-        sum(changed_lanes),
+        readmitted as f64,
+        changed as f64,
         0.0,
     ];
     *next = stats;
