@@ -15,14 +15,7 @@ pub enum IoError {
 
 /// Write an `n × n` row-major field as float64 `.npy`.
 pub fn write_heights(path: &Path, n: usize, values: Vec<f64>) -> Result<(), IoError> {
-    let array = Array2::from_shape_vec((n, n), values).map_err(|e| IoError::File {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    write_npy(path, &array).map_err(|e| IoError::File {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })
+    write_f64(path, &[n, n], values)
 }
 
 /// Read a square float64 `.npy` field; returns `(n, values row-major)`.
@@ -49,17 +42,19 @@ pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
 
 /// Write any float64 array of the given shape (C order) as `.npy`.
 pub fn write_f64(path: &Path, shape: &[usize], values: Vec<f64>) -> Result<(), IoError> {
-    let err = |message: String| IoError::File {
-        path: path.display().to_string(),
-        message,
-    };
-    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), values)
-        .map_err(|e| err(e.to_string()))?;
-    write_npy(path, &array).map_err(|e| err(e.to_string()))
+    write_array(path, shape, values)
 }
 
 /// Write any uint8 array of the given shape (C order) as `.npy`.
 pub fn write_u8(path: &Path, shape: &[usize], values: Vec<u8>) -> Result<(), IoError> {
+    write_array(path, shape, values)
+}
+
+fn write_array<T: ndarray_npy::WritableElement>(
+    path: &Path,
+    shape: &[usize],
+    values: Vec<T>,
+) -> Result<(), IoError> {
     let err = |message: String| IoError::File {
         path: path.display().to_string(),
         message,
