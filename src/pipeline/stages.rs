@@ -208,7 +208,6 @@ fn compute_contact(job: &ContactJob, dir: &Path, store: &Store) -> anyhow::Resul
     Ok(json!({
         "n": n,
         "rms_slope": slope,
-        "w0_over_e_star_l2": slope,
         "total_iterations": results.iter().map(|r| r.report.iterations).sum::<usize>(),
         "solve_seconds": results.iter().map(|r| r.seconds).collect::<Vec<_>>(),
     }))

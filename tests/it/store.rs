@@ -348,21 +348,25 @@ fn catalog_reads_back_with_typed_columns() {
 fn cache_key_is_stable() {
     use wearcoef::pipeline::hash::instance_key;
     use wearcoef::pipeline::stages::{surface_params_json, SURFACE_VERSION};
-    use wearcoef::surface::{Method, SurfaceParams};
-    let p = SurfaceParams {
-        n: 64,
-        hurst: 0.8,
-        lambda_l_px: 32.0,
-        lambda_s_px: 4.0,
-        rolloff_lambda_px: None,
-        method: Method::Filter,
-        seed: 1,
-    };
+    let p = key_fixture();
     let key = instance_key("surface", SURFACE_VERSION, &surface_params_json(&p), &[]);
     assert_eq!(
         key, PINNED_SURFACE_KEY,
         "surface keys changed: bump SURFACE_VERSION or the salt deliberately"
     );
+}
+
+/// The surface parameters whose key is pinned.
+fn key_fixture() -> wearcoef::surface::SurfaceParams {
+    wearcoef::surface::SurfaceParams {
+        n: 64,
+        hurst: 0.8,
+        lambda_l_px: 32.0,
+        lambda_s_px: 4.0,
+        rolloff_lambda_px: None,
+        method: wearcoef::surface::Method::Filter,
+        seed: 1,
+    }
 }
 
 const PINNED_SURFACE_KEY: &str = "8aa76b2801a9988576896a292e010b73809f1fcc17df8449f5e5ef3ed57c3342";
@@ -373,15 +377,7 @@ fn every_surface_parameter_changes_the_key() {
     use wearcoef::pipeline::hash::instance_key;
     use wearcoef::pipeline::stages::{surface_params_json, SURFACE_VERSION};
     use wearcoef::surface::{Method, SurfaceParams};
-    let base = SurfaceParams {
-        n: 64,
-        hurst: 0.8,
-        lambda_l_px: 32.0,
-        lambda_s_px: 4.0,
-        rolloff_lambda_px: None,
-        method: Method::Filter,
-        seed: 1,
-    };
+    let base = key_fixture();
     let key =
         |p: &SurfaceParams| instance_key("surface", SURFACE_VERSION, &surface_params_json(p), &[]);
     let variants = [
