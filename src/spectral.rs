@@ -89,9 +89,8 @@ impl Fft2 {
     /// Allocate the scratch these plans need (about `n²` doubles).
     pub fn make_scratch(&self) -> Fft2Scratch {
         let n = self.n;
-        let blocks_wanted = n.min(MAX_BLOCKS);
-        let rows_per_block = n.div_ceil(blocks_wanted);
-        let n_blocks = n.div_ceil(rows_per_block);
+        let rows_per_block = self.rows_per_block();
+        let n_blocks = self.block_count();
         let complex_len = [
             self.r2c.get_scratch_len(),
             self.c2r.get_scratch_len(),
@@ -115,22 +114,72 @@ impl Fft2 {
         }
     }
 
+    /// Rows per work block: the fixed decomposition of a field into
+    /// [`Self::block_count`] blocks of `rows_per_block · n` values (the last may be
+    /// shorter). It depends on `n` only, never on the thread count, so callers that reduce
+    /// per block ([`Self::forward_rows`], [`Self::inverse_rows`]) stay deterministic.
+    pub fn rows_per_block(&self) -> usize {
+        self.n.div_ceil(self.n.min(MAX_BLOCKS))
+    }
+
+    /// Number of work blocks (see [`Self::rows_per_block`]).
+    pub fn block_count(&self) -> usize {
+        self.n.div_ceil(self.rows_per_block())
+    }
+
     /// Forward transform of the real row-major field `input` (length `n²`) into `output`
     /// (length [`Self::spectrum_len`], kx-major). Not normalised.
     pub fn forward(&self, input: &[f64], output: &mut [Complex64], scratch: &mut Fft2Scratch) {
+        assert_eq!(
+            input.len(),
+            self.n * self.n,
+            "real field must have n² values"
+        );
+        let n = self.n;
+        let block_len = self.rows_per_block() * n;
+        self.forward_rows(
+            input.par_chunks(block_len),
+            |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
+            output,
+            scratch,
+        );
+    }
+
+    /// Forward transform of a field produced row by row, so that a pass over other fields
+    /// can be fused with the transform's first stage. `blocks` yields one state per work
+    /// block (exactly [`Self::block_count`] of them, e.g. fields split with
+    /// `par_chunks(rows_per_block · n)`); `produce(state, r, row)` must fill `row` (length
+    /// `n`) with row `r` of that block, and is called for `r = 0, 1, …` in order within a
+    /// block (blocks run in parallel).
+    pub fn forward_rows<S, I, F>(
+        &self,
+        blocks: I,
+        produce: F,
+        output: &mut [Complex64],
+        scratch: &mut Fft2Scratch,
+    ) where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+    {
         let n = self.n;
         let h = n / 2 + 1;
-        self.check(input.len(), output.len(), scratch);
+        self.check(n * n, output.len(), scratch);
+        assert_eq!(
+            blocks.len(),
+            scratch.blocks.len(),
+            "one state per work block"
+        );
         let rpb = scratch.rows_per_block;
         // 1. r2c along x for every row y.
         scratch
             .rows
             .par_chunks_mut(rpb * h)
-            .zip(input.par_chunks(rpb * n))
+            .zip(blocks)
             .zip(scratch.blocks.par_iter_mut())
-            .for_each(|((rows_out, rows_in), block)| {
-                for (row_out, row_in) in rows_out.chunks_exact_mut(h).zip(rows_in.chunks_exact(n)) {
-                    block.real_row.copy_from_slice(row_in);
+            .for_each(|((rows_out, mut state), block)| {
+                for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
+                    produce(&mut state, r, &mut block.real_row);
                     self.r2c
                         .process_with_scratch(&mut block.real_row, row_out, &mut block.complex)
                         .expect("r2c lengths are fixed by the plan");
@@ -161,9 +210,45 @@ impl Fft2 {
         output: &mut [f64],
         scratch: &mut Fft2Scratch,
     ) {
+        assert_eq!(
+            output.len(),
+            self.n * self.n,
+            "real field must have n² values"
+        );
+        let n = self.n;
+        let block_len = self.rows_per_block() * n;
+        self.inverse_rows(
+            spectrum,
+            output.par_chunks_mut(block_len),
+            |rows: &mut &mut [f64], r, row| rows[r * n..(r + 1) * n].copy_from_slice(row),
+            scratch,
+        );
+    }
+
+    /// Inverse transform whose result is handed over row by row instead of stored, so that
+    /// a pass over other fields can be fused with the transform's last stage (see
+    /// [`Self::forward_rows`] for `blocks`). `consume(state, r, row)` receives row `r`
+    /// (length `n`) of the block, in order within a block. Same normalisation and
+    /// Hermitian projection as [`Self::inverse`].
+    pub fn inverse_rows<S, I, F>(
+        &self,
+        spectrum: &mut [Complex64],
+        blocks: I,
+        consume: F,
+        scratch: &mut Fft2Scratch,
+    ) where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &[f64]) + Sync,
+    {
         let n = self.n;
         let h = n / 2 + 1;
-        self.check(output.len(), spectrum.len(), scratch);
+        self.check(n * n, spectrum.len(), scratch);
+        assert_eq!(
+            blocks.len(),
+            scratch.blocks.len(),
+            "one state per work block"
+        );
         let rpb = scratch.rows_per_block;
         let cpb = h.div_ceil(scratch.blocks.len());
         // 1. inverse complex FFT along y for every kx.
@@ -181,18 +266,16 @@ impl Fft2 {
         scratch
             .rows
             .par_chunks_mut(rpb * h)
-            .zip(output.par_chunks_mut(rpb * n))
+            .zip(blocks)
             .zip(scratch.blocks.par_iter_mut())
-            .for_each(|((rows_in, rows_out), block)| {
-                for (row_in, row_out) in rows_in
-                    .chunks_exact_mut(h)
-                    .zip(rows_out.chunks_exact_mut(n))
-                {
+            .for_each(|((rows_in, mut state), block)| {
+                for (r, row_in) in rows_in.chunks_exact_mut(h).enumerate() {
                     row_in[0].im = 0.0;
                     row_in[h - 1].im = 0.0;
                     self.c2r
-                        .process_with_scratch(row_in, row_out, &mut block.complex)
+                        .process_with_scratch(row_in, &mut block.real_row, &mut block.complex)
                         .expect("c2r lengths are fixed and imaginary parts were cleared");
+                    consume(&mut state, r, &block.real_row);
                 }
             });
     }

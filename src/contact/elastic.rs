@@ -107,9 +107,50 @@ impl ElasticOperator {
         output: &mut [f64],
         ws: &mut OperatorWorkspace,
     ) -> f64 {
+        self.fft.forward(input, &mut ws.spectrum, &mut ws.scratch);
+        let energy = self.multiply(ws);
+        self.fft.inverse(&mut ws.spectrum, output, &mut ws.scratch);
+        energy
+    }
+
+    /// Rows per work block of the fused passes ([`Fft2::rows_per_block`]): fields split
+    /// with `par_chunks(rows_per_block · n)` give one state per block.
+    pub fn rows_per_block(&self) -> usize {
+        self.fft.rows_per_block()
+    }
+
+    /// First half of a fused application of `K`: the input field is produced row by row
+    /// by `produce` (see [`Fft2::forward_rows`]), transformed and multiplied; returns
+    /// `⟨t, K t⟩` (Parseval). The result stays in `ws` for [`Self::finish_rows`], which
+    /// must follow before `ws` is used again.
+    pub fn start_rows<S, I, F>(&self, blocks: I, produce: F, ws: &mut OperatorWorkspace) -> f64
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+    {
+        self.fft
+            .forward_rows(blocks, produce, &mut ws.spectrum, &mut ws.scratch);
+        self.multiply(ws)
+    }
+
+    /// Second half of a fused application of `K` started by [`Self::start_rows`]: the
+    /// result `K t` is handed to `consume` row by row (see [`Fft2::inverse_rows`]) instead
+    /// of being stored.
+    pub fn finish_rows<S, I, F>(&self, blocks: I, consume: F, ws: &mut OperatorWorkspace)
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &[f64]) + Sync,
+    {
+        self.fft
+            .inverse_rows(&mut ws.spectrum, blocks, consume, &mut ws.scratch);
+    }
+
+    /// Multiply the spectrum in `ws` by the operator's multiplier; returns the energy.
+    fn multiply(&self, ws: &mut OperatorWorkspace) -> f64 {
         let n = self.grid.n();
         let h = self.grid.half_len();
-        self.fft.forward(input, &mut ws.spectrum, &mut ws.scratch);
         ws.spectrum
             .par_chunks_mut(n)
             .zip(self.multiplier.par_chunks(h))
@@ -124,9 +165,7 @@ impl ElasticOperator {
                 }
                 *part = self.grid.half_weight(jx) * energy;
             });
-        let energy = ws.partials.iter().sum();
-        self.fft.inverse(&mut ws.spectrum, output, &mut ws.scratch);
-        energy
+        ws.partials.iter().sum()
     }
 
     /// `output += K Δ` for a few point loads `(node index, Δp)`, by direct summation of the

@@ -17,8 +17,11 @@
 //! and recomputed exactly every [`RESYNC`] steps and before convergence is declared. The
 //! curvature `⟨t, K t⟩` comes from Parseval's identity inside the convolution. The search
 //! direction is kept centred on the contact set (the projected conjugate gradient), so the
-//! step preserves the load. All reductions use a fixed chunking, so results are
-//! bit-identical whatever the number of threads.
+//! step preserves the load. The direction pass is fused with the forward FFT (each row of
+//! `t` is handed to the transform as it is made) and the update pass with the inverse FFT
+//! (each row of `K t` is consumed as it comes out, never stored): the line search needs
+//! only `⟨t, K t⟩`, which is known before the inverse transform starts. All reductions use
+//! the FFT's fixed row blocks, so results are bit-identical whatever the number of threads.
 //!
 //! **Defined behaviour where the method breaks down**:
 //! - zero load: `p = 0`, no contact, converged in 0 iterations;
@@ -39,16 +42,23 @@ use rayon::prelude::*;
 
 use super::elastic::{ElasticOperator, OperatorWorkspace};
 
-/// Elements per reduction chunk (fixed, so sums do not depend on the thread count).
-const CHUNK: usize = 8192;
 /// Independent accumulators per reduction (breaks floating-point dependency chains; the
 /// summation order stays fixed).
 const LANES: usize = 4;
 
-/// A block of `LANES` values (fields have n² values with n even, a multiple of 4).
+/// A block of `LANES` values.
 #[inline(always)]
 fn lanes(slice: &[f64]) -> [f64; LANES] {
     slice.try_into().expect("blocks of LANES values")
+}
+
+/// A block of up to `LANES` values (the tail of a row whose length is not a multiple of
+/// `LANES`), padded with `fill`.
+#[inline(always)]
+fn padded(slice: &[f64], fill: f64) -> [f64; LANES] {
+    let mut out = [fill; LANES];
+    out[..slice.len()].copy_from_slice(slice);
+    out
 }
 
 /// Per-lane accumulators of the gradient statistics `|S|, Σg, Σg², Σpg, Σp, min g`.
@@ -88,6 +98,19 @@ impl GradientLanes {
             self.sg2[l] += m * g[l] * g[l];
             self.spg[l] += p[l] * g[l];
             self.sp[l] += p[l];
+        }
+    }
+
+    /// Add the first `k` lanes of `other` (the valid lanes of a padded tail block).
+    #[inline(always)]
+    fn merge_lanes(&mut self, other: &Self, k: usize) {
+        for l in 0..k {
+            self.n[l] += other.n[l];
+            self.sg[l] += other.sg[l];
+            self.sg2[l] += other.sg2[l];
+            self.spg[l] += other.spg[l];
+            self.sp[l] += other.sp[l];
+            self.min[l] = self.min[l].min(other.min[l]);
         }
     }
 
@@ -187,15 +210,17 @@ pub struct Solver<'a> {
     ws: OperatorWorkspace,
     pressure: Vec<f64>,
     deflection: Vec<f64>,
+    /// The search direction `t` during iterations; the gap after a solve.
     direction: Vec<f64>,
-    /// `K t` during iterations; the gap after a solve.
-    work: Vec<f64>,
+    /// Values per work block: the operator's fixed row blocks (`rows_per_block · n`), so
+    /// that the passes fused with the FFT and the plain passes reduce over the same blocks
+    /// and sums do not depend on the thread count.
+    chunk: usize,
     partials: Vec<[f64; 6]>,
-    /// Gradient statistics per chunk gathered by the update pass for the next iteration.
-    next_partials: Vec<[f64; 6]>,
-    /// Per chunk: up to [`MAX_SPARSE`] nodes whose projection departed from the linear step.
+    /// Per block: accumulators of the update pass fused with the inverse FFT.
+    update_acc: Vec<UpdateAcc>,
+    /// Per block: up to [`MAX_SPARSE`] nodes whose projection departed from the linear step.
     changes: Vec<[(usize, f64); MAX_SPARSE]>,
-    change_counts: Vec<usize>,
     sparse: Vec<(usize, f64)>,
     has_solution: bool,
 }
@@ -209,7 +234,7 @@ enum Pending {
 }
 
 impl<'a> Solver<'a> {
-    /// Check the surface and allocate every buffer (about 7.5 n² doubles with the
+    /// Check the surface and allocate every buffer (about 6.5 n² doubles with the
     /// operator's, besides the heights).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
@@ -230,6 +255,8 @@ impl<'a> Solver<'a> {
         let mean = heights.iter().sum::<f64>() / len as f64;
         let height_std =
             (heights.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / len as f64).sqrt();
+        let chunk = op.rows_per_block() * n;
+        let blocks = len.div_ceil(chunk);
         let (lo, hi) = heights
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
@@ -244,11 +271,10 @@ impl<'a> Solver<'a> {
             pressure: vec![0.0; len],
             deflection: vec![0.0; len],
             direction: vec![0.0; len],
-            work: vec![0.0; len],
-            partials: vec![[0.0; 6]; len.div_ceil(CHUNK)],
-            next_partials: vec![[0.0; 6]; len.div_ceil(CHUNK)],
-            changes: vec![[(0, 0.0); MAX_SPARSE]; len.div_ceil(CHUNK)],
-            change_counts: vec![0; len.div_ceil(CHUNK)],
+            chunk,
+            partials: vec![[0.0; 6]; blocks],
+            update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
+            changes: vec![[(0, 0.0); MAX_SPARSE]; blocks],
             sparse: Vec::with_capacity(MAX_SPARSE),
             has_solution: false,
         })
@@ -266,7 +292,7 @@ impl<'a> Solver<'a> {
 
     /// Gap `(K p − h) − min(K p − h)` of the last solve (row-major).
     pub fn gap(&self) -> &[f64] {
-        &self.work
+        &self.direction
     }
 
     /// Number of nodes in contact (`p > 0`) in the last solve.
@@ -381,32 +407,31 @@ impl<'a> Solver<'a> {
             }
             report.iterations += 1;
 
-            // Pass 2: conjugate direction on the contact set, kept centred there.
+            // Pass 2, fused with the forward FFT: conjugate direction on the contact set,
+            // kept centred there; then K t and the curvature ⟨t, K t⟩ (Parseval).
             let beta = if restart || g_norm_old <= 0.0 {
                 0.0
             } else {
                 g_norm / g_norm_old
             };
             g_norm_old = g_norm;
-            let numerator = self.pass_direction(shift + mean_g, beta, direction_mean);
-
-            // K t and the curvature ⟨t, K t⟩ (Parseval), then the exact line search.
-            let denominator =
-                self.op
-                    .apply_with_energy(&self.direction, &mut self.work, &mut self.ws);
+            let level = shift + mean_g;
+            let (denominator, numerator) =
+                self.direction_and_transform(level, beta, direction_mean);
             report.convolutions += 1;
+            // Exact line search.
             let tau = if denominator > 0.0 && denominator.is_finite() && numerator.is_finite() {
                 numerator / denominator
             } else {
                 1.0 / self_influence
             };
 
-            // Pass 3: step, project, re-admit interpenetrating nodes; speculatively update
-            // the deflection linearly (u − τ K t) and gather the next gradient statistics.
-            let new_shift = shift + mean_g;
-            let [total, kept_t, kept_n, readmitted, changed, _] =
-                self.pass_update(tau, shift + mean_g, new_shift);
-            let stats = self.reduce_gradient();
+            // Pass 3, fused with the inverse FFT: step, project, re-admit interpenetrating
+            // nodes; speculatively update the deflection linearly (u − τ K t) and gather the
+            // next gradient statistics.
+            let new_shift = level;
+            let ([total, kept_t, kept_n, readmitted, changed, _], stats) =
+                self.update_from_transform(tau, level, new_shift);
             direction_mean = if kept_n > 0.0 { kept_t / kept_n } else { 0.0 };
             restart = readmitted > 0.0;
             shift = new_shift;
@@ -453,7 +478,7 @@ impl<'a> Solver<'a> {
     /// Sum of `f(p_i)` over all nodes with fixed chunking.
     fn chunked_sum(&mut self, f: impl Fn(f64) -> f64 + Sync) -> f64 {
         self.pressure
-            .par_chunks(CHUNK)
+            .par_chunks(self.chunk)
             .zip(self.partials.par_iter_mut())
             .for_each(|(pc, part)| part[0] = pc.iter().map(|&p| f(p)).sum());
         self.partials.iter().map(|p| p[0]).sum()
@@ -462,11 +487,11 @@ impl<'a> Solver<'a> {
     /// Apply `pending`, then over all nodes: `min(g)`, and over the contact set `S = {p > 0}`:
     /// `|S|, Σg, Σg², Σpg, Σp`, with `g = u − h − shift`.
     fn pass_gradient(&mut self, pending: Pending, shift: f64) -> [f64; 6] {
-        let h = self.heights;
+        let (chunk, h) = (self.chunk, self.heights);
         self.pressure
-            .par_chunks_mut(CHUNK)
-            .zip(self.deflection.par_chunks_mut(CHUNK))
-            .zip(h.par_chunks(CHUNK))
+            .par_chunks_mut(chunk)
+            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(h.par_chunks(chunk))
             .zip(self.partials.par_iter_mut())
             .for_each(|(((pc, uc), hc), part)| {
                 if let Pending::Scale(s) = pending {
@@ -475,18 +500,28 @@ impl<'a> Solver<'a> {
                         *u *= s;
                     }
                 }
-                let mut acc = GradientLanes::new();
-                for ((p, u), h) in pc
-                    .chunks_exact(LANES)
-                    .zip(uc.chunks_exact(LANES))
-                    .zip(hc.chunks_exact(LANES))
-                {
-                    let (p, u, h) = (lanes(p), lanes(u), lanes(h));
+                let gap = |u: &[f64; LANES], h: &[f64; LANES]| {
                     let mut g = [0.0; LANES];
                     for l in 0..LANES {
                         g[l] = u[l] - h[l] - shift;
                     }
-                    acc.add(&p, &g);
+                    g
+                };
+                let mut acc = GradientLanes::new();
+                let whole = pc.len() / LANES * LANES;
+                for ((p, u), h) in pc[..whole]
+                    .chunks_exact(LANES)
+                    .zip(uc.chunks_exact(LANES))
+                    .zip(hc.chunks_exact(LANES))
+                {
+                    acc.add(&lanes(p), &gap(&lanes(u), &lanes(h)));
+                }
+                if whole < pc.len() {
+                    let k = pc.len() - whole;
+                    let mut tail = GradientLanes::new();
+                    let g = gap(&padded(&uc[whole..], 0.0), &padded(&hc[whole..], 0.0));
+                    tail.add(&padded(&pc[whole..], 0.0), &g);
+                    acc.merge_lanes(&tail, k);
                 }
                 *part = acc.finish();
             });
@@ -504,88 +539,125 @@ impl<'a> Solver<'a> {
         acc
     }
 
-    /// Gradient statistics gathered by the last [`Self::pass_update`].
-    fn reduce_gradient(&self) -> [f64; 6] {
-        Self::sum_gradient(&self.next_partials)
-    }
-
-    /// `t ← (g − ḡ_S) + β (t − t̄_S)` on S, 0 elsewhere (`t̄_S = direction_mean`, the mean
-    /// of the old direction over the current contact set, so that `Σ_S t = 0`); returns
-    /// `Σ_S (g − ḡ_S) t`.
-    fn pass_direction(&mut self, level: f64, beta: f64, direction_mean: f64) -> f64 {
-        let h = self.heights;
-        self.direction
-            .par_chunks_mut(CHUNK)
-            .zip(self.pressure.par_chunks(CHUNK))
-            .zip(self.deflection.par_chunks(CHUNK))
-            .zip(h.par_chunks(CHUNK))
-            .zip(self.partials.par_iter_mut())
-            .for_each(|((((tc, pc), uc), hc), part)| {
-                let mut num = [0.0f64; LANES];
-                for (((t, p), u), h) in tc
-                    .chunks_exact_mut(LANES)
-                    .zip(pc.chunks_exact(LANES))
-                    .zip(uc.chunks_exact(LANES))
-                    .zip(hc.chunks_exact(LANES))
-                {
-                    let (p, u, h) = (lanes(p), lanes(u), lanes(h));
-                    let mut tn = lanes(t);
-                    for l in 0..LANES {
-                        let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
-                        let gc = u[l] - h[l] - level;
-                        tn[l] = m * (gc + beta * (tn[l] - direction_mean));
-                        num[l] += gc * tn[l];
-                    }
-                    t.copy_from_slice(&tn);
+    /// Pass 2 fused with the first half of `K t`: `t ← (g − ḡ_S) + β (t − t̄_S)` on S, 0
+    /// elsewhere (`g − ḡ_S = u − h − level`, `t̄_S = direction_mean`, the mean of the old
+    /// direction over the current contact set, so that `Σ_S t = 0`), each row handed to the
+    /// forward FFT as it is made. Returns `(⟨t, K t⟩, Σ_S (g − ḡ_S) t)`.
+    fn direction_and_transform(
+        &mut self,
+        level: f64,
+        beta: f64,
+        direction_mean: f64,
+    ) -> (f64, f64) {
+        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let blocks = self
+            .direction
+            .par_chunks_mut(chunk)
+            .zip(self.pressure.par_chunks(chunk))
+            .zip(self.deflection.par_chunks(chunk))
+            .zip(h.par_chunks(chunk))
+            .zip(self.partials.par_iter_mut());
+        let energy = self.op.start_rows(
+            blocks,
+            |((((tc, pc), uc), hc), part), r, row| {
+                if r == 0 {
+                    **part = [0.0; 6];
                 }
-                part[0] = num.iter().sum();
-            });
-        self.partials.iter().map(|p| p[0]).sum()
+                let at = r * n..(r + 1) * n;
+                direction_row(
+                    level,
+                    beta,
+                    direction_mean,
+                    &mut tc[at.clone()],
+                    &pc[at.clone()],
+                    &uc[at.clone()],
+                    &hc[at],
+                    row,
+                    part,
+                );
+            },
+            &mut self.ws,
+        );
+        let numerator = self
+            .partials
+            .iter()
+            .map(|p| p[..LANES].iter().sum::<f64>())
+            .sum();
+        (energy, numerator)
     }
 
+    /// Pass 3 fused with the second half of `K t` (whose rows arrive from the inverse FFT):
     /// `p ← max(p − τ t, 0)` on S; nodes with `p = 0` and `g − level < 0` are re-admitted
     /// with `p = −τ (g − level)`. Records the nodes where the result departs from the
-    /// linear step. Also `u ← u − τ K t` and, into `next_partials`, the gradient statistics
-    /// of [`Self::pass_gradient`] for the new state with `g = u − h − next_shift` (exact if
-    /// no node changed). Returns `[Σp, Σ t over the new S, |new S|, #re-admitted, #changed, 0]`.
-    fn pass_update(&mut self, tau: f64, level: f64, next_shift: f64) -> [f64; 6] {
-        let h = self.heights;
-        self.pressure
-            .par_chunks_mut(CHUNK)
-            .zip(self.deflection.par_chunks_mut(CHUNK))
-            .zip(self.direction.par_chunks(CHUNK))
-            .zip(self.work.par_chunks(CHUNK))
-            .zip(h.par_chunks(CHUNK))
-            .zip(self.partials.par_iter_mut())
-            .zip(self.next_partials.par_iter_mut())
+    /// linear step. Also `u ← u − τ K t` and the gradient statistics of
+    /// [`Self::pass_gradient`] for the new state with `g = u − h − next_shift` (exact if no
+    /// node changed). Returns `[Σp, Σ t over the new S, |new S|, #re-admitted, #changed, 0]`
+    /// and those statistics.
+    fn update_from_transform(
+        &mut self,
+        tau: f64,
+        level: f64,
+        next_shift: f64,
+    ) -> ([f64; 6], [f64; 6]) {
+        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let args = UpdateArgs {
+            tau,
+            level,
+            next_shift,
+        };
+        let blocks = self
+            .pressure
+            .par_chunks_mut(chunk)
+            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(self.direction.par_chunks(chunk))
+            .zip(h.par_chunks(chunk))
+            .zip(self.update_acc.par_iter_mut())
             .zip(self.changes.par_iter_mut())
-            .zip(self.change_counts.par_iter_mut())
-            .enumerate()
-            .for_each(
-                |(chunk, ((((((((pc, uc), tc), rc), hc), part), next), changes), count))| {
-                    let args = UpdateArgs {
-                        tau,
-                        level,
-                        next_shift,
-                        base: chunk * CHUNK,
-                    };
-                    dispatch_update(&args, pc, uc, tc, rc, hc, part, next, changes, count);
-                },
-            );
-        let mut acc = [0.0; 6];
-        for part in &self.partials {
+            .enumerate();
+        self.op.finish_rows(
+            blocks,
+            |(block, (((((pc, uc), tc), hc), acc), changes)), r, kt| {
+                if r == 0 {
+                    **acc = UpdateAcc::new();
+                }
+                let at = r * n..(r + 1) * n;
+                dispatch_update(
+                    &args,
+                    *block * chunk + r * n,
+                    &mut pc[at.clone()],
+                    &mut uc[at.clone()],
+                    &tc[at.clone()],
+                    kt,
+                    &hc[at],
+                    acc,
+                    changes,
+                );
+            },
+            &mut self.ws,
+        );
+        let mut totals = [0.0; 6];
+        let mut stats = [0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY];
+        for acc in &self.update_acc {
+            let s = acc.grad.finish();
+            totals[0] += s[4];
+            totals[1] += acc.kept_t.iter().sum::<f64>();
+            totals[2] += s[0];
+            totals[3] += acc.readmitted as f64;
+            totals[4] += acc.changed as f64;
             for k in 0..5 {
-                acc[k] += part[k];
+                stats[k] += s[k];
             }
+            stats[5] = stats[5].min(s[5]);
         }
-        acc
+        (totals, stats)
     }
 
     /// Collect the changed nodes of the last update in index order; false if a chunk
     /// overflowed its slots (then a full convolution is needed).
     fn gather_changes(&mut self) -> bool {
         self.sparse.clear();
-        for (slots, &count) in self.changes.iter().zip(&self.change_counts) {
+        for (slots, acc) in self.changes.iter().zip(&self.update_acc) {
+            let count = acc.changed;
             if count > MAX_SPARSE || self.sparse.len() + count > MAX_SPARSE {
                 return false;
             }
@@ -594,7 +666,7 @@ impl<'a> Solver<'a> {
         true
     }
 
-    /// `work ← (u − h) − min(u − h)` (the gap; `u` must be exact).
+    /// `direction ← (u − h) − min(u − h)` (the gap; `u` must be exact).
     fn finish_gap(&mut self) {
         let h = self.heights;
         let min = self
@@ -603,11 +675,72 @@ impl<'a> Solver<'a> {
             .zip(h.par_iter())
             .map(|(u, h)| u - h)
             .reduce(|| f64::INFINITY, f64::min);
-        self.work
+        self.direction
             .par_iter_mut()
             .zip(self.deflection.par_iter())
             .zip(h.par_iter())
             .for_each(|((g, u), h)| *g = (u - h) - min);
+    }
+}
+
+/// Direction update of one row (see [`Solver::direction_and_transform`]): writes `t` and
+/// the FFT's input row, adds `(g − ḡ_S) t` to the lane sums `part[..LANES]`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn direction_row(
+    level: f64,
+    beta: f64,
+    direction_mean: f64,
+    t: &mut [f64],
+    p: &[f64],
+    u: &[f64],
+    h: &[f64],
+    row: &mut [f64],
+    part: &mut [f64; 6],
+) {
+    let mut num = [0.0f64; LANES];
+    let body = |t: &mut [f64; LANES],
+                p: &[f64; LANES],
+                u: &[f64; LANES],
+                h: &[f64; LANES],
+                num: &mut [f64; LANES]| {
+        for l in 0..LANES {
+            let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
+            let gc = u[l] - h[l] - level;
+            t[l] = m * (gc + beta * (t[l] - direction_mean));
+            num[l] += gc * t[l];
+        }
+    };
+    let whole = t.len() / LANES * LANES;
+    for ((((t, p), u), h), o) in t[..whole]
+        .chunks_exact_mut(LANES)
+        .zip(p.chunks_exact(LANES))
+        .zip(u.chunks_exact(LANES))
+        .zip(h.chunks_exact(LANES))
+        .zip(row.chunks_exact_mut(LANES))
+    {
+        let mut tn = lanes(t);
+        body(&mut tn, &lanes(p), &lanes(u), &lanes(h), &mut num);
+        t.copy_from_slice(&tn);
+        o.copy_from_slice(&tn);
+    }
+    if whole < t.len() {
+        // Tail of a row whose length is not a multiple of LANES: padded with p = 0 (off S),
+        // so the padding contributes exactly 0.
+        let k = t.len() - whole;
+        let mut tn = padded(&t[whole..], 0.0);
+        body(
+            &mut tn,
+            &padded(&p[whole..], 0.0),
+            &padded(&u[whole..], 0.0),
+            &padded(&h[whole..], 0.0),
+            &mut num,
+        );
+        t[whole..].copy_from_slice(&tn[..k]);
+        row[whole..].copy_from_slice(&tn[..k]);
+    }
+    for l in 0..LANES {
+        part[l] += num[l];
     }
 }
 
@@ -616,73 +749,145 @@ struct UpdateArgs {
     tau: f64,
     level: f64,
     next_shift: f64,
-    base: usize,
 }
 
-/// Run [`update_chunk`] with AVX2 code generation where the processor has it. IEEE
+/// Accumulators of the update pass over one block.
+struct UpdateAcc {
+    grad: GradientLanes,
+    kept_t: [f64; LANES],
+    changed: usize,
+    readmitted: usize,
+}
+
+impl UpdateAcc {
+    fn new() -> Self {
+        Self {
+            grad: GradientLanes::new(),
+            kept_t: [0.0; LANES],
+            changed: 0,
+            readmitted: 0,
+        }
+    }
+}
+
+/// Run [`update_row`] with AVX2 code generation where the processor has it. IEEE
 /// arithmetic without fused multiply-add gives the same bits on either path.
 #[allow(clippy::too_many_arguments)]
 fn dispatch_update(
     a: &UpdateArgs,
+    base: usize,
     pc: &mut [f64],
     uc: &mut [f64],
     tc: &[f64],
     rc: &[f64],
     hc: &[f64],
-    part: &mut [f64; 6],
-    next: &mut [f64; 6],
+    acc: &mut UpdateAcc,
     changes: &mut [(usize, f64); MAX_SPARSE],
-    count: &mut usize,
 ) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor supports AVX2 (checked just above).
-            unsafe { update_chunk_avx2(a, pc, uc, tc, rc, hc, part, next, changes, count) };
+            unsafe { update_row_avx2(a, base, pc, uc, tc, rc, hc, acc, changes) };
             return;
         }
     }
-    update_chunk(a, pc, uc, tc, rc, hc, part, next, changes, count);
+    update_row(a, base, pc, uc, tc, rc, hc, acc, changes);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn update_chunk_avx2(
+unsafe fn update_row_avx2(
     a: &UpdateArgs,
+    base: usize,
     pc: &mut [f64],
     uc: &mut [f64],
     tc: &[f64],
     rc: &[f64],
     hc: &[f64],
-    part: &mut [f64; 6],
-    next: &mut [f64; 6],
+    acc: &mut UpdateAcc,
     changes: &mut [(usize, f64); MAX_SPARSE],
-    count: &mut usize,
 ) {
-    update_chunk(a, pc, uc, tc, rc, hc, part, next, changes, count)
+    update_row(a, base, pc, uc, tc, rc, hc, acc, changes)
 }
 
+/// One block of `LANES` nodes of the update pass; returns the departures from the linear
+/// step (`Δ`), zero where the node stayed on its linear path.
+#[inline(always)]
+fn update_lanes(
+    a: &UpdateArgs,
+    pn: &mut [f64; LANES],
+    un: &mut [f64; LANES],
+    t: &[f64; LANES],
+    r: &[f64; LANES],
+    h: &[f64; LANES],
+    acc: &mut UpdateAcc,
+) -> [f64; LANES] {
+    let (tau, level, next_shift) = (a.tau, a.level, a.next_shift);
+    let mut g = [0.0; LANES];
+    let mut delta = [0.0; LANES];
+    for l in 0..LANES {
+        let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
+        let kept = if stepped > 0.0 { stepped } else { 0.0 };
+        let gc = un[l] - h[l] - level;
+        let new = if kept == 0.0 && gc < 0.0 {
+            -tau * gc
+        } else {
+            kept
+        };
+        pn[l] = new;
+        delta[l] = new - stepped;
+        let m = if new > 0.0 { 1.0 } else { 0.0 };
+        acc.kept_t[l] += m * t[l];
+        un[l] -= tau * r[l];
+        g[l] = un[l] - h[l] - next_shift;
+    }
+    acc.grad.add(pn, &g);
+    delta
+}
+
+/// Record the nodes of one lane block that left or (re-)entered the contact set.
+#[inline(always)]
+fn record_changes(
+    delta: &[f64; LANES],
+    pn: &[f64; LANES],
+    first: usize,
+    valid: usize,
+    acc: &mut UpdateAcc,
+    changes: &mut [(usize, f64); MAX_SPARSE],
+) {
+    for l in 0..valid {
+        if delta[l] != 0.0 {
+            if acc.changed < MAX_SPARSE {
+                changes[acc.changed] = (first + l, delta[l]);
+            }
+            acc.changed += 1;
+            // Re-admitted: positive now although the linear step left it at ≤ 0.
+            if pn[l] > 0.0 {
+                acc.readmitted += 1;
+            }
+        }
+    }
+}
+
+/// The update pass over one row (see [`Solver::update_from_transform`]); `base` is the
+/// node index of the row's first value, `rc` the row of `K t`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn update_chunk(
+fn update_row(
     a: &UpdateArgs,
+    base: usize,
     pc: &mut [f64],
     uc: &mut [f64],
     tc: &[f64],
     rc: &[f64],
     hc: &[f64],
-    part: &mut [f64; 6],
-    next: &mut [f64; 6],
+    acc: &mut UpdateAcc,
     changes: &mut [(usize, f64); MAX_SPARSE],
-    count: &mut usize,
 ) {
-    let (tau, level, next_shift) = (a.tau, a.level, a.next_shift);
-
-    let mut kept_t = [0.0f64; LANES];
-    let mut acc = GradientLanes::new();
-    let (mut changed, mut readmitted) = (0usize, 0usize);
-    for (block, ((((p, u), t), r), h)) in pc
+    let whole = pc.len() / LANES * LANES;
+    for (block, ((((p, u), t), r), h)) in pc[..whole]
         .chunks_exact_mut(LANES)
         .zip(uc.chunks_exact_mut(LANES))
         .zip(tc.chunks_exact(LANES))
@@ -690,54 +895,37 @@ fn update_chunk(
         .zip(hc.chunks_exact(LANES))
         .enumerate()
     {
-        let (t, r, h) = (lanes(t), lanes(r), lanes(h));
         let (mut pn, mut un) = (lanes(p), lanes(u));
-        let mut g = [0.0; LANES];
-        let mut delta = [0.0; LANES];
-        for l in 0..LANES {
-            let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
-            let kept = if stepped > 0.0 { stepped } else { 0.0 };
-            let gc = un[l] - h[l] - level;
-            let new = if kept == 0.0 && gc < 0.0 {
-                -tau * gc
-            } else {
-                kept
-            };
-            pn[l] = new;
-            delta[l] = new - stepped;
-            let m = if new > 0.0 { 1.0 } else { 0.0 };
-            kept_t[l] += m * t[l];
-            un[l] -= tau * r[l];
-            g[l] = un[l] - h[l] - next_shift;
-        }
-        acc.add(&pn, &g);
+        let delta = update_lanes(a, &mut pn, &mut un, &lanes(t), &lanes(r), &lanes(h), acc);
         p.copy_from_slice(&pn);
         u.copy_from_slice(&un);
         // Rare path: a node left or (re-)entered the contact set.
         if delta.iter().any(|&d| d != 0.0) {
-            for l in 0..LANES {
-                if delta[l] != 0.0 {
-                    if changed < MAX_SPARSE {
-                        changes[changed] = (a.base + block * LANES + l, delta[l]);
-                    }
-                    changed += 1;
-                    // Re-admitted: positive now although the linear step left it at ≤ 0.
-                    if pn[l] > 0.0 {
-                        readmitted += 1;
-                    }
-                }
-            }
+            record_changes(&delta, &pn, base + block * LANES, LANES, acc, changes);
         }
     }
-    *count = changed;
-    let stats = acc.finish();
-    *part = [
-        stats[4],
-        kept_t.iter().sum(),
-        stats[0],
-        readmitted as f64,
-        changed as f64,
-        0.0,
-    ];
-    *next = stats;
+    if whole < pc.len() {
+        // Tail of a row whose length is not a multiple of LANES. The padding (p = t = 0,
+        // u − h − level = 0) stays off the contact set, is not re-admitted and has Δ = 0;
+        // its gap g = −next_shift enters only the minimum, so it is padded with +∞ there.
+        let k = pc.len() - whole;
+        let (mut pn, mut un) = (padded(&pc[whole..], 0.0), padded(&uc[whole..], a.level));
+        let mut tail = UpdateAcc::new();
+        let delta = update_lanes(
+            a,
+            &mut pn,
+            &mut un,
+            &padded(&tc[whole..], 0.0),
+            &padded(&rc[whole..], 0.0),
+            &padded(&hc[whole..], 0.0),
+            &mut tail,
+        );
+        pc[whole..].copy_from_slice(&pn[..k]);
+        uc[whole..].copy_from_slice(&un[..k]);
+        record_changes(&delta, &pn, base + whole, k, acc, changes);
+        acc.grad.merge_lanes(&tail.grad, k);
+        for l in 0..k {
+            acc.kept_t[l] += tail.kept_t[l];
+        }
+    }
 }

@@ -251,8 +251,20 @@ fn eggbox_full_contact_threshold() {
 
 #[test]
 fn rough_surface_load_balance_and_complementarity() {
-    let n = 128;
-    let h = rough_surface(n, 64.0, 4.0, 3);
+    check_load_balance_and_complementarity(128, 64.0);
+}
+
+/// Rows whose length is not a multiple of the solver's 4-wide lanes (n = 30, 66) go
+/// through the padded tail paths of the fused passes; one work block holds one row at
+/// n = 30 and two at n = 66.
+#[test]
+fn load_balance_and_complementarity_with_ragged_rows() {
+    check_load_balance_and_complementarity(30, 15.0);
+    check_load_balance_and_complementarity(66, 33.0);
+}
+
+fn check_load_balance_and_complementarity(n: usize, lambda_l_px: f64) {
+    let h = rough_surface(n, lambda_l_px, 4.0, 3);
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let mut solver = Solver::new(&op, &h).unwrap();
     for w in [0.001, 0.01, 0.05, 0.2] {
