@@ -63,3 +63,75 @@ fn write_array<T: ndarray_npy::WritableElement>(
         .map_err(|e| err(e.to_string()))?;
     write_npy(path, &array).map_err(|e| err(e.to_string()))
 }
+
+/// How a contact map file was stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum ContactMapFormat {
+    /// `bool` array `(rows, cols)`.
+    Bool,
+    /// `uint8` array of 0/1 `(rows, cols)`.
+    ZeroOne,
+    /// The project's bit-packed rows (numpy `packbits(axis=1)` convention): `uint8`
+    /// `(n, ceil(n/8))` for an `n × n` map, most significant bit first.
+    Packed,
+}
+
+/// Read a 2-D contact map: `bool`, `uint8` 0/1, or the project's bit-packed `uint8`
+/// `(n, ceil(n/8))` (recognised by that shape with `n ≥ 2`; the map is then `n × n`).
+/// Returns `(rows, cols, map row-major, format)`.
+pub fn read_contact_map(
+    path: &Path,
+) -> Result<(usize, usize, Vec<bool>, ContactMapFormat), IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let flat = |a: ndarray::ArrayView2<'_, u8>| a.iter().copied().collect::<Vec<u8>>();
+    match read_npy::<_, Array2<u8>>(path) {
+        Ok(a) => {
+            let (rows, cols) = a.dim();
+            if rows == 0 || cols == 0 {
+                return Err(err(format!("contact map is empty ({rows} × {cols})")));
+            }
+            let bytes = flat(a.view());
+            if rows >= 2 && cols == rows.div_ceil(8) && cols != rows {
+                let n = rows;
+                let map = (0..n * n)
+                    .map(|i| bytes[(i / n) * cols + (i % n) / 8] & (0x80 >> (i % n % 8)) != 0)
+                    .collect();
+                return Ok((n, n, map, ContactMapFormat::Packed));
+            }
+            if let Some((i, v)) = bytes.iter().enumerate().find(|(_, &v)| v > 1) {
+                return Err(err(format!(
+                    "uint8 contact map must hold 0 or 1, found {v} at row {}, column {} \
+                     (bit-packed maps have shape (n, ceil(n/8)))",
+                    i / cols,
+                    i % cols
+                )));
+            }
+            Ok((
+                rows,
+                cols,
+                bytes.iter().map(|&v| v == 1).collect(),
+                ContactMapFormat::ZeroOne,
+            ))
+        }
+        Err(first) => match read_npy::<_, Array2<bool>>(path) {
+            Ok(a) => {
+                let (rows, cols) = a.dim();
+                if rows == 0 || cols == 0 {
+                    return Err(err(format!("contact map is empty ({rows} × {cols})")));
+                }
+                Ok((
+                    rows,
+                    cols,
+                    a.iter().copied().collect(),
+                    ContactMapFormat::Bool,
+                ))
+            }
+            Err(_) => Err(err(format!(
+                "not a 2-D bool or uint8 .npy contact map ({first})"
+            ))),
+        },
+    }
+}

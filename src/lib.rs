@@ -20,10 +20,13 @@
 //! - Surfaces have zero mean and unit rms slope `sqrt(<|∇h|²>)`, computed spectrally.
 //! - Loads are `W/W0` with `W0 = E* · rms slope · L²`.
 
+pub mod clusters;
 pub mod config;
 pub mod contact;
 pub mod grid;
 pub mod io;
 pub mod pipeline;
+pub mod powerlaw;
 pub mod spectral;
+pub mod statistics;
 pub mod surface;

@@ -9,6 +9,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use serde_json::json;
 
+use wearcoef::clusters::{self, Connectivity};
 use wearcoef::config::{ConfigError, Pipeline};
 use wearcoef::contact::elastic::ElasticOperator;
 use wearcoef::contact::solver::SolverConfig;
@@ -85,6 +86,19 @@ enum Command {
     },
     /// Solve the contact of a surface file at one or several loads.
     Solve(SolveArgs),
+    /// Label the contact clusters of a map on the periodic torus.
+    Clusters {
+        /// Contact map: bool or uint8 0/1 `.npy` (rows, cols), or the project's bit-packed
+        /// uint8 (n, ceil(n/8)) from the contact stage.
+        #[arg(long)]
+        contact: PathBuf,
+        /// Neighbours that link pixels: 8 (edges and corners, the paper's) or 4 (edges).
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(4..=8))]
+        connectivity: u32,
+        /// Print `{"n_clusters", "areas_px" (descending), "percolating"}` as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).
     Surface {
         /// Grid nodes per side (even).
@@ -270,6 +284,42 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             }
         }
         Command::Solve(args) => solve(args)?,
+        Command::Clusters {
+            contact,
+            connectivity,
+            json,
+        } => {
+            let conn = Connectivity::from_neighbours(connectivity).ok_or_else(|| {
+                InputError(format!("--connectivity must be 4 or 8, got {connectivity}"))
+            })?;
+            let (rows, cols, map, format) = wearcoef::io::read_contact_map(&contact)?;
+            let labelling = clusters::label(&map, rows, cols, conn)
+                .map_err(|e| InputError(format!("{}: {e}", contact.display())))?;
+            let mut areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
+            areas.sort_unstable_by(|a, b| b.cmp(a));
+            let percolating = labelling.clusters.iter().any(|c| c.percolating());
+            if json {
+                let out = json!({
+                    "n_clusters": labelling.clusters.len(),
+                    "areas_px": areas,
+                    "percolating": percolating,
+                });
+                println!("{}", serde_json::to_string(&out)?);
+            } else {
+                let in_contact: u64 = areas.iter().sum();
+                println!(
+                    "{rows} × {cols} map ({format:?}), {connectivity}-connected: {} clusters, \
+                     {in_contact} pixels in contact, largest {} px{}",
+                    areas.len(),
+                    areas.first().copied().unwrap_or(0),
+                    if percolating {
+                        ", a cluster wraps around the periodic box (percolating)"
+                    } else {
+                        ""
+                    }
+                );
+            }
+        }
         Command::Surface {
             n,
             lambda_l_px,

@@ -277,3 +277,118 @@ fn solve_command_rejects_bad_surfaces_with_exit_2() {
     );
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// The same map as bool, uint8 0/1 and the contact stage's bit-packed rows gives the same
+/// clusters; areas are sorted in descending order; bad maps exit 2.
+#[test]
+fn clusters_command_reads_every_map_format() {
+    use ndarray::Array2;
+    let dir = tempfile::tempdir().unwrap();
+    let n = 12;
+    // A 2×3 block, a pixel linked diagonally to it, a lone pixel, and a pair across the
+    // left–right edge.
+    let mut map = vec![false; n * n];
+    for (y, x) in [
+        (2, 2),
+        (2, 3),
+        (2, 4),
+        (3, 2),
+        (3, 3),
+        (3, 4),
+        (4, 5),
+        (8, 8),
+        (6, 0),
+        (6, 11),
+    ] {
+        map[y * n + x] = true;
+    }
+    let as_u8: Vec<u8> = map.iter().map(|&b| b as u8).collect();
+    let bool_path = dir.path().join("bool.npy");
+    ndarray_npy::write_npy(
+        &bool_path,
+        &Array2::from_shape_vec((n, n), map.clone()).unwrap(),
+    )
+    .unwrap();
+    let u8_path = dir.path().join("u8.npy");
+    wearcoef::io::write_u8(&u8_path, &[n, n], as_u8.clone()).unwrap();
+    let pressure: Vec<f64> = as_u8.iter().map(|&v| v as f64).collect();
+    let packed = wearcoef::contact::sweep::pack_contact(&pressure, n);
+    let packed_path = dir.path().join("packed.npy");
+    wearcoef::io::write_u8(&packed_path, &[n, n.div_ceil(8)], packed).unwrap();
+
+    for path in [&bool_path, &u8_path, &packed_path] {
+        let out = run_in(
+            dir.path(),
+            &["clusters", "--contact", path.to_str().unwrap(), "--json"],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v = stdout_json(&out);
+        assert_eq!(v["n_clusters"], 3, "{path:?}: {v}");
+        assert_eq!(v["areas_px"], serde_json::json!([7, 2, 1]));
+        assert_eq!(v["percolating"], false);
+        let out = run_in(
+            dir.path(),
+            &[
+                "clusters",
+                "--contact",
+                path.to_str().unwrap(),
+                "--connectivity",
+                "4",
+                "--json",
+            ],
+        );
+        assert_eq!(
+            stdout_json(&out)["areas_px"],
+            serde_json::json!([6, 2, 1, 1])
+        );
+    }
+
+    // A full row wraps around the box.
+    let mut band = vec![0u8; n * n];
+    band[5 * n..6 * n].fill(1);
+    let band_path = dir.path().join("band.npy");
+    wearcoef::io::write_u8(&band_path, &[n, n], band).unwrap();
+    let out = run_in(
+        dir.path(),
+        &[
+            "clusters",
+            "--contact",
+            band_path.to_str().unwrap(),
+            "--json",
+        ],
+    );
+    assert_eq!(stdout_json(&out)["percolating"], true);
+
+    // Values other than 0/1, a float map, a missing file, a bad connectivity: exit 2.
+    let bad = dir.path().join("bad.npy");
+    let mut values = as_u8;
+    values[7] = 2;
+    wearcoef::io::write_u8(&bad, &[n, n], values).unwrap();
+    let floats = dir.path().join("floats.npy");
+    wearcoef::io::write_f64(&floats, &[n, n], vec![0.0; n * n]).unwrap();
+    for args in [
+        vec!["clusters", "--contact", bad.to_str().unwrap()],
+        vec!["clusters", "--contact", floats.to_str().unwrap()],
+        vec!["clusters", "--contact", "missing.npy"],
+        vec![
+            "clusters",
+            "--contact",
+            u8_path.to_str().unwrap(),
+            "--connectivity",
+            "6",
+        ],
+    ] {
+        let out = run_in(dir.path(), &args);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(!out.stderr.is_empty());
+    }
+}

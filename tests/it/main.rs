@@ -1,8 +1,10 @@
 //! Integration tests (one binary to save link time).
 
 mod cli;
+mod clusters;
 mod config;
 mod contact;
+mod powerlaw;
 mod store;
 mod surface;
 

@@ -1,0 +1,256 @@
+//! Cluster-area statistics of one load: PDF in logarithmic bins, exact CCDF, the wear
+//! coefficients `K` (eq. 5) and `𝒦` (eq. 7), the wear rate (eq. 6), and ensemble means
+//! with confidence bands. Areas are pixel counts here; callers convert to `A/λ_s²`.
+//!
+//! Definitions (docs/CONVENTIONS.md):
+//! - `K(A*) = P(A > A*)`, the fraction of clusters larger than `A*` (Archard's
+//!   interpretation, eq. 5, the CCDF);
+//! - `𝒦(A*) = Σ_{A_i > A*} A_i / Σ A_i`, the fraction of the contact area in clusters
+//!   larger than `A*` (eq. 7);
+//! - wear rate `R(A*) = ω Σ_{A_i > A*} A_i` with `ω = 1/3` (eq. 6, hemispherical
+//!   particles), an area (volume per sliding distance).
+//! - PDF of areas in logarithmic bins: bin `[e_j, e_{j+1})` holds the integer areas
+//!   `⌈e_j⌉ … ⌈e_{j+1}⌉ − 1`; its density is `count / (N · m_j)` with `m_j` the number of
+//!   integers in the bin (the discrete-aware width), so it estimates `P(A = k)` per pixel
+//!   of area and integrates to 1 over all bins. Bins without an integer are dropped.
+
+/// Shape factor of the wear rate (hemispherical wear particles).
+pub const OMEGA: f64 = 1.0 / 3.0;
+
+/// The wear measures of one sample of cluster areas at a threshold `A*`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WearAt {
+    /// `K = P(A > A*)`.
+    pub k_archard: f64,
+    /// `𝒦 = A_c*/A_c`.
+    pub k_upscaled: f64,
+    /// `A_c* = Σ_{A > A*} A` (pixels).
+    pub area_above_px: f64,
+}
+
+/// `K`, `𝒦` and `A_c*` of the areas (pixels) at threshold `a_star_px`. An empty sample
+/// gives zeros (no cluster: no wear).
+pub fn wear_at(areas_px: &[u64], a_star_px: f64) -> WearAt {
+    let total: f64 = areas_px.iter().map(|&a| a as f64).sum();
+    let (mut count, mut above) = (0usize, 0.0f64);
+    for &a in areas_px {
+        if a as f64 > a_star_px {
+            count += 1;
+            above += a as f64;
+        }
+    }
+    if areas_px.is_empty() {
+        return WearAt {
+            k_archard: 0.0,
+            k_upscaled: 0.0,
+            area_above_px: 0.0,
+        };
+    }
+    WearAt {
+        k_archard: count as f64 / areas_px.len() as f64,
+        k_upscaled: if total > 0.0 { above / total } else { 0.0 },
+        area_above_px: above,
+    }
+}
+
+/// Exact CCDF steps: for each distinct area `a` (ascending), `P(A > a)`.
+pub fn ccdf_steps(areas_px: &[u64]) -> Vec<(u64, f64)> {
+    let mut sorted = areas_px.to_vec();
+    sorted.sort_unstable();
+    let n = sorted.len() as f64;
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < sorted.len() {
+        let a = sorted[i];
+        let j = i + sorted[i..].partition_point(|&v| v == a);
+        out.push((a, (sorted.len() - j) as f64 / n));
+        i = j;
+    }
+    out
+}
+
+/// `count` logarithmic bin edges from `lo` to `hi` (> lo > 0), `count + 1` values.
+pub fn log_edges(lo: f64, hi: f64, count: usize) -> Vec<f64> {
+    let (a, b) = (lo.ln(), hi.ln());
+    let mut edges: Vec<f64> = (0..=count)
+        .map(|i| (a + (b - a) * i as f64 / count as f64).exp())
+        .collect();
+    // exp(ln x) may miss x by an ulp; the end edges are exact.
+    edges[0] = lo;
+    edges[count] = hi;
+    edges
+}
+
+/// One bin of the area PDF.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PdfBin {
+    pub lower_px: f64,
+    pub upper_px: f64,
+    /// Integers in the bin (its discrete width).
+    pub width_px: u64,
+    /// Geometric centre `sqrt(lower · upper)`.
+    pub centre_px: f64,
+    pub count: u64,
+    /// `count / (N · width)`.
+    pub density_per_px: f64,
+}
+
+/// PDF of the areas in the bins given by `edges` (the last bin includes its upper edge).
+pub fn log_binned_pdf(areas_px: &[u64], edges: &[f64]) -> Vec<PdfBin> {
+    let n = areas_px.len() as f64;
+    let mut out = Vec::new();
+    for (j, w) in edges.windows(2).enumerate() {
+        let last = j + 2 == edges.len();
+        let first_int = w[0].ceil() as u64;
+        let end_int = if last {
+            w[1].floor() as u64 + 1
+        } else {
+            w[1].ceil() as u64
+        };
+        if end_int <= first_int {
+            continue;
+        }
+        let count = areas_px
+            .iter()
+            .filter(|&&a| a >= first_int && a < end_int)
+            .count() as u64;
+        let width = end_int - first_int;
+        out.push(PdfBin {
+            lower_px: w[0],
+            upper_px: w[1],
+            width_px: width,
+            centre_px: (w[0] * w[1]).sqrt(),
+            count,
+            density_per_px: if n > 0.0 {
+                count as f64 / (n * width as f64)
+            } else {
+                0.0
+            },
+        });
+    }
+    out
+}
+
+/// Mean, standard deviation (ddof = 1) and half-width of the two-sided 95 % confidence
+/// interval of the mean (Student t with `n − 1` degrees of freedom) of `values`. With one
+/// value the deviation and half-width are NaN (no spread can be estimated), never 0.
+pub fn mean_band(values: &[f64]) -> (f64, f64, f64) {
+    let n = values.len();
+    if n == 0 {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    let mean = values.iter().sum::<f64>() / n as f64;
+    if n == 1 {
+        return (mean, f64::NAN, f64::NAN);
+    }
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let sd = var.sqrt();
+    (mean, sd, student_t_975(n - 1) * sd / (n as f64).sqrt())
+}
+
+/// The 97.5 % quantile of Student's t with `dof` degrees of freedom (table to 30, then
+/// the Cornish–Fisher expansion about the normal quantile, error < 1e-4).
+pub fn student_t_975(dof: usize) -> f64 {
+    const TABLE: [f64; 30] = [
+        12.7062, 4.3027, 3.1824, 2.7764, 2.5706, 2.4469, 2.3646, 2.3060, 2.2622, 2.2281, 2.2010,
+        2.1788, 2.1604, 2.1448, 2.1314, 2.1199, 2.1098, 2.1009, 2.0930, 2.0860, 2.0796, 2.0739,
+        2.0687, 2.0639, 2.0595, 2.0555, 2.0518, 2.0484, 2.0452, 2.0423,
+    ];
+    assert!(dof >= 1, "Student t needs at least one degree of freedom");
+    if dof <= 30 {
+        return TABLE[dof - 1];
+    }
+    let z = 1.959_963_984_540_054f64;
+    let v = dof as f64;
+    z + (z.powi(3) + z) / (4.0 * v)
+        + (5.0 * z.powi(5) + 16.0 * z.powi(3) + 3.0 * z) / (96.0 * v * v)
+        + (3.0 * z.powi(7) + 19.0 * z.powi(5) + 17.0 * z.powi(3) - 15.0 * z) / (384.0 * v.powi(3))
+}
+
+/// Central finite differences `dy/dx` at each point (one-sided at the ends); NaN where
+/// two abscissae coincide or fewer than two points are given.
+pub fn derivative(x: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            if n < 2 {
+                return f64::NAN;
+            }
+            let (a, b) = if i == 0 {
+                (0, 1)
+            } else if i + 1 == n {
+                (n - 2, n - 1)
+            } else {
+                (i - 1, i + 1)
+            };
+            let dx = x[b] - x[a];
+            if dx == 0.0 {
+                f64::NAN
+            } else {
+                (y[b] - y[a]) / dx
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wear_measures_by_hand() {
+        let areas = [1u64, 1, 2, 4, 8];
+        let w = wear_at(&areas, 1.5);
+        assert_eq!(w.k_archard, 3.0 / 5.0);
+        assert_eq!(w.k_upscaled, 14.0 / 16.0);
+        assert_eq!(w.area_above_px, 14.0);
+        let w = wear_at(&areas, 8.0);
+        assert_eq!((w.k_archard, w.k_upscaled), (0.0, 0.0));
+        let w = wear_at(&areas, 0.0);
+        assert_eq!((w.k_archard, w.k_upscaled), (1.0, 1.0));
+        assert_eq!(wear_at(&[], 1.0).k_upscaled, 0.0);
+    }
+
+    #[test]
+    fn ccdf_steps_by_hand() {
+        assert_eq!(
+            ccdf_steps(&[3, 1, 3, 2]),
+            vec![(1, 0.75), (2, 0.5), (3, 0.0)]
+        );
+    }
+
+    #[test]
+    fn binned_pdf_integrates_to_one_over_integers() {
+        let areas: Vec<u64> = (1..=500u64).map(|k| 1 + (k * k) % 997).collect();
+        let bins = log_binned_pdf(&areas, &log_edges(1.0, 997.0, 20));
+        let total: f64 = bins
+            .iter()
+            .map(|b| b.density_per_px * b.width_px as f64)
+            .sum();
+        assert!((total - 1.0).abs() < 1e-12, "{total}");
+        // Bins partition the integers 1..=997 without overlap.
+        let widths: u64 = bins.iter().map(|b| b.width_px).sum();
+        assert_eq!(widths, 997);
+    }
+
+    #[test]
+    fn student_t_quantiles() {
+        assert_eq!(student_t_975(1), 12.7062);
+        // Beyond the table the expansion is continuous with it and tends to 1.96.
+        assert!((student_t_975(31) - 2.0395).abs() < 2e-4);
+        assert!((student_t_975(120) - 1.9799).abs() < 2e-4);
+        assert!((student_t_975(100_000) - 1.96).abs() < 1e-4);
+        let (m, sd, half) = mean_band(&[1.0, 2.0, 3.0]);
+        assert_eq!((m, sd), (2.0, 1.0));
+        assert!((half - 4.3027 / 3f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn derivative_of_a_line_and_a_parabola() {
+        let x = [0.0, 1.0, 3.0, 4.0];
+        let d = derivative(&x, &x.map(|v| 2.0 * v + 1.0));
+        assert!(d.iter().all(|&v| (v - 2.0).abs() < 1e-15));
+        let d = derivative(&[0.0, 1.0, 2.0], &[0.0, 1.0, 4.0]);
+        assert_eq!(d[1], 2.0);
+    }
+}
