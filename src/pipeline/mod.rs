@@ -5,6 +5,7 @@
 //! nothing of it.
 
 pub mod catalog;
+mod cluster_stages;
 pub mod hash;
 pub mod runner;
 pub mod stages;

@@ -207,7 +207,10 @@ fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
         for source in [&manifest.params, &manifest.results] {
             if let Value::Object(map) = source {
                 for (k, v) in map {
-                    if !v.is_object() && !v.is_array() {
+                    // Scalars only; a parameter named like a fixed column (the clusters
+                    // stage's `realization`) is already there.
+                    let fixed = ["stage", "study", "realization", "file", "path", "key"];
+                    if !v.is_object() && !v.is_array() && !fixed.contains(&k.as_str()) {
                         extra.insert(k.clone(), v.clone());
                     }
                 }

@@ -7,8 +7,10 @@ use serde_json::{json, Value};
 
 use polars::prelude::*;
 
+use super::cluster_stages::{compute_clusters, compute_statistics};
 use super::hash::instance_key;
 use super::store::Store;
+use crate::clusters::Connectivity;
 use crate::config::StudyPlan;
 use crate::contact::elastic::ElasticOperator;
 use crate::contact::solver::SolverConfig;
@@ -18,12 +20,48 @@ use crate::spectral::Fft2;
 use crate::surface::{self, SurfaceParams};
 
 /// Stages in dependency order.
-pub const STAGES: &[&str] = &["surface", "contact"];
+pub const STAGES: &[&str] = &["surface", "contact", "clusters", "statistics"];
 
 /// Version of the surface stage; bump when its algorithm or outputs change.
 pub const SURFACE_VERSION: u32 = 1;
 /// Version of the contact stage.
 pub const CONTACT_VERSION: u32 = 1;
+/// Version of the clusters stage.
+pub const CLUSTERS_VERSION: u32 = 1;
+/// Version of the statistics stage.
+pub const STATISTICS_VERSION: u32 = 1;
+
+/// Thresholds `A*/λ_s²` at which the statistics stage evaluates `K`, `𝒦` and the wear
+/// rate: powers of two from 1/4 to 1024 (the paper's Fig. 2 uses `A* = 2 λ_s²`).
+pub const A_STAR_OVER_LS2: [f64; 13] = [
+    0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0,
+];
+/// Logarithmic bins of the area PDF (paper Fig. 3).
+pub const PDF_BINS: usize = 20;
+/// Bootstrap resamples of the exponent's interval.
+pub const BOOTSTRAP_RESAMPLES: usize = 200;
+
+/// What a clusters instance computes.
+#[derive(Debug, Clone)]
+pub struct ClustersJob {
+    pub contact_key: String,
+    pub loads: Vec<f64>,
+    pub n: usize,
+    pub lambda_s_px: f64,
+    pub realization: u32,
+    pub connectivity: Connectivity,
+}
+
+/// What a statistics instance computes (one per study).
+#[derive(Debug, Clone)]
+pub struct StatisticsJob {
+    /// Clusters instances, in realization order.
+    pub clusters_keys: Vec<String>,
+    pub loads: Vec<f64>,
+    pub n: usize,
+    pub lambda_s_px: f64,
+    pub seed: u64,
+}
 
 /// What a contact instance computes.
 #[derive(Debug, Clone)]
@@ -41,6 +79,8 @@ pub struct ContactJob {
 pub enum Job {
     Surface(SurfaceParams),
     Contact(ContactJob),
+    Clusters(ClustersJob),
+    Statistics(StatisticsJob),
 }
 
 /// One stage instance of a profile.
@@ -81,6 +121,32 @@ pub fn contact_params_json(job: &ContactJob) -> Value {
     })
 }
 
+/// Parameters the clusters stage reads, as they enter its key.
+pub fn clusters_params_json(job: &ClustersJob) -> Value {
+    json!({
+        "loads_w_over_w0": job.loads,
+        "n": job.n,
+        "lambda_s_px": job.lambda_s_px,
+        "realization": job.realization,
+        "connectivity": job.connectivity.neighbours(),
+    })
+}
+
+/// Parameters the statistics stage reads, as they enter its key.
+pub fn statistics_params_json(job: &StatisticsJob) -> Value {
+    json!({
+        "loads_w_over_w0": job.loads,
+        "n": job.n,
+        "lambda_s_px": job.lambda_s_px,
+        "seed": job.seed,
+        "a_star_over_ls2": A_STAR_OVER_LS2,
+        "pdf_bins": PDF_BINS,
+        "bootstrap_resamples": BOOTSTRAP_RESAMPLES,
+        "min_tail": crate::powerlaw::MIN_TAIL,
+        "omega": crate::statistics::OMEGA,
+    })
+}
+
 /// Add an instance, or record one more study for an existing one with the same key.
 fn push_unique(out: &mut Vec<Instance>, inst: Instance) -> String {
     let key = inst.key.clone();
@@ -100,6 +166,7 @@ fn push_unique(out: &mut Vec<Instance>, inst: Instance) -> String {
 pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
     let mut out: Vec<Instance> = Vec::new();
     for plan in plans {
+        let mut clusters_keys = Vec::new();
         for r in 0..plan.realizations {
             let params = plan.surface_for(r);
             let params_json = surface_params_json(&params);
@@ -126,7 +193,7 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
             };
             let params_json = contact_params_json(&job);
             let inputs = vec![surface_key];
-            push_unique(
+            let contact_key = push_unique(
                 &mut out,
                 Instance {
                     stage: "contact",
@@ -139,7 +206,56 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                     job: Job::Contact(job),
                 },
             );
+            let job = ClustersJob {
+                contact_key: contact_key.clone(),
+                loads: plan.loads.clone(),
+                n: plan.surface.n,
+                lambda_s_px: plan.surface.lambda_s_px,
+                realization: r,
+                connectivity: Connectivity::Eight,
+            };
+            let params_json = clusters_params_json(&job);
+            let inputs = vec![contact_key];
+            clusters_keys.push(push_unique(
+                &mut out,
+                Instance {
+                    stage: "clusters",
+                    version: CLUSTERS_VERSION,
+                    key: instance_key("clusters", CLUSTERS_VERSION, &params_json, &inputs),
+                    params: params_json,
+                    inputs,
+                    studies: vec![plan.name.clone()],
+                    realization: Some(r),
+                    job: Job::Clusters(job),
+                },
+            ));
         }
+        let job = StatisticsJob {
+            clusters_keys: clusters_keys.clone(),
+            loads: plan.loads.clone(),
+            n: plan.surface.n,
+            lambda_s_px: plan.surface.lambda_s_px,
+            seed: plan.seed,
+        };
+        let params_json = statistics_params_json(&job);
+        push_unique(
+            &mut out,
+            Instance {
+                stage: "statistics",
+                version: STATISTICS_VERSION,
+                key: instance_key(
+                    "statistics",
+                    STATISTICS_VERSION,
+                    &params_json,
+                    &clusters_keys,
+                ),
+                params: params_json,
+                inputs: clusters_keys,
+                studies: vec![plan.name.clone()],
+                realization: None,
+                job: Job::Statistics(job),
+            },
+        );
     }
     out
 }
@@ -150,6 +266,8 @@ pub fn compute(instance: &Instance, dir: &Path, store: &Store) -> anyhow::Result
     match &instance.job {
         Job::Surface(params) => compute_surface(params, dir),
         Job::Contact(job) => compute_contact(job, dir, store),
+        Job::Clusters(job) => compute_clusters(job, dir, store),
+        Job::Statistics(job) => compute_statistics(job, dir, store),
     }
 }
 

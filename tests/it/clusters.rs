@@ -29,7 +29,12 @@ fn areas(l: &Labelling) -> Vec<u64> {
 
 /// Reference: breadth-first search on the torus in row-major start order, tracking each
 /// pixel's unwrapped position to detect winding and measure extents.
-fn bfs(contact: &[bool], rows: usize, cols: usize, conn: Connectivity) -> (Vec<u32>, Vec<Cluster>) {
+pub fn bfs(
+    contact: &[bool],
+    rows: usize,
+    cols: usize,
+    conn: Connectivity,
+) -> (Vec<u32>, Vec<Cluster>) {
     let offsets: Vec<(i64, i64)> = match conn {
         Connectivity::Four => vec![(-1, 0), (1, 0), (0, -1), (0, 1)],
         Connectivity::Eight => (-1..=1)

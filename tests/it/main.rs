@@ -5,6 +5,7 @@ mod clusters;
 mod config;
 mod contact;
 mod powerlaw;
+mod stages;
 mod store;
 mod surface;
 

@@ -45,7 +45,10 @@ fn artifacts(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_instances() {
     let (_t, dir) = workdir(&small_pipeline(0.8, "first"));
     let first = run_json(&dir, &[]);
-    assert_eq!(first["computed"], 10, "5 surfaces and 5 contact sweeps");
+    assert_eq!(
+        first["computed"], 17,
+        "5 surfaces, 5 contact sweeps, 5 cluster tables, 2 study statistics"
+    );
     assert_eq!(first["reused"], 0);
     let keys_before: Vec<String> = std::fs::read_dir(dir.join("data/cache/surface"))
         .unwrap()
@@ -54,26 +57,27 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
 
     let second = run_json(&dir, &[]);
     assert_eq!(second["computed"], 0);
-    assert_eq!(second["reused"], 10);
+    assert_eq!(second["reused"], 17);
 
     // A parameter no stage reads (a description) changes nothing.
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.8, "renamed")).unwrap();
     let third = run_json(&dir, &[]);
     assert_eq!(third["computed"], 0);
 
-    // Study b's loads: only b's two contact sweeps are rebuilt, not its surfaces.
+    // Study b's loads: only b's two contact sweeps, their cluster tables and b's
+    // statistics are rebuilt, not its surfaces.
     let text = small_pipeline(0.8, "renamed")
         .replace("loads: {values: [0.01]}", "loads: {values: [0.01, 0.03]}");
     std::fs::write(dir.join("pipeline.yaml"), &text).unwrap();
     let loads_changed = run_json(&dir, &[]);
-    assert_eq!(loads_changed["computed"], 2);
-    assert_eq!(loads_changed["reused"], 8);
+    assert_eq!(loads_changed["computed"], 5);
+    assert_eq!(loads_changed["reused"], 12);
 
-    // Study b's Hurst exponent: b's two surfaces and the two sweeps on them are rebuilt.
+    // Study b's Hurst exponent: b's two surfaces and everything downstream of them.
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.6, "renamed")).unwrap();
     let fourth = run_json(&dir, &[]);
-    assert_eq!(fourth["computed"], 4);
-    assert_eq!(fourth["reused"], 6);
+    assert_eq!(fourth["computed"], 7);
+    assert_eq!(fourth["reused"], 10);
 
     // The earlier keys are all still there (nothing was overwritten).
     for k in keys_before {
@@ -88,7 +92,7 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.5, "renamed")).unwrap();
     let only_a = run_json(&dir, &["a"]);
     assert_eq!(only_a["computed"], 0);
-    assert_eq!(only_a["instances"], 6);
+    assert_eq!(only_a["instances"], 10);
     // A stage target builds that stage and what it needs, nothing downstream.
     let surfaces = run_json(&dir, &["surface"]);
     assert_eq!(surfaces["instances"], 5);
@@ -110,7 +114,10 @@ fn status_reports_present_and_missing() {
         .iter()
         .map(|l| l["missing"].as_u64().unwrap())
         .sum();
-    assert_eq!(missing, 10, "5 surfaces and 5 sweeps");
+    assert_eq!(
+        missing, 17,
+        "5 surfaces, 5 sweeps, 5 cluster tables, 2 statistics"
+    );
     run_json(&dir, &["a"]);
     let after = stdout_json(&run_in(&dir, &["status", "--profile", "t", "--json"]));
     let lines = after["stages"].as_array().unwrap();
@@ -138,7 +145,7 @@ fn verify_names_each_damaged_entry_and_clean_corrupt_removes_it() {
     run_json(&dir, &[]);
     let ok = run_in(&dir, &["verify", "--json"]);
     assert!(ok.status.success());
-    assert_eq!(stdout_json(&ok)["checked"], 10);
+    assert_eq!(stdout_json(&ok)["checked"], 17);
 
     let entries: Vec<_> = std::fs::read_dir(dir.join("data/cache/surface"))
         .unwrap()
@@ -236,7 +243,7 @@ fn sigkill_in_the_middle_of_a_stage_then_rerun_gives_the_uninterrupted_result() 
     assert!(run_in(&dir, &["verify"]).status.success());
 
     let rerun = run_json(&dir, &[]);
-    assert_eq!(rerun["computed"], 10);
+    assert_eq!(rerun["computed"], 17);
     assert!(run_in(&dir, &["verify"]).status.success());
     assert_eq!(artifacts(&dir), artifacts(&reference));
     // The stale temporary directory of the dead process was cleaned up.
@@ -272,7 +279,7 @@ fn two_concurrent_runs_on_one_store_both_succeed() {
     assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
     let v = run_in(&dir, &["verify", "--json"]);
     assert!(v.status.success());
-    assert_eq!(stdout_json(&v)["checked"], 10);
+    assert_eq!(stdout_json(&v)["checked"], 17);
     let again = run_json(&dir, &[]);
     assert_eq!(again["computed"], 0);
 }
@@ -306,8 +313,9 @@ fn catalog_reads_back_with_typed_columns() {
     let file = std::fs::File::open(dir.join("data/t/index.parquet")).unwrap();
     let df = ParquetReader::new(file).finish().unwrap();
     // 5 surfaces; 5 sweeps, each with loads.parquet and one contact map per load
-    // (study a: 3 realizations × 2 loads, study b: 2 × 1).
-    assert_eq!(df.height(), 5 + 5 + 3 * 2 + 2);
+    // (study a: 3 realizations × 2 loads, study b: 2 × 1); 5 cluster tables with their
+    // per-load summaries; 2 statistics entries of 5 tables each.
+    assert_eq!(df.height(), 5 + 5 + 3 * 2 + 2 + 5 * 2 + 2 * 5);
     for (name, dtype) in [
         ("stage", DataType::String),
         ("study", DataType::String),

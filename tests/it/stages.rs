@@ -1,0 +1,193 @@
+//! The clusters and statistics stages against independent recomputations from the
+//! stored contact maps and cluster tables.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use polars::prelude::*;
+use wearcoef::clusters::Connectivity;
+use wearcoef::statistics::OMEGA;
+
+use crate::{run_in, small_pipeline, workdir};
+
+fn read(path: &Path) -> DataFrame {
+    ParquetReader::new(std::fs::File::open(path).unwrap())
+        .finish()
+        .unwrap()
+}
+
+fn f64s(df: &DataFrame, name: &str) -> Vec<f64> {
+    df.column(name)
+        .unwrap()
+        .f64()
+        .unwrap()
+        .iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect()
+}
+
+fn u64s(df: &DataFrame, name: &str) -> Vec<u64> {
+    let c = df.column(name).unwrap().cast(&DataType::UInt64).unwrap();
+    c.u64().unwrap().iter().map(|v| v.unwrap()).collect()
+}
+
+fn manifest(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap()
+}
+
+fn entries(root: &Path, stage: &str) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(root.join("data/cache").join(stage))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| !p.file_name().unwrap().to_string_lossy().starts_with('.'))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn cluster_tables_match_the_contact_maps_and_statistics_match_the_tables() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    let out = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    // Clusters: each table equals a breadth-first search on the stored contact maps, and
+    // the areas add up to the solver's contact pixel counts.
+    let mut areas_by_key: BTreeMap<String, Vec<Vec<u64>>> = BTreeMap::new();
+    let mut n_grid = 0;
+    for entry in entries(&dir, "clusters") {
+        let m = manifest(&entry);
+        let contact = dir
+            .join("data/cache/contact")
+            .join(m["inputs"][0].as_str().unwrap());
+        let contact_loads = read(&contact.join("loads.parquet"));
+        let n_contact = u64s(&contact_loads, "n_contact_px");
+        let table = read(&entry.join("clusters.parquet"));
+        let load_index = u64s(&table, "load_index");
+        let area = u64s(&table, "area_px");
+        let mut per_load = vec![Vec::new(); n_contact.len()];
+        for (l, a) in load_index.iter().zip(&area) {
+            per_load[*l as usize].push(*a);
+        }
+        for (l, areas) in per_load.iter_mut().enumerate() {
+            let (rows, cols, map, _) =
+                wearcoef::io::read_contact_map(&contact.join(format!("contact_{l:03}.npy")))
+                    .unwrap();
+            n_grid = rows;
+            let (_, reference) = crate::clusters::bfs(&map, rows, cols, Connectivity::Eight);
+            let mut expected: Vec<u64> = reference.iter().map(|c| c.area_px).collect();
+            expected.sort_unstable();
+            areas.sort_unstable();
+            assert_eq!(*areas, expected, "{entry:?} load {l}");
+            assert_eq!(
+                areas.iter().sum::<u64>(),
+                n_contact[l],
+                "{entry:?} load {l}"
+            );
+        }
+        areas_by_key.insert(
+            entry.file_name().unwrap().to_string_lossy().to_string(),
+            per_load,
+        );
+    }
+
+    // Statistics: recompute K, 𝒦, the wear rate and A_c from the tables.
+    for entry in entries(&dir, "statistics") {
+        let m = manifest(&entry);
+        let keys: Vec<String> = m["inputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect();
+        let lambda_s = m["params"]["lambda_s_px"].as_f64().unwrap();
+        let ls2 = lambda_s * lambda_s;
+        let pixels = (n_grid * n_grid) as f64;
+        let samples: Vec<&Vec<Vec<u64>>> = keys.iter().map(|k| &areas_by_key[k]).collect();
+        let wear = read(&entry.join("wear.parquet"));
+        let li = u64s(&wear, "load_index");
+        let a_star = f64s(&wear, "a_star_over_ls2");
+        let k_pooled = f64s(&wear, "k_archard_pooled");
+        let kk_pooled = f64s(&wear, "k_upscaled_pooled");
+        let k_mean = f64s(&wear, "k_archard_mean");
+        let rate = f64s(&wear, "wear_rate_over_l2_mean");
+        assert!(!li.is_empty());
+        for i in 0..li.len() {
+            let l = li[i] as usize;
+            let threshold = a_star[i] * ls2;
+            let pooled: Vec<u64> = samples.iter().flat_map(|s| s[l].iter().copied()).collect();
+            let above: Vec<u64> = pooled
+                .iter()
+                .copied()
+                .filter(|&a| a as f64 > threshold)
+                .collect();
+            let k = above.len() as f64 / pooled.len() as f64;
+            let kk = above.iter().sum::<u64>() as f64 / pooled.iter().sum::<u64>() as f64;
+            assert!((k_pooled[i] - k).abs() < 1e-15, "K at row {i}");
+            assert!((kk_pooled[i] - kk).abs() < 1e-15, "𝒦 at row {i}");
+            let per: Vec<(f64, f64)> = samples
+                .iter()
+                .map(|s| {
+                    let a = &s[l];
+                    let up: Vec<u64> = a
+                        .iter()
+                        .copied()
+                        .filter(|&x| x as f64 > threshold)
+                        .collect();
+                    (
+                        if a.is_empty() {
+                            0.0
+                        } else {
+                            up.len() as f64 / a.len() as f64
+                        },
+                        OMEGA * up.iter().sum::<u64>() as f64 / pixels,
+                    )
+                })
+                .collect();
+            let n = per.len() as f64;
+            assert!((k_mean[i] - per.iter().map(|p| p.0).sum::<f64>() / n).abs() < 1e-15);
+            assert!((rate[i] - per.iter().map(|p| p.1).sum::<f64>() / n).abs() < 1e-15);
+        }
+        // Contact area and the PDF's normalisation (per λ_s², bins of `width_px` integers).
+        let loads = read(&entry.join("loads.parquet"));
+        let fraction = f64s(&loads, "area_fraction_mean");
+        for (l, f) in fraction.iter().enumerate() {
+            let expected = samples
+                .iter()
+                .map(|s| s[l].iter().sum::<u64>() as f64 / pixels)
+                .sum::<f64>()
+                / samples.len() as f64;
+            assert!((f - expected).abs() < 1e-15);
+        }
+        let pdf = read(&entry.join("pdf.parquet"));
+        let pl = u64s(&pdf, "load_index");
+        let dens = f64s(&pdf, "pdf_pooled");
+        let width = u64s(&pdf, "width_px");
+        let mut mass = vec![0.0; fraction.len()];
+        for i in 0..pl.len() {
+            mass[pl[i] as usize] += dens[i] * width[i] as f64 / ls2;
+        }
+        for (l, m) in mass.iter().enumerate() {
+            let any = samples.iter().any(|s| !s[l].is_empty());
+            if any {
+                assert!((m - 1.0).abs() < 1e-12, "PDF mass at load {l}: {m}");
+            }
+        }
+        // Every exponent row names its estimator; a missing fit says why.
+        let alpha = read(&entry.join("alpha.parquet"));
+        let est = alpha.column("estimator").unwrap().str().unwrap().clone();
+        let note = alpha.column("note").unwrap().str().unwrap().clone();
+        let values = alpha.column("alpha").unwrap().f64().unwrap().clone();
+        for i in 0..alpha.height() {
+            assert!(est.get(i).unwrap().ends_with("_mle"));
+            match values.get(i) {
+                Some(a) => assert!(a.is_finite()),
+                None => assert!(note.get(i).unwrap().starts_with("no fit:")),
+            }
+        }
+    }
+}
