@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test fmt clippy bench bench-fft bench-solver bench-peers clean
+.PHONY: figures build test fmt clippy bench bench-fft bench-solver bench-peers bench-labelling clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -24,13 +24,17 @@ test:
 fmt:
 	cargo fmt
 
-bench: bench-fft bench-solver bench-peers
+bench: bench-fft bench-solver bench-peers bench-labelling
 
 bench-fft:
 	bash benches/fft_compare.sh
 
 bench-solver:
 	cargo bench --bench solver -- --noplot
+
+# Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
+bench-labelling:
+	bash benches/labelling_compare.sh
 
 # Contact sweeps of wearcoef and Tamaas (PyPI) on the same surfaces, in the same run.
 bench-peers:

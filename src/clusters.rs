@@ -49,22 +49,6 @@ impl Connectivity {
             Self::Eight => 8,
         }
     }
-
-    fn offsets(self) -> &'static [(isize, isize)] {
-        match self {
-            Self::Four => &[(-1, 0), (1, 0), (0, -1), (0, 1)],
-            Self::Eight => &[
-                (-1, -1),
-                (-1, 0),
-                (-1, 1),
-                (0, -1),
-                (0, 1),
-                (1, -1),
-                (1, 0),
-                (1, 1),
-            ],
-        }
-    }
 }
 
 /// One cluster's measures.
@@ -116,39 +100,7 @@ pub enum ClusterError {
     TooLarge { rows: usize, cols: usize },
 }
 
-/// Union–find over provisional labels (no shifts: within the open box).
-struct Forest {
-    parent: Vec<u32>,
-}
-
-impl Forest {
-    fn make(&mut self) -> u32 {
-        let id = self.parent.len() as u32;
-        self.parent.push(id);
-        id
-    }
-
-    fn find(&mut self, mut x: u32) -> u32 {
-        // Path halving.
-        while self.parent[x as usize] != x {
-            let grand = self.parent[self.parent[x as usize] as usize];
-            self.parent[x as usize] = grand;
-            x = grand;
-        }
-        x
-    }
-
-    /// Join the sets of `a` and `b`; the smaller root becomes the root (keeps the
-    /// labelling independent of the order of unions).
-    fn union(&mut self, a: u32, b: u32) -> u32 {
-        let (ra, rb) = (self.find(a), self.find(b));
-        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-        self.parent[hi as usize] = lo;
-        lo
-    }
-}
-
-/// Union–find over patches with, per node, the shift (in periods) of its copy of the box
+/// Union–find over runs with, per node, the shift (in periods) of its copy of the box
 /// relative to its parent's, and per root the winding flags.
 struct ShiftForest {
     parent: Vec<u32>,
@@ -216,7 +168,56 @@ impl ShiftForest {
     }
 }
 
+/// A maximal horizontal run of contact pixels `x0..=x1` in row `y`.
+#[derive(Clone, Copy)]
+struct Run {
+    y: u32,
+    x0: u32,
+    x1: u32,
+}
+
+/// Runs of each row: `runs[row_start[y]..row_start[y + 1]]`, in order of `x0`.
+fn find_runs(contact: &[bool], rows: usize, cols: usize) -> (Vec<Run>, Vec<usize>) {
+    let mut runs = Vec::new();
+    let mut row_start = Vec::with_capacity(rows + 1);
+    for y in 0..rows {
+        row_start.push(runs.len());
+        let row = &contact[y * cols..(y + 1) * cols];
+        let mut x = 0;
+        while x < cols {
+            // Skip background eight pixels at a time where possible.
+            while x + 8 <= cols && row[x..x + 8].iter().all(|&c| !c) {
+                x += 8;
+            }
+            while x < cols && !row[x] {
+                x += 1;
+            }
+            if x == cols {
+                break;
+            }
+            let start = x;
+            while x < cols && row[x] {
+                x += 1;
+            }
+            runs.push(Run {
+                y: y as u32,
+                x0: start as u32,
+                x1: (x - 1) as u32,
+            });
+        }
+    }
+    row_start.push(runs.len());
+    (runs, row_start)
+}
+
 /// Label the clusters of `contact` (row-major `rows × cols`, periodic).
+///
+/// Works on horizontal runs of contact pixels: runs of consecutive rows are joined where
+/// they touch (overlap, or also touch at a corner for 8-connectivity), the last and first
+/// rows and columns across the periodic edges with the shift of the periodic copy, in one
+/// union–find over runs. Areas, perimeters (`4·area − 2·(adjacent pixel pairs)`) and
+/// unwrapped bounding boxes are summed per run, so the cost is one scan of the map plus
+/// work proportional to the number of runs.
 pub fn label(
     contact: &[bool],
     rows: usize,
@@ -237,159 +238,101 @@ pub fn label(
         return Err(ClusterError::TooLarge { rows, cols });
     }
     let eight = connectivity == Connectivity::Eight;
+    let (runs, row_start) = find_runs(contact, rows, cols);
+    let last_col = (cols - 1) as u32;
+    let mut forest = ShiftForest::new(runs.len());
+    // Adjacent pixel pairs (4-neighbour edges inside contact) per run, for perimeters.
+    let mut pairs = vec![0u64; runs.len()];
 
-    // Pass 1: provisional labels over the open box (raster scan, already-visited
-    // neighbours: left, and the three above for 8-connectivity).
-    const NONE: u32 = u32::MAX;
-    let mut labels = vec![NONE; rows * cols];
-    let mut forest = Forest {
-        parent: Vec::with_capacity(64),
-    };
+    // Horizontal pairs inside runs, and the wrap of a row's last run onto its first.
     for y in 0..rows {
-        let row = y * cols;
-        for x in 0..cols {
-            if !contact[row + x] {
-                continue;
-            }
-            let mut label = NONE;
-            let join = |other: u32, label: &mut u32, forest: &mut Forest| {
-                if other != NONE {
-                    *label = if *label == NONE {
-                        other
-                    } else {
-                        forest.union(*label, other)
-                    };
-                }
-            };
-            if x > 0 {
-                join(labels[row + x - 1], &mut label, &mut forest);
-            }
-            if y > 0 {
-                let up = row - cols;
-                join(labels[up + x], &mut label, &mut forest);
-                if eight {
-                    if x > 0 {
-                        join(labels[up + x - 1], &mut label, &mut forest);
-                    }
-                    if x + 1 < cols {
-                        join(labels[up + x + 1], &mut label, &mut forest);
-                    }
-                }
-            }
-            labels[row + x] = if label == NONE { forest.make() } else { label };
+        let (a, b) = (row_start[y], row_start[y + 1]);
+        for r in a..b {
+            pairs[r] += (runs[r].x1 - runs[r].x0) as u64;
+        }
+        if b > a && runs[b - 1].x1 == last_col && runs[a].x0 == 0 {
+            pairs[b - 1] += 1;
+            forest.union((b - 1) as u32, a as u32, (1, 0));
         }
     }
 
-    // Patches: the components of the open box, numbered 0.. by provisional root.
-    let provisional = forest.parent.len();
-    let mut patch_of = vec![NONE; provisional];
-    let mut patches = 0u32;
-    for l in 0..provisional as u32 {
-        let r = forest.find(l);
-        if patch_of[r as usize] == NONE {
-            patch_of[r as usize] = patches;
-            patches += 1;
-        }
-        patch_of[l as usize] = patch_of[r as usize];
-    }
-    for l in labels.iter_mut().filter(|l| **l != NONE) {
-        *l = patch_of[*l as usize];
-    }
-
-    // Pass 2: join patches across the periodic edges, recording the shift between copies.
-    let mut torus = ShiftForest::new(patches as usize);
-    let offsets = connectivity.offsets();
-    let (ri, ci) = (rows as isize, cols as isize);
-    let mut ring = |y: usize, x: usize| {
-        let a = labels[y * cols + x];
-        if a == NONE {
+    // Rows `ya` (above) and `yb` (below, `dy` periods down): overlapping runs (vertical
+    // pairs; 8-connectivity also joins runs touching at a corner) and, for
+    // 8-connectivity, the diagonal links across the left–right edge.
+    let mut join_rows = |ya: usize, yb: usize, dy: i32, forest: &mut ShiftForest| {
+        let (a0, a1) = (row_start[ya], row_start[ya + 1]);
+        let (b0, b1) = (row_start[yb], row_start[yb + 1]);
+        if a0 == a1 || b0 == b1 {
             return;
         }
-        for &(dy, dx) in offsets {
-            let (uy, ux) = (y as isize + dy, x as isize + dx);
-            let (sy, sx) = (uy.div_euclid(ri), ux.div_euclid(ci));
-            if sy == 0 && sx == 0 {
-                continue; // inside the open box: joined in pass 1
+        let reach = u32::from(eight);
+        let (mut i, mut j) = (a0, b0);
+        while i < a1 && j < b1 {
+            let (ra, rb) = (runs[i], runs[j]);
+            if ra.x0 <= rb.x1 + reach && rb.x0 <= ra.x1 + reach {
+                forest.union(i as u32, j as u32, (0, dy));
+                let overlap = ra.x1.min(rb.x1) as i64 - ra.x0.max(rb.x0) as i64 + 1;
+                if overlap > 0 {
+                    pairs[i] += overlap as u64;
+                }
             }
-            let (wy, wx) = (uy.rem_euclid(ri) as usize, ux.rem_euclid(ci) as usize);
-            let b = labels[wy * cols + wx];
-            if b != NONE {
-                torus.union(a, b, (sx as i32, sy as i32));
+            if ra.x1 < rb.x1 {
+                i += 1;
+            } else {
+                j += 1;
+            }
+        }
+        if eight {
+            // (ya, last column) – (yb, first column), and (ya, first) – (yb, last).
+            if runs[a1 - 1].x1 == last_col && runs[b0].x0 == 0 {
+                forest.union((a1 - 1) as u32, b0 as u32, (1, dy));
+            }
+            if runs[a0].x0 == 0 && runs[b1 - 1].x1 == last_col {
+                forest.union(a0 as u32, (b1 - 1) as u32, (-1, dy));
             }
         }
     };
-    for x in 0..cols {
-        ring(0, x);
-        if rows > 1 {
-            ring(rows - 1, x);
-        }
+    for y in 1..rows {
+        join_rows(y - 1, y, 0, &mut forest);
     }
-    for y in 1..rows.saturating_sub(1) {
-        ring(y, 0);
-        if cols > 1 {
-            ring(y, cols - 1);
-        }
-    }
+    join_rows(rows - 1, 0, 1, &mut forest);
 
-    // Clusters: ids in order of first appearance; area, perimeter and unwrapped bounding
-    // box (patch coordinates shifted by the patch's copy).
-    let mut cluster_of_root = vec![0u32; patches as usize];
-    let mut root_shift = vec![(0i32, 0i32); patches as usize];
-    let mut patch_root = vec![0u32; patches as usize];
-    for p in 0..patches {
-        let (r, s) = torus.find(p);
-        patch_root[p as usize] = r;
-        root_shift[p as usize] = s;
-    }
+    // Clusters: ids in order of first appearance (runs are in row-major order).
+    let mut cluster_of_root = vec![0u32; runs.len()];
     let mut clusters: Vec<Cluster> = Vec::new();
     let mut bounds: Vec<[i64; 4]> = Vec::new(); // min x, max x, min y, max y
-    for y in 0..rows {
-        for x in 0..cols {
-            let i = y * cols + x;
-            let p = labels[i];
-            if p == NONE {
-                labels[i] = 0;
-                continue;
-            }
-            let root = patch_root[p as usize] as usize;
-            if cluster_of_root[root] == 0 {
-                clusters.push(Cluster {
-                    area_px: 0,
-                    perimeter_px: 0,
-                    extent_x_px: 0,
-                    extent_y_px: 0,
-                    wraps_x: torus.wraps[root].0,
-                    wraps_y: torus.wraps[root].1,
-                });
-                bounds.push([i64::MAX, i64::MIN, i64::MAX, i64::MIN]);
-                cluster_of_root[root] = clusters.len() as u32;
-            }
-            let id = cluster_of_root[root];
-            labels[i] = id;
-            let c = &mut clusters[id as usize - 1];
-            c.area_px += 1;
-            let up = if y == 0 { rows - 1 } else { y - 1 };
-            let down = if y + 1 == rows { 0 } else { y + 1 };
-            let left = if x == 0 { cols - 1 } else { x - 1 };
-            let right = if x + 1 == cols { 0 } else { x + 1 };
-            c.perimeter_px += [
-                contact[up * cols + x],
-                contact[down * cols + x],
-                contact[y * cols + left],
-                contact[y * cols + right],
-            ]
-            .iter()
-            .filter(|&&v| !v)
-            .count() as u64;
-            let s = root_shift[p as usize];
-            let ux = x as i64 + s.0 as i64 * cols as i64;
-            let uy = y as i64 + s.1 as i64 * rows as i64;
-            let b = &mut bounds[id as usize - 1];
-            b[0] = b[0].min(ux);
-            b[1] = b[1].max(ux);
-            b[2] = b[2].min(uy);
-            b[3] = b[3].max(uy);
+    let mut labels = vec![0u32; rows * cols];
+    for (r, run) in runs.iter().enumerate() {
+        let (root, shift) = forest.find(r as u32);
+        let root = root as usize;
+        if cluster_of_root[root] == 0 {
+            clusters.push(Cluster {
+                area_px: 0,
+                perimeter_px: 0,
+                extent_x_px: 0,
+                extent_y_px: 0,
+                wraps_x: forest.wraps[root].0,
+                wraps_y: forest.wraps[root].1,
+            });
+            bounds.push([i64::MAX, i64::MIN, i64::MAX, i64::MIN]);
+            cluster_of_root[root] = clusters.len() as u32;
         }
+        let id = cluster_of_root[root];
+        let len = (run.x1 - run.x0 + 1) as u64;
+        let c = &mut clusters[id as usize - 1];
+        c.area_px += len;
+        // Each pixel has 4 edges; each adjacent pair hides 2.
+        c.perimeter_px += 4 * len;
+        c.perimeter_px -= 2 * pairs[r];
+        let start = run.y as usize * cols;
+        labels[start + run.x0 as usize..=start + run.x1 as usize].fill(id);
+        let ox = shift.0 as i64 * cols as i64;
+        let oy = shift.1 as i64 * rows as i64 + run.y as i64;
+        let b = &mut bounds[id as usize - 1];
+        b[0] = b[0].min(ox + run.x0 as i64);
+        b[1] = b[1].max(ox + run.x1 as i64);
+        b[2] = b[2].min(oy);
+        b[3] = b[3].max(oy);
     }
     for (c, b) in clusters.iter_mut().zip(&bounds) {
         c.extent_x_px = if c.wraps_x {

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# make bench-labelling: periodic cluster labelling of wearcoef (criterion) and
+# scipy.ndimage.label + periodic merge on the same maps, same run, 1 thread each.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-/var/tmp/wearcoef-target}"
+venv="${WEARCOEF_BENCH_VENV:-$CARGO_TARGET_DIR/bench-venv}"
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import numpy, scipy" 2>/dev/null; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet numpy scipy
+fi
+cargo build --release --locked --quiet
+RAYON_NUM_THREADS=1 cargo bench --locked --bench labelling -- --noplot >/dev/null 2>&1
+OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$venv/bin/python" benches/labelling_scipy.py \
+  "$CARGO_TARGET_DIR/release/wearcoef" "$CARGO_TARGET_DIR/label-maps" "$CARGO_TARGET_DIR/criterion"
