@@ -7,7 +7,9 @@
 //! ## Module map
 //! - Numerical core (no polars, YAML or plotting): [`grid`] (the periodic grid and its
 //!   wavevectors), [`spectral`] (planned 2-D real FFTs), [`surface`] (self-affine random
-//!   surfaces).
+//!   surfaces), [`contact`] (elastic operator and Polonsky–Keer solver), [`clusters`]
+//!   (periodic labelling), [`powerlaw`] (maximum-likelihood exponents), [`statistics`]
+//!   (wear coefficients, PDFs, CCDFs, confidence bands).
 //! - Files: [`io`] (`.npy` fields).
 //! - Pipeline: [`config`] (`pipeline.yaml`), [`pipeline`] (content keys, artifact store,
 //!   runner, catalog).

@@ -295,7 +295,9 @@ pub(super) fn compute_statistics(
         )?;
     }
 
-    // Exact CCDF, pooled (realization null) and per realization.
+    // Exact CCDF, pooled (realization null) and per realization; on the pooled rows also
+    // the mean over realizations of their own CCDFs at the same areas, with its band
+    // (realizations without any cluster at that load have no CCDF and are left out).
     {
         let (mut li, mut w, mut real, mut area, mut area_ls2, mut ccdf) = (
             Vec::new(),
@@ -305,7 +307,16 @@ pub(super) fn compute_statistics(
             Vec::new(),
             Vec::new(),
         );
+        let (mut mean, mut half) = (Vec::<Option<f64>>::new(), Vec::<Option<f64>>::new());
         for (l, pooled_l) in pooled.iter().enumerate() {
+            let sorted: Vec<Vec<u64>> = (0..realizations)
+                .filter(|&r| !s.areas[r][l].is_empty())
+                .map(|r| {
+                    let mut v = s.areas[r][l].clone();
+                    v.sort_unstable();
+                    v
+                })
+                .collect();
             let sets = std::iter::once((None, pooled_l))
                 .chain((0..realizations).map(|r| (Some(r as u32), &s.areas[r][l])));
             for (r, a) in sets {
@@ -316,6 +327,20 @@ pub(super) fn compute_statistics(
                     area.push(k);
                     area_ls2.push(k as f64 / ls2);
                     ccdf.push(p);
+                    if r.is_none() {
+                        let v: Vec<f64> = sorted
+                            .iter()
+                            .map(|x| {
+                                (x.len() - x.partition_point(|&a| a <= k)) as f64 / x.len() as f64
+                            })
+                            .collect();
+                        let (m, _, h) = stats::mean_band(&v);
+                        mean.push(Some(m));
+                        half.push(Some(h));
+                    } else {
+                        mean.push(None);
+                        half.push(None);
+                    }
                 }
             }
         }
@@ -332,6 +357,8 @@ pub(super) fn compute_statistics(
                     col("area_px", area),
                     col("area_over_ls2", area_ls2),
                     col("ccdf", ccdf),
+                    Column::new("ccdf_mean".into(), mean),
+                    Column::new("ccdf_ci95".into(), half),
                 ],
             )?,
         )?;

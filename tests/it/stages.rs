@@ -177,6 +177,32 @@ fn cluster_tables_match_the_contact_maps_and_statistics_match_the_tables() {
                 assert!((m - 1.0).abs() < 1e-12, "PDF mass at load {l}: {m}");
             }
         }
+        // CCDF: pooled steps and the mean of the realizations' own CCDFs.
+        let ccdf = read(&entry.join("ccdf.parquet"));
+        let cl = u64s(&ccdf, "load_index");
+        let ca = u64s(&ccdf, "area_px");
+        let cp = f64s(&ccdf, "ccdf");
+        let cm = f64s(&ccdf, "ccdf_mean");
+        let creal = ccdf.column("realization").unwrap().u32().unwrap().clone();
+        let mut pooled_rows = 0;
+        for i in 0..ccdf.height() {
+            if creal.get(i).is_some() {
+                continue;
+            }
+            pooled_rows += 1;
+            let (l, a) = (cl[i] as usize, ca[i]);
+            let pooled: Vec<u64> = samples.iter().flat_map(|s| s[l].iter().copied()).collect();
+            let above = pooled.iter().filter(|&&x| x > a).count() as f64;
+            assert!((cp[i] - above / pooled.len() as f64).abs() < 1e-15);
+            let per: Vec<f64> = samples
+                .iter()
+                .filter(|s| !s[l].is_empty())
+                .map(|s| s[l].iter().filter(|&&x| x > a).count() as f64 / s[l].len() as f64)
+                .collect();
+            let mean = per.iter().sum::<f64>() / per.len() as f64;
+            assert!((cm[i] - mean).abs() < 1e-15, "CCDF mean at row {i}");
+        }
+        assert!(pooled_rows > 0);
         // Every exponent row names its estimator; a missing fit says why.
         let alpha = read(&entry.join("alpha.parquet"));
         let est = alpha.column("estimator").unwrap().str().unwrap().clone();
