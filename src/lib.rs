@@ -9,7 +9,8 @@
 //!   wavevectors), [`spectral`] (planned 2-D real FFTs), [`surface`] (self-affine random
 //!   surfaces), [`contact`] (elastic operator and Polonsky–Keer solver), [`clusters`]
 //!   (periodic labelling), [`powerlaw`] (maximum-likelihood exponents), [`statistics`]
-//!   (wear coefficients, PDFs, CCDFs, confidence bands).
+//!   (wear coefficients, PDFs, CCDFs, confidence bands), [`analytic`] (Archard and the
+//!   plateau + power-law model).
 //! - Files: [`io`] (`.npy` fields).
 //! - Pipeline: [`config`] (`pipeline.yaml`), [`pipeline`] (content keys, artifact store,
 //!   runner, catalog).
@@ -22,6 +23,7 @@
 //! - Surfaces have zero mean and unit rms slope `sqrt(<|∇h|²>)`, computed spectrally.
 //! - Loads are `W/W0` with `W0 = E* · rms slope · L²`.
 
+pub mod analytic;
 pub mod clusters;
 pub mod config;
 pub mod contact;

@@ -9,6 +9,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use serde_json::json;
 
+use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
 use wearcoef::config::{ConfigError, Pipeline};
 use wearcoef::contact::elastic::ElasticOperator;
@@ -86,6 +87,26 @@ enum Command {
     },
     /// Solve the contact of a surface file at one or several loads.
     Solve(SolveArgs),
+    /// Wear coefficients of the plateau + power-law model of cluster areas (paper
+    /// Appendix A): K (Archard, number fraction of clusters above A*) and K_upscaled (𝒦,
+    /// area fraction). Areas in any one unit.
+    Model {
+        /// Power-law exponent α.
+        #[arg(long, allow_hyphen_values = true)]
+        alpha: f64,
+        /// End of the plateau A_s (> 0).
+        #[arg(long)]
+        a_s: f64,
+        /// Cut-off A_m (≥ A_s), or `inf` for the limit A_m → ∞.
+        #[arg(long)]
+        a_m: f64,
+        /// Critical area A* (≥ 0).
+        #[arg(long, allow_hyphen_values = true)]
+        a_star: f64,
+        /// Print `{"K", "K_upscaled"}` as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Label the contact clusters of a map on the periodic torus.
     Clusters {
         /// Contact map: bool or uint8 0/1 `.npy` (rows, cols), or the project's bit-packed
@@ -284,6 +305,28 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             }
         }
         Command::Solve(args) => solve(args)?,
+        Command::Model {
+            alpha,
+            a_s,
+            a_m,
+            a_star,
+            json,
+        } => {
+            let bad = |e: ModelError| InputError(e.to_string());
+            let model = PlateauPowerLaw::new(alpha, a_s, a_m).map_err(bad)?;
+            let k = model.k_archard(a_star).map_err(bad)?;
+            let kk = model.k_upscaled(a_star).map_err(bad)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string(&json!({"K": k, "K_upscaled": kk}))?
+                );
+            } else {
+                println!(
+                    "K = {k} (Archard, P(A > A*)), K_upscaled = {kk} (area fraction above A*)"
+                );
+            }
+        }
         Command::Clusters {
             contact,
             connectivity,

@@ -8,9 +8,11 @@ use polars::prelude::*;
 use serde_json::{json, Value};
 
 use super::stages::{
-    contact_file, ClustersJob, StatisticsJob, A_STAR_OVER_LS2, BOOTSTRAP_RESAMPLES, PDF_BINS,
+    contact_file, AnalyticJob, ClustersJob, StatisticsJob, A_STAR_OVER_LS2, BOOTSTRAP_RESAMPLES,
+    FIG6_ALPHA, FIG6_A_STAR_OVER_A_S, FIG6_POINTS, PDF_BINS,
 };
 use super::store::Store;
+use crate::analytic::PlateauPowerLaw;
 use crate::clusters;
 use crate::powerlaw::{self, Estimator};
 use crate::statistics::{self as stats, OMEGA};
@@ -547,4 +549,118 @@ fn write_alpha(
         )?,
     )?;
     Ok(fitted)
+}
+
+/// The analytic stage: the fitted plateau + power-law model of each load of a study on the
+/// statistics' A* grid (`model.parquet`), or the model curves of Fig. 6 (`fig6.parquet`).
+pub(super) fn compute_analytic(
+    job: &AnalyticJob,
+    dir: &Path,
+    store: &Store,
+) -> anyhow::Result<Value> {
+    let Some(key) = &job.statistics_key else {
+        return fig6_curves(dir);
+    };
+    let manifest = store
+        .lookup("statistics", key)?
+        .ok_or_else(|| anyhow::anyhow!("input statistics {key} is missing from the store"))?;
+    let path = store.read_output(&manifest, "alpha.parquet")?;
+    let df = ParquetReader::new(std::fs::File::open(&path)?).finish()?;
+    let ls2 = job.lambda_s_px * job.lambda_s_px;
+    let est = df.column("estimator")?.str()?.clone();
+    let li = df.column("load_index")?.u32()?.clone();
+    let w = df.column("w_over_w0")?.f64()?.clone();
+    let alpha = df.column("alpha")?.f64()?.clone();
+    let k_s = df.column("k_s_px")?.f64()?.clone();
+    let k_m = df.column("k_max_px")?.f64()?.clone();
+    let mut rows: (Vec<u32>, Vec<f64>, Vec<f64>) = Default::default();
+    let mut fit: [Vec<Option<f64>>; 5] = Default::default();
+    let mut fitted_loads = 0;
+    for i in 0..df.height() {
+        if est.get(i) != Some(Estimator::DiscretePlateauPowerLaw.name()) {
+            continue;
+        }
+        let (Some(l), Some(wi)) = (li.get(i), w.get(i)) else {
+            anyhow::bail!("{}: null load in row {i}", path.display());
+        };
+        let model = match (alpha.get(i), k_s.get(i), k_m.get(i)) {
+            (Some(a), Some(s), Some(m)) => Some(PlateauPowerLaw::new(a, s, m)?),
+            _ => None,
+        };
+        fitted_loads += usize::from(model.is_some());
+        for &a_star in &A_STAR_OVER_LS2 {
+            rows.0.push(l);
+            rows.1.push(wi);
+            rows.2.push(a_star);
+            let values = match &model {
+                Some(m) => [
+                    Some(m.alpha),
+                    Some(m.a_s / ls2),
+                    Some(m.a_m / ls2),
+                    Some(m.k_archard(a_star * ls2)?),
+                    Some(m.k_upscaled(a_star * ls2)?),
+                ],
+                None => [None; 5],
+            };
+            for (c, v) in fit.iter_mut().zip(values) {
+                c.push(v);
+            }
+        }
+    }
+    let n = rows.0.len();
+    let [a, s, m, k, kk] = fit;
+    write_parquet(
+        dir,
+        "model.parquet",
+        DataFrame::new(
+            n,
+            vec![
+                col("load_index", rows.0),
+                col("w_over_w0", rows.1),
+                col("a_star_over_ls2", rows.2),
+                Column::new("alpha".into(), a),
+                Column::new("a_s_over_ls2".into(), s),
+                Column::new("a_m_over_ls2".into(), m),
+                Column::new("k_pl".into(), k),
+                Column::new("k_upscaled_pl".into(), kk),
+            ],
+        )?,
+    )?;
+    Ok(
+        json!({ "fitted_loads": fitted_loads, "source_estimator": Estimator::DiscretePlateauPowerLaw.name() }),
+    )
+}
+
+/// K_PL and 𝒦_PL against `A_m/A_s` for α = 1.5 and several `A*/A_s` (paper Fig. 6), plus
+/// the `A_m → ∞` limits as rows with `a_m_over_a_s = inf`.
+fn fig6_curves(dir: &Path) -> anyhow::Result<Value> {
+    let (mut a_star, mut a_m, mut k, mut kk) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for &s in &FIG6_A_STAR_OVER_A_S {
+        let grid = (0..FIG6_POINTS)
+            .map(|i| 10f64.powf(12.0 * i as f64 / (FIG6_POINTS - 1) as f64))
+            .chain(std::iter::once(f64::INFINITY));
+        for m in grid {
+            let model = PlateauPowerLaw::new(FIG6_ALPHA, 1.0, m)?;
+            a_star.push(s);
+            a_m.push(m);
+            k.push(model.k_archard(s)?);
+            kk.push(model.k_upscaled(s)?);
+        }
+    }
+    let n = a_star.len();
+    write_parquet(
+        dir,
+        "fig6.parquet",
+        DataFrame::new(
+            n,
+            vec![
+                col("alpha", vec![FIG6_ALPHA; n]),
+                col("a_star_over_a_s", a_star),
+                col("a_m_over_a_s", a_m),
+                col("k_pl", k),
+                col("k_upscaled_pl", kk),
+            ],
+        )?,
+    )?;
+    Ok(json!({ "rows": n }))
 }

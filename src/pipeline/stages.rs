@@ -7,7 +7,7 @@ use serde_json::{json, Value};
 
 use polars::prelude::*;
 
-use super::cluster_stages::{compute_clusters, compute_statistics};
+use super::cluster_stages::{compute_analytic, compute_clusters, compute_statistics};
 use super::hash::instance_key;
 use super::store::Store;
 use crate::clusters::Connectivity;
@@ -20,7 +20,7 @@ use crate::spectral::Fft2;
 use crate::surface::{self, SurfaceParams};
 
 /// Stages in dependency order.
-pub const STAGES: &[&str] = &["surface", "contact", "clusters", "statistics"];
+pub const STAGES: &[&str] = &["surface", "contact", "clusters", "statistics", "analytic"];
 
 /// Version of the surface stage; bump when its algorithm or outputs change.
 pub const SURFACE_VERSION: u32 = 1;
@@ -30,6 +30,14 @@ pub const CONTACT_VERSION: u32 = 1;
 pub const CLUSTERS_VERSION: u32 = 1;
 /// Version of the statistics stage.
 pub const STATISTICS_VERSION: u32 = 1;
+/// Version of the analytic stage.
+pub const ANALYTIC_VERSION: u32 = 1;
+
+/// Paper Fig. 6: the exponent, and the thresholds `A*/A_s` of the model curves, whose cut-off
+/// `A_m/A_s` runs over `10^0 … 10^12` in [`FIG6_POINTS`] logarithmic steps.
+pub const FIG6_ALPHA: f64 = 1.5;
+pub const FIG6_A_STAR_OVER_A_S: [f64; 5] = [0.5, 1.0, 10.0, 100.0, 1000.0];
+pub const FIG6_POINTS: usize = 121;
 
 /// Thresholds `A*/λ_s²` at which the statistics stage evaluates `K`, `𝒦` and the wear
 /// rate: powers of two from 1/4 to 1024 (the paper's Fig. 2 uses `A* = 2 λ_s²`).
@@ -74,6 +82,14 @@ pub struct ContactJob {
     pub max_iterations: u32,
 }
 
+/// What an analytic instance computes: the fitted model of one study's statistics
+/// (`statistics_key`), or, without input, the model curves of paper Fig. 6.
+#[derive(Debug, Clone)]
+pub struct AnalyticJob {
+    pub statistics_key: Option<String>,
+    pub lambda_s_px: f64,
+}
+
 /// What an instance computes.
 #[derive(Debug, Clone)]
 pub enum Job {
@@ -81,6 +97,7 @@ pub enum Job {
     Contact(ContactJob),
     Clusters(ClustersJob),
     Statistics(StatisticsJob),
+    Analytic(AnalyticJob),
 }
 
 /// One stage instance of a profile.
@@ -238,7 +255,7 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
             seed: plan.seed,
         };
         let params_json = statistics_params_json(&job);
-        push_unique(
+        let statistics_key = push_unique(
             &mut out,
             Instance {
                 stage: "statistics",
@@ -256,8 +273,63 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 job: Job::Statistics(job),
             },
         );
+        let job = AnalyticJob {
+            statistics_key: Some(statistics_key.clone()),
+            lambda_s_px: plan.surface.lambda_s_px,
+        };
+        let params_json = analytic_params_json(&job);
+        let inputs = vec![statistics_key];
+        push_unique(
+            &mut out,
+            Instance {
+                stage: "analytic",
+                version: ANALYTIC_VERSION,
+                key: instance_key("analytic", ANALYTIC_VERSION, &params_json, &inputs),
+                params: params_json,
+                inputs,
+                studies: vec![plan.name.clone()],
+                realization: None,
+                job: Job::Analytic(job),
+            },
+        );
+    }
+    // The model curves of Fig. 6 need no simulation; listed under every study.
+    if !plans.is_empty() {
+        let job = AnalyticJob {
+            statistics_key: None,
+            lambda_s_px: 1.0,
+        };
+        let params_json = analytic_params_json(&job);
+        out.push(Instance {
+            stage: "analytic",
+            version: ANALYTIC_VERSION,
+            key: instance_key("analytic", ANALYTIC_VERSION, &params_json, &[]),
+            params: params_json,
+            inputs: Vec::new(),
+            studies: plans.iter().map(|p| p.name.clone()).collect(),
+            realization: None,
+            job: Job::Analytic(job),
+        });
     }
     out
+}
+
+/// Parameters the analytic stage reads, as they enter its key.
+pub fn analytic_params_json(job: &AnalyticJob) -> Value {
+    match job.statistics_key {
+        Some(_) => json!({
+            "curves": "fitted",
+            "lambda_s_px": job.lambda_s_px,
+            "a_star_over_ls2": A_STAR_OVER_LS2,
+        }),
+        None => json!({
+            "curves": "fig6",
+            "alpha": FIG6_ALPHA,
+            "a_star_over_a_s": FIG6_A_STAR_OVER_A_S,
+            "a_m_over_a_s_decades": [0, 12],
+            "points": FIG6_POINTS,
+        }),
+    }
 }
 
 /// Compute an instance into `dir`, reading its inputs from `store`; returns the stage's
@@ -268,6 +340,7 @@ pub fn compute(instance: &Instance, dir: &Path, store: &Store) -> anyhow::Result
         Job::Contact(job) => compute_contact(job, dir, store),
         Job::Clusters(job) => compute_clusters(job, dir, store),
         Job::Statistics(job) => compute_statistics(job, dir, store),
+        Job::Analytic(job) => compute_analytic(job, dir, store),
     }
 }
 

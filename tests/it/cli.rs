@@ -108,7 +108,7 @@ fn run_prints_a_one_line_summary() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(text.trim().lines().count(), 1, "{text}");
     assert!(
-        text.contains("17 computed") && text.contains("0 reused"),
+        text.contains("20 computed") && text.contains("0 reused"),
         "{text}"
     );
 }
@@ -389,6 +389,52 @@ fn clusters_command_reads_every_map_format() {
             "{args:?}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
+        assert!(!out.stderr.is_empty());
+    }
+}
+
+#[test]
+fn model_command_prints_both_coefficients_and_rejects_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run_in(
+        dir.path(),
+        &[
+            "model", "--alpha", "2.5", "--a-s", "3", "--a-m", "inf", "--a-star", "30", "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = stdout_json(&out);
+    // VALIDATION.md §6.6: the A_m → ∞ limits at A_s = 3, A* = 30.
+    assert!(
+        (v["K"].as_f64().unwrap() - 0.012_649_11).abs() < 1e-8,
+        "{v}"
+    );
+    assert!(
+        (v["K_upscaled"].as_f64().unwrap() - 0.252_982_2).abs() < 1e-7,
+        "{v}"
+    );
+    for args in [
+        [
+            "--alpha", "1.5", "--a-s", "0", "--a-m", "10", "--a-star", "1",
+        ],
+        [
+            "--alpha", "1.5", "--a-s", "2", "--a-m", "1", "--a-star", "1",
+        ],
+        [
+            "--alpha", "1.5", "--a-s", "2", "--a-m", "10", "--a-star", "-1",
+        ],
+        [
+            "--alpha", "nan", "--a-s", "2", "--a-m", "10", "--a-star", "1",
+        ],
+    ] {
+        let mut all = vec!["model"];
+        all.extend_from_slice(&args);
+        let out = run_in(dir.path(), &all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
         assert!(!out.stderr.is_empty());
     }
 }

@@ -1,5 +1,6 @@
 //! Integration tests (one binary to save link time).
 
+mod analytic;
 mod cli;
 mod clusters;
 mod config;

@@ -217,3 +217,79 @@ fn cluster_tables_match_the_contact_maps_and_statistics_match_the_tables() {
         }
     }
 }
+
+#[test]
+fn analytic_stage_evaluates_the_fitted_model_and_the_fig6_curves() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    let out = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut fitted_files = 0;
+    for entry in entries(&dir, "analytic") {
+        let m = manifest(&entry);
+        if entry.join("fig6.parquet").exists() {
+            // A_m → ∞ rows against the limits of VALIDATION.md §6.6 (α = 1.5 < 2: 𝒦 → 1).
+            let df = read(&entry.join("fig6.parquet"));
+            let s = f64s(&df, "a_star_over_a_s");
+            let am = f64s(&df, "a_m_over_a_s");
+            let k = f64s(&df, "k_pl");
+            let kk = f64s(&df, "k_upscaled_pl");
+            let mut limits = 0;
+            for i in 0..df.height() {
+                assert!((0.0..=1.0).contains(&k[i]) && kk[i] >= k[i] - 1e-15);
+                if am[i].is_infinite() {
+                    let want = if s[i] <= 1.0 {
+                        1.0 - (0.5 / 1.5) * s[i]
+                    } else {
+                        s[i].powf(-0.5) / 1.5
+                    };
+                    assert!((k[i] - want).abs() < 1e-14, "K limit at A*/A_s = {}", s[i]);
+                    assert_eq!(kk[i], 1.0);
+                    limits += 1;
+                }
+            }
+            assert_eq!(limits, 5);
+            continue;
+        }
+        fitted_files += 1;
+        // The fitted parameters are the statistics stage's p_PL fit, load by load.
+        let stats = dir
+            .join("data/cache/statistics")
+            .join(m["inputs"][0].as_str().unwrap())
+            .join("alpha.parquet");
+        let alpha = read(&stats);
+        let est = alpha.column("estimator").unwrap().str().unwrap().clone();
+        let fit_alpha = alpha.column("alpha").unwrap().f64().unwrap().clone();
+        let fit_load = u64s(&alpha, "load_index");
+        let model = read(&entry.join("model.parquet"));
+        let ml = u64s(&model, "load_index");
+        let ma = model.column("alpha").unwrap().f64().unwrap().clone();
+        let k = model.column("k_pl").unwrap().f64().unwrap().clone();
+        let kk = model
+            .column("k_upscaled_pl")
+            .unwrap()
+            .f64()
+            .unwrap()
+            .clone();
+        for (i, &load) in ml.iter().enumerate() {
+            let row = (0..alpha.height())
+                .find(|&j| {
+                    fit_load[j] == load && est.get(j) == Some("discrete_plateau_power_law_mle")
+                })
+                .unwrap();
+            assert_eq!(ma.get(i), fit_alpha.get(row));
+            if let (Some(k), Some(kk)) = (k.get(i), kk.get(i)) {
+                assert!((0.0..=1.0).contains(&k) && kk >= k - 1e-15);
+            } else {
+                assert!(
+                    fit_alpha.get(row).is_none(),
+                    "a fitted load must have a model"
+                );
+            }
+        }
+    }
+    assert_eq!(fitted_files, 2);
+}
