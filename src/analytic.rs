@@ -25,11 +25,12 @@
 //! `α ≤ 1`. For `α > 2`, `𝒦_PL → 1 − ((α−2)/α)(A*/A_s)²`, `(2/α)(A*/A_s)^(2−α)`; `→ 1` for
 //! `α ≤ 2`.
 //!
-//! **Archard's law** (eqs. 2–3): the wear rate (worn volume per sliding distance) is
-//! `R = ω K A_c` with the real contact area `A_c` and the particle shape factor `ω` (1/3 for
-//! hemispherical particles); for a rigid-plastic contact `A_c = W/H`, so `R = ω K W/H`
-//! (eq. 3). In the elastic regime of a self-affine surface, `A_c = κ W/(E* h'_rms)` at small
-//! loads (VALIDATION.md §3d, §7).
+//! **Archard's law** (eqs. 2–3, table 2): [`ArchardContact`] integrates the sphere
+//! population of Archard's contact model, `A_c(W) = (b d/2)((p+1) W/(c d))^(2/(p+1))`, and
+//! the wear rate (worn volume per sliding distance) is `R = K ω A_c` with the particle shape
+//! factor `ω` (1/3 for hemispherical particles); for rigid-plastic spheres `A_c = W/𝓗` and
+//! `R = K ω W/𝓗` (eq. 3). In the elastic regime of a self-affine surface,
+//! `A_c = κ W/(E* h'_rms)` at small loads instead (VALIDATION.md §3d, §7).
 
 use thiserror::Error;
 
@@ -191,12 +192,70 @@ impl PlateauPowerLaw {
     }
 }
 
-/// Archard's wear rate (worn volume per sliding distance), eq. (2): `R = ω K A_c`.
+/// Archard's multi-asperity contact model (paper eq. 2 and table 2): spheres of radius `r`
+/// whose summits are spread uniformly in depth with `d` spheres per unit depth (per unit
+/// nominal area). A sphere pressed by `z` carries the area `b z` and the load `c z^p`;
+/// integrating over the summits above the approach `δ`,
+/// `A_c = ∫_0^δ b z d dz = b d δ²/2` and `W = ∫_0^δ c z^p d dz = c d δ^(p+1)/(p+1)`, so
+/// `A_c(W) = (b d/2) ((p+1) W/(c d))^(2/(p+1))` and the wear rate is `R = K ω A_c` (eq. 2).
+/// Units: lengths in any unit `u`, loads in force `F`; `d` in 1/u, `b` in u, `c` in
+/// `F/u^p`, `A_c` in u², `R` in u³/u (volume per sliding distance).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArchardContact {
+    /// Contact area per unit interference of one sphere.
+    pub b: f64,
+    /// Load coefficient of one sphere (`W_1 = c z^p`).
+    pub c: f64,
+    /// Load exponent.
+    pub p: f64,
+    /// Summits per unit depth.
+    pub d: f64,
+}
+
+impl ArchardContact {
+    /// Elastic spheres, table 2 as printed: `b = π r`, `c = 4.25 E √r`, `p = 3/2` (`E`
+    /// Young's modulus; Hertz's own law with the effective modulus would read
+    /// `c = (4/3) E* √r`: the factor is the paper's and only scales the load).
+    pub fn elastic(radius: f64, young: f64, density: f64) -> Self {
+        Self {
+            b: std::f64::consts::PI * radius,
+            c: 4.25 * young * radius.sqrt(),
+            p: 1.5,
+            d: density,
+        }
+    }
+
+    /// Rigid-plastic spheres, table 2: `b = 2π r`, `c = 2π r 𝓗`, `p = 1` (`𝓗` hardness).
+    pub fn plastic(radius: f64, hardness: f64, density: f64) -> Self {
+        let tau = 2.0 * std::f64::consts::PI;
+        Self {
+            b: tau * radius,
+            c: tau * radius * hardness,
+            p: 1.0,
+            d: density,
+        }
+    }
+
+    /// Real contact area `A_c(W)` (eq. 2 without `K ω`).
+    pub fn contact_area(&self, load: f64) -> f64 {
+        0.5 * self.b
+            * self.d
+            * ((self.p + 1.0) * load / (self.c * self.d)).powf(2.0 / (self.p + 1.0))
+    }
+
+    /// Archard's wear rate `R = K ω A_c(W)` (eq. 2); for plastic spheres `= K ω W/𝓗` (eq. 3).
+    pub fn wear_rate(&self, k: f64, omega: f64, load: f64) -> f64 {
+        k * omega * self.contact_area(load)
+    }
+}
+
+/// Archard's wear rate (worn volume per sliding distance) for a known real contact area:
+/// `R = K ω A_c` (eq. 2).
 pub fn archard_wear_rate(omega: f64, k: f64, contact_area: f64) -> f64 {
     omega * k * contact_area
 }
 
-/// Archard's law for a rigid-plastic contact, eq. (3): `R = ω K W / H` (load over hardness
+/// Archard's law for a rigid-plastic contact, eq. (3): `R = K ω W/𝓗` (load over hardness
 /// is the real contact area).
 pub fn archard_wear_rate_plastic(omega: f64, k: f64, load: f64, hardness: f64) -> f64 {
     omega * k * load / hardness

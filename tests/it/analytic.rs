@@ -1,6 +1,6 @@
 //! Closed-form K_PL, 𝒦_PL, C and D against adaptive quadrature of p_PL (VALIDATION.md §6).
 
-use wearcoef::analytic::{ModelError, PlateauPowerLaw};
+use wearcoef::analytic::{archard_wear_rate_plastic, ArchardContact, ModelError, PlateauPowerLaw};
 
 /// Adaptive Gauss–Legendre (10 points) of `f` on `[a, b]`: split until the two halves agree
 /// with the whole to `rtol` of the running scale.
@@ -244,4 +244,40 @@ fn invalid_parameters_are_errors() {
     let m = PlateauPowerLaw::new(1.5, 2.0, 10.0).unwrap();
     assert_eq!(m.k_archard(-1.0), Err(ModelError::Threshold(-1.0)));
     assert!(m.k_upscaled(f64::INFINITY).is_err());
+}
+
+/// Eq. (2) against the sum over the sphere population done by quadrature: summits spread
+/// uniformly in depth, each carrying `b z` of area and `c z^p` of load at interference `z`.
+#[test]
+fn archard_contact_area_matches_quadrature_over_the_spheres() {
+    for model in [
+        ArchardContact::elastic(2.0e-6, 200e9, 3.0e7),
+        ArchardContact::plastic(2.0e-6, 3.0e9, 3.0e7),
+    ] {
+        for &delta in &[1e-9, 3.7e-8, 5e-7] {
+            let area = integrate(&|z: f64| model.b * z * model.d, 0.0, delta, 1e-15);
+            let load = integrate(
+                &|z: f64| model.c * z.powf(model.p) * model.d,
+                0.0,
+                delta,
+                1e-15,
+            );
+            let got = model.contact_area(load);
+            assert!(
+                (got / area - 1.0).abs() < 1e-12,
+                "p = {}: {got} vs {area}",
+                model.p
+            );
+        }
+    }
+    // Rigid-plastic: eq. (2) reduces to eq. (3), A_c = W/𝓗.
+    let (h, w) = (3.0e9, 42.0);
+    let plastic = ArchardContact::plastic(5e-6, h, 1e8);
+    let (k, omega) = (1e-4, 1.0 / 3.0);
+    let r = plastic.wear_rate(k, omega, w);
+    assert!((r / archard_wear_rate_plastic(omega, k, w, h) - 1.0).abs() < 1e-14);
+    // Elastic: A_c ∝ W^(4/5), not linear (the paper's point about Archard's model).
+    let elastic = ArchardContact::elastic(5e-6, 200e9, 1e8);
+    let ratio = elastic.contact_area(2.0 * w) / elastic.contact_area(w);
+    assert!((ratio - 2f64.powf(0.8)).abs() < 1e-14);
 }
