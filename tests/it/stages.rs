@@ -45,15 +45,21 @@ fn entries(root: &Path, stage: &str) -> Vec<std::path::PathBuf> {
     v
 }
 
-#[test]
-fn cluster_tables_match_the_contact_maps_and_statistics_match_the_tables() {
-    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+/// The two-study test pipeline, built.
+fn built_small_pipeline() -> (tempfile::TempDir, std::path::PathBuf) {
+    let (t, dir) = workdir(&small_pipeline(0.8, "x"));
     let out = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    (t, dir)
+}
+
+#[test]
+fn cluster_tables_match_the_contact_maps_and_statistics_match_the_tables() {
+    let (_t, dir) = built_small_pipeline();
 
     // Clusters: each table equals a breadth-first search on the stored contact maps, and
     // the areas add up to the solver's contact pixel counts.
@@ -220,13 +226,7 @@ fn cluster_tables_match_the_contact_maps_and_statistics_match_the_tables() {
 
 #[test]
 fn analytic_stage_evaluates_the_fitted_model_and_the_fig6_curves() {
-    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
-    let out = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (_t, dir) = built_small_pipeline();
     let mut fitted_files = 0;
     for entry in entries(&dir, "analytic") {
         let m = manifest(&entry);
