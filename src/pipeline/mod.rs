@@ -6,7 +6,9 @@
 
 pub mod catalog;
 mod cluster_stages;
+mod figures;
 pub mod hash;
+mod plot;
 pub mod runner;
 pub mod stages;
 pub mod store;

@@ -20,7 +20,14 @@ use crate::spectral::Fft2;
 use crate::surface::{self, SurfaceParams};
 
 /// Stages in dependency order.
-pub const STAGES: &[&str] = &["surface", "contact", "clusters", "statistics", "analytic"];
+pub const STAGES: &[&str] = &[
+    "surface",
+    "contact",
+    "clusters",
+    "statistics",
+    "analytic",
+    "figures",
+];
 
 /// Version of the surface stage; bump when its algorithm or outputs change.
 pub const SURFACE_VERSION: u32 = 1;
@@ -32,6 +39,20 @@ pub const CLUSTERS_VERSION: u32 = 1;
 pub const STATISTICS_VERSION: u32 = 1;
 /// Version of the analytic stage.
 pub const ANALYTIC_VERSION: u32 = 1;
+/// Version of the figures stage.
+pub const FIGURES_VERSION: u32 = 1;
+
+/// What a figures instance draws.
+#[derive(Debug, Clone)]
+pub enum FigureJob {
+    /// Paper Fig. 6 from the analytic stage's model curves.
+    Fig6 { analytic_key: String },
+    /// Paper Fig. 2e–f from the statistics of study `fig2`.
+    Fig2ef {
+        statistics_key: String,
+        lambda_s_px: f64,
+    },
+}
 
 /// Paper Fig. 6: the exponent, and the thresholds `A*/A_s` of the model curves, whose cut-off
 /// `A_m/A_s` runs over `10^0 … 10^12` in [`FIG6_POINTS`] logarithmic steps.
@@ -98,6 +119,7 @@ pub enum Job {
     Clusters(ClustersJob),
     Statistics(StatisticsJob),
     Analytic(AnalyticJob),
+    Figure(FigureJob),
 }
 
 /// One stage instance of a profile.
@@ -182,6 +204,7 @@ fn push_unique(out: &mut Vec<Instance>, inst: Instance) -> String {
 /// Every instance the given studies need, deduplicated by key, in stage order.
 pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
     let mut out: Vec<Instance> = Vec::new();
+    let mut fig2_statistics: Option<(String, f64)> = None;
     for plan in plans {
         let mut clusters_keys = Vec::new();
         for r in 0..plan.realizations {
@@ -273,6 +296,9 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 job: Job::Statistics(job),
             },
         );
+        if plan.name == "fig2" {
+            fig2_statistics = Some((statistics_key.clone(), plan.surface.lambda_s_px));
+        }
         let job = AnalyticJob {
             statistics_key: Some(statistics_key.clone()),
             lambda_s_px: plan.surface.lambda_s_px,
@@ -300,15 +326,46 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
             lambda_s_px: 1.0,
         };
         let params_json = analytic_params_json(&job);
+        let analytic_key = instance_key("analytic", ANALYTIC_VERSION, &params_json, &[]);
+        let all_studies: Vec<String> = plans.iter().map(|p| p.name.clone()).collect();
         out.push(Instance {
             stage: "analytic",
             version: ANALYTIC_VERSION,
-            key: instance_key("analytic", ANALYTIC_VERSION, &params_json, &[]),
+            key: analytic_key.clone(),
             params: params_json,
             inputs: Vec::new(),
-            studies: plans.iter().map(|p| p.name.clone()).collect(),
+            studies: all_studies.clone(),
             realization: None,
             job: Job::Analytic(job),
+        });
+        let params_json = json!({ "figure": "fig6" });
+        let inputs = vec![analytic_key.clone()];
+        out.push(Instance {
+            stage: "figures",
+            version: FIGURES_VERSION,
+            key: instance_key("figures", FIGURES_VERSION, &params_json, &inputs),
+            params: params_json,
+            inputs,
+            studies: all_studies,
+            realization: None,
+            job: Job::Figure(FigureJob::Fig6 { analytic_key }),
+        });
+    }
+    if let Some((statistics_key, lambda_s_px)) = fig2_statistics {
+        let params_json = json!({ "figure": "fig2ef", "lambda_s_px": lambda_s_px });
+        let inputs = vec![statistics_key.clone()];
+        out.push(Instance {
+            stage: "figures",
+            version: FIGURES_VERSION,
+            key: instance_key("figures", FIGURES_VERSION, &params_json, &inputs),
+            params: params_json,
+            inputs,
+            studies: vec!["fig2".to_string()],
+            realization: None,
+            job: Job::Figure(FigureJob::Fig2ef {
+                statistics_key,
+                lambda_s_px,
+            }),
         });
     }
     out
@@ -341,6 +398,7 @@ pub fn compute(instance: &Instance, dir: &Path, store: &Store) -> anyhow::Result
         Job::Clusters(job) => compute_clusters(job, dir, store),
         Job::Statistics(job) => compute_statistics(job, dir, store),
         Job::Analytic(job) => compute_analytic(job, dir, store),
+        Job::Figure(job) => super::figures::compute_figure(job, dir, store),
     }
 }
 

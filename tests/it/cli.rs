@@ -108,7 +108,7 @@ fn run_prints_a_one_line_summary() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(text.trim().lines().count(), 1, "{text}");
     assert!(
-        text.contains("20 computed") && text.contains("0 reused"),
+        text.contains("21 computed") && text.contains("0 reused"),
         "{text}"
     );
 }

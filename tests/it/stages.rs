@@ -293,3 +293,33 @@ fn analytic_stage_evaluates_the_fitted_model_and_the_fig6_curves() {
     }
     assert_eq!(fitted_files, 2);
 }
+
+/// Width and height from a PNG's IHDR chunk (after the 8-byte signature).
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    (be(&bytes[16..20]), be(&bytes[20..24]))
+}
+
+#[test]
+fn figures_are_valid_images_with_their_data_copied_beside_the_data_directory() {
+    let (_t, dir) = built_small_pipeline();
+    let out = dir.join("figures/t");
+    let png = std::fs::read(out.join("fig6.png")).unwrap();
+    // 6.4 × 4.8 in at 150 dpi.
+    assert_eq!(png_size(&png), (960, 720));
+    let svg = std::fs::read_to_string(out.join("fig6.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("A_m / A_s"), "axis label in the SVG");
+    // The plotted data: 5 thresholds × 2 coefficients, points with A_m ≥ A* only.
+    let csv = std::fs::read_to_string(out.join("fig6.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert!(lines.next().unwrap().starts_with("series,A_m / A_s,"));
+    let rows: Vec<&str> = lines.collect();
+    assert!(rows.len() > 500, "{} rows", rows.len());
+    for r in &rows {
+        let y: f64 = r.rsplit(',').next().unwrap().parse().unwrap();
+        assert!((0.0..=1.0).contains(&y));
+    }
+}

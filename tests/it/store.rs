@@ -46,8 +46,8 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
     let (_t, dir) = workdir(&small_pipeline(0.8, "first"));
     let first = run_json(&dir, &[]);
     assert_eq!(
-        first["computed"], 20,
-        "5 surfaces, 5 contact sweeps, 5 cluster tables, 2 statistics, 2 fitted models, Fig. 6"
+        first["computed"], 21,
+        "5 surfaces, 5 sweeps, 5 cluster tables, 2 statistics, 2 fitted models, Fig. 6 data and plot"
     );
     assert_eq!(first["reused"], 0);
     let keys_before: Vec<String> = std::fs::read_dir(dir.join("data/cache/surface"))
@@ -57,7 +57,7 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
 
     let second = run_json(&dir, &[]);
     assert_eq!(second["computed"], 0);
-    assert_eq!(second["reused"], 20);
+    assert_eq!(second["reused"], 21);
 
     // A parameter no stage reads (a description) changes nothing.
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.8, "renamed")).unwrap();
@@ -71,13 +71,13 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
     std::fs::write(dir.join("pipeline.yaml"), &text).unwrap();
     let loads_changed = run_json(&dir, &[]);
     assert_eq!(loads_changed["computed"], 6);
-    assert_eq!(loads_changed["reused"], 14);
+    assert_eq!(loads_changed["reused"], 15);
 
     // Study b's Hurst exponent: b's two surfaces and everything downstream of them.
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.6, "renamed")).unwrap();
     let fourth = run_json(&dir, &[]);
     assert_eq!(fourth["computed"], 8);
-    assert_eq!(fourth["reused"], 12);
+    assert_eq!(fourth["reused"], 13);
 
     // The earlier keys are all still there (nothing was overwritten).
     for k in keys_before {
@@ -92,7 +92,7 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.5, "renamed")).unwrap();
     let only_a = run_json(&dir, &["a"]);
     assert_eq!(only_a["computed"], 0);
-    assert_eq!(only_a["instances"], 12);
+    assert_eq!(only_a["instances"], 13);
     // A stage target builds that stage and what it needs, nothing downstream.
     let surfaces = run_json(&dir, &["surface"]);
     assert_eq!(surfaces["instances"], 5);
@@ -114,9 +114,9 @@ fn status_reports_present_and_missing() {
         .iter()
         .map(|l| l["missing"].as_u64().unwrap())
         .sum();
-    // The Fig. 6 curves are one instance listed under both studies, so counted twice.
+    // The Fig. 6 curves and plot are instances listed under both studies, so counted twice.
     assert_eq!(
-        missing, 21,
+        missing, 23,
         "5 surfaces, 5 sweeps, 5 cluster tables, 2 statistics, 2 fitted models, Fig. 6 twice"
     );
     run_json(&dir, &["a"]);
@@ -146,7 +146,7 @@ fn verify_names_each_damaged_entry_and_clean_corrupt_removes_it() {
     run_json(&dir, &[]);
     let ok = run_in(&dir, &["verify", "--json"]);
     assert!(ok.status.success());
-    assert_eq!(stdout_json(&ok)["checked"], 20);
+    assert_eq!(stdout_json(&ok)["checked"], 21);
 
     let entries: Vec<_> = std::fs::read_dir(dir.join("data/cache/surface"))
         .unwrap()
@@ -244,7 +244,7 @@ fn sigkill_in_the_middle_of_a_stage_then_rerun_gives_the_uninterrupted_result() 
     assert!(run_in(&dir, &["verify"]).status.success());
 
     let rerun = run_json(&dir, &[]);
-    assert_eq!(rerun["computed"], 20);
+    assert_eq!(rerun["computed"], 21);
     assert!(run_in(&dir, &["verify"]).status.success());
     assert_eq!(artifacts(&dir), artifacts(&reference));
     // The stale temporary directory of the dead process was cleaned up.
@@ -280,7 +280,7 @@ fn two_concurrent_runs_on_one_store_both_succeed() {
     assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
     let v = run_in(&dir, &["verify", "--json"]);
     assert!(v.status.success());
-    assert_eq!(stdout_json(&v)["checked"], 20);
+    assert_eq!(stdout_json(&v)["checked"], 21);
     let again = run_json(&dir, &[]);
     assert_eq!(again["computed"], 0);
 }
@@ -316,8 +316,11 @@ fn catalog_reads_back_with_typed_columns() {
     // 5 surfaces; 5 sweeps, each with loads.parquet and one contact map per load
     // (study a: 3 realizations × 2 loads, study b: 2 × 1); 5 cluster tables with their
     // per-load summaries; 2 statistics entries of 5 tables each; 2 fitted models; the
-    // Fig. 6 curves, listed under both studies.
-    assert_eq!(df.height(), 5 + 5 + 3 * 2 + 2 + 5 * 2 + 2 * 5 + 2 + 2);
+    // Fig. 6 curves and its PNG, SVG and CSV, listed under both studies.
+    assert_eq!(
+        df.height(),
+        5 + 5 + 3 * 2 + 2 + 5 * 2 + 2 * 5 + 2 + 2 + 3 * 2
+    );
     for (name, dtype) in [
         ("stage", DataType::String),
         ("study", DataType::String),
