@@ -43,6 +43,13 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
             statistics_key,
             "loads.parquet",
         )?)?,
+        FigureJob::Fig45 {
+            statistics_key,
+            analytic_key,
+        } => fig45(
+            &read_table(store, "statistics", statistics_key, "wear.parquet")?,
+            &read_table(store, "analytic", analytic_key, "model.parquet")?,
+        )?,
     };
     let mut names = Vec::new();
     for (stem, plot) in &plots {
@@ -134,4 +141,85 @@ fn fig2ef(df: &DataFrame) -> anyhow::Result<Vec<(&'static str, LinePlot)>> {
         }],
     };
     Ok(vec![("fig2e", e), ("fig2f", f)])
+}
+
+/// Thresholds A*/λ_s² drawn in Figs. 4b and 5.
+const FIG45_A_STAR: [f64; 4] = [0.5, 2.0, 8.0, 32.0];
+
+/// One series per threshold of `value` against W/W0 from a table with columns
+/// `a_star_over_ls2` and `w_over_w0`.
+fn per_threshold(
+    df: &DataFrame,
+    value: &str,
+    label: &str,
+    dashed: bool,
+) -> anyhow::Result<Vec<Series>> {
+    let a = f64_column(df, "a_star_over_ls2")?;
+    let w = f64_column(df, "w_over_w0")?;
+    let v = f64_column(df, value)?;
+    Ok(FIG45_A_STAR
+        .iter()
+        .enumerate()
+        .map(|(c, &t)| Series {
+            label: format!("{label}, A*/λ_s² = {t}"),
+            points: (0..a.len())
+                .filter(|&i| a[i] == t)
+                .map(|i| (w[i], v[i]))
+                .collect(),
+            color: c,
+            dashed,
+        })
+        .collect())
+}
+
+/// Figs. 4b (K vs load), 5a (𝒦 vs load) and 5b (wear rate vs load), simulated (solid,
+/// pooled over realizations) and from the fitted plateau + power-law model (dashed).
+fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(&'static str, LinePlot)>> {
+    let mut k = per_threshold(wear, "k_archard_pooled", "K_num", false)?;
+    k.extend(per_threshold(model, "k_pl", "K_PL fit", true)?);
+    let mut kk = per_threshold(wear, "k_upscaled_pooled", "up-scaled K_num", false)?;
+    kk.extend(per_threshold(
+        model,
+        "k_upscaled_pl",
+        "up-scaled K_PL fit",
+        true,
+    )?);
+    let rate = per_threshold(wear, "wear_rate_over_l2_mean", "R / L²", false)?;
+    let plot = |title: &str, y: &str, y_log: bool, series| LinePlot {
+        title: title.into(),
+        x_label: "W / W0".into(),
+        y_label: y.into(),
+        x_log: true,
+        y_log,
+        series,
+    };
+    Ok(vec![
+        (
+            "fig4b",
+            plot(
+                "Fig. 4b: Archard's wear coefficient, λ_l/λ_s = 128",
+                "K = P(A > A*)",
+                false,
+                k,
+            ),
+        ),
+        (
+            "fig5a",
+            plot(
+                "Fig. 5a: up-scaled wear coefficient, λ_l/λ_s = 128",
+                "A_c* / A_c",
+                false,
+                kk,
+            ),
+        ),
+        (
+            "fig5b",
+            plot(
+                "Fig. 5b: wear rate (ω = 1/3), λ_l/λ_s = 128",
+                "R / L²",
+                true,
+                rate,
+            ),
+        ),
+    ])
 }

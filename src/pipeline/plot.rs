@@ -125,6 +125,8 @@ impl LinePlot {
                 let mut chart = $chart;
                 chart
                     .configure_mesh()
+                    .x_labels(6)
+                    .y_labels(10)
                     .x_label_formatter(&tick)
                     .y_label_formatter(&tick)
                     .x_desc(&self.x_label)

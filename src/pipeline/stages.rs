@@ -52,6 +52,11 @@ pub enum FigureJob {
         statistics_key: String,
         lambda_s_px: f64,
     },
+    /// Paper Figs. 4b, 5a, 5b from the statistics and fitted model of study `fig3_ll128`.
+    Fig45 {
+        statistics_key: String,
+        analytic_key: String,
+    },
 }
 
 /// Paper Fig. 6: the exponent, and the thresholds `A*/A_s` of the model curves, whose cut-off
@@ -205,6 +210,7 @@ fn push_unique(out: &mut Vec<Instance>, inst: Instance) -> String {
 pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
     let mut out: Vec<Instance> = Vec::new();
     let mut fig2_statistics: Option<(String, f64)> = None;
+    let mut fig45_inputs: Option<(String, String)> = None;
     for plan in plans {
         let mut clusters_keys = Vec::new();
         for r in 0..plan.realizations {
@@ -304,8 +310,8 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
             lambda_s_px: plan.surface.lambda_s_px,
         };
         let params_json = analytic_params_json(&job);
-        let inputs = vec![statistics_key];
-        push_unique(
+        let inputs = vec![statistics_key.clone()];
+        let analytic_key = push_unique(
             &mut out,
             Instance {
                 stage: "analytic",
@@ -318,6 +324,9 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 job: Job::Analytic(job),
             },
         );
+        if plan.name == "fig3_ll128" {
+            fig45_inputs = Some((statistics_key, analytic_key));
+        }
     }
     // The model curves of Fig. 6 need no simulation; listed under every study.
     if !plans.is_empty() {
@@ -349,6 +358,23 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
             studies: all_studies,
             realization: None,
             job: Job::Figure(FigureJob::Fig6 { analytic_key }),
+        });
+    }
+    if let Some((statistics_key, analytic_key)) = fig45_inputs {
+        let params_json = json!({ "figure": "fig45" });
+        let inputs = vec![statistics_key.clone(), analytic_key.clone()];
+        out.push(Instance {
+            stage: "figures",
+            version: FIGURES_VERSION,
+            key: instance_key("figures", FIGURES_VERSION, &params_json, &inputs),
+            params: params_json,
+            inputs,
+            studies: vec!["fig3_ll128".to_string()],
+            realization: None,
+            job: Job::Figure(FigureJob::Fig45 {
+                statistics_key,
+                analytic_key,
+            }),
         });
     }
     if let Some((statistics_key, lambda_s_px)) = fig2_statistics {
