@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test fmt clippy bench bench-fft bench-solver bench-peers bench-labelling clean
+.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-labelling clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -20,6 +20,11 @@ test:
 	cargo clippy --locked --all-targets -- -D warnings
 	cargo test --locked
 	cargo test --locked --release --test it -- --ignored
+	$(MAKE) test-client
+
+# Real client: the quick profile end to end, every artifact opened with pandas, numpy, Pillow.
+test-client: build
+	bash tests/client/run.sh
 
 fmt:
 	cargo fmt

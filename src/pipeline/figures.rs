@@ -7,9 +7,12 @@ use std::path::Path;
 use polars::prelude::*;
 use serde_json::{json, Value};
 
-use super::plot::{LinePlot, Series};
-use super::stages::FigureJob;
+use super::plot::{
+    viridis, ColorBar, Layout, LegendAt, LinePlot, Panels, RasterPlot, Series, YAxis,
+};
+use super::stages::{FigureJob, StudyRef};
 use super::store::Store;
+use crate::clusters::{label, Connectivity};
 
 fn read_table(store: &Store, stage: &str, key: &str, file: &str) -> anyhow::Result<DataFrame> {
     let manifest = store
@@ -28,40 +31,147 @@ fn f64_column(df: &DataFrame, name: &str) -> anyhow::Result<Vec<f64>> {
         .collect())
 }
 
+fn u32_column(df: &DataFrame, name: &str) -> anyhow::Result<Vec<Option<u32>>> {
+    Ok(df.column(name)?.u32()?.iter().collect())
+}
+
+fn str_column(df: &DataFrame, name: &str) -> anyhow::Result<Vec<String>> {
+    Ok(df
+        .column(name)?
+        .str()?
+        .iter()
+        .map(|v| v.unwrap_or("").to_string())
+        .collect())
+}
+
+/// Index of the value of `values` nearest to `target` in log scale.
+fn nearest(values: &[f64], target: f64) -> Option<usize> {
+    values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v > 0.0)
+        .min_by(|a, b| {
+            let da = (a.1.ln() - target.ln()).abs();
+            let db = (b.1.ln() - target.ln()).abs();
+            da.total_cmp(&db)
+        })
+        .map(|(i, _)| i)
+}
+
+/// Distinct loads `(load_index, W/W0)` of a statistics table, in order.
+fn loads_of(df: &DataFrame) -> anyhow::Result<Vec<(u32, f64)>> {
+    let idx = u32_column(df, "load_index")?;
+    let w = f64_column(df, "w_over_w0")?;
+    let mut out: Vec<(u32, f64)> = Vec::new();
+    for (i, w) in idx.into_iter().zip(w) {
+        let i = i.unwrap_or(u32::MAX);
+        if !out.iter().any(|(j, _)| *j == i) {
+            out.push((i, w));
+        }
+    }
+    Ok(out)
+}
+
+/// The loads of a sweep nearest to `targets` (deduplicated, increasing).
+fn pick_loads(loads: &[(u32, f64)], targets: &[f64]) -> Vec<(u32, f64)> {
+    let w: Vec<f64> = loads.iter().map(|l| l.1).collect();
+    let mut out: Vec<(u32, f64)> = targets
+        .iter()
+        .filter_map(|&t| nearest(&w, t).map(|i| loads[i]))
+        .collect();
+    out.sort_by(|a, b| a.1.total_cmp(&b.1));
+    out.dedup_by_key(|l| l.0);
+    out
+}
+
+/// Rows of `df` at load `load_index`.
+fn rows_at(df: &DataFrame, load_index: u32) -> anyhow::Result<Vec<usize>> {
+    Ok(u32_column(df, "load_index")?
+        .into_iter()
+        .enumerate()
+        .filter(|(_, v)| *v == Some(load_index))
+        .map(|(i, _)| i)
+        .collect())
+}
+
+/// Something a figures instance writes.
+enum Drawn {
+    Line(LinePlot),
+    Panels(Panels),
+    /// A raster and the plotted array as `.npy` (shape, values).
+    Raster(RasterPlot, NpyData),
+}
+
+enum NpyData {
+    F64(Vec<usize>, Vec<f64>),
+    U8(Vec<usize>, Vec<u8>),
+}
+
 /// Draw one figure into `dir`.
 pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyhow::Result<Value> {
-    let plots: Vec<(&str, LinePlot)> = match job {
+    let stats = |key: &str, file: &str| read_table(store, "statistics", key, file);
+    let drawn: Vec<(String, Drawn)> = match job {
         FigureJob::Fig6 { analytic_key } => fig6(&read_table(
             store,
             "analytic",
             analytic_key,
             "fig6.parquet",
         )?)?,
-        FigureJob::Fig2ef { statistics_key, .. } => fig2ef(&read_table(
-            store,
-            "statistics",
+        FigureJob::Fig2ef {
             statistics_key,
-            "loads.parquet",
-        )?)?,
+            marked_loads,
+            ..
+        } => fig2ef(&stats(statistics_key, "loads.parquet")?, marked_loads)?,
+        FigureJob::Fig2Maps {
+            surface_key,
+            contact_key,
+            maps,
+            lambda_s_px,
+        } => fig2_maps(store, surface_key, contact_key, maps, *lambda_s_px)?,
         FigureJob::Fig45 {
             statistics_key,
             analytic_key,
         } => fig45(
-            &read_table(store, "statistics", statistics_key, "wear.parquet")?,
+            &stats(statistics_key, "wear.parquet")?,
             &read_table(store, "analytic", analytic_key, "model.parquet")?,
         )?,
+        FigureJob::Fig34a { ratios, hurst } => fig34a(store, ratios, hurst)?,
+        FigureJob::Appendix { figure, settings } => appendix(store, figure, settings)?,
     };
     let mut names = Vec::new();
-    for (stem, plot) in &plots {
-        plot.write(dir, stem)?;
-        plot.write_data(&dir.join(format!("{stem}.csv")))?;
-        names.push(*stem);
+    let mut sizes = serde_json::Map::new();
+    for (stem, item) in &drawn {
+        let size = match item {
+            Drawn::Line(_) => super::plot::SIZE_PX,
+            Drawn::Panels(p) => p.size(),
+            Drawn::Raster(..) => super::plot::RASTER_SIZE_PX,
+        };
+        sizes.insert(stem.clone(), json!([size.0, size.1]));
+        match item {
+            Drawn::Line(plot) => {
+                plot.write(dir, stem)?;
+                plot.write_data(&dir.join(format!("{stem}.csv")))?;
+            }
+            Drawn::Panels(panels) => {
+                panels.write(dir, stem)?;
+                panels.write_data(&dir.join(format!("{stem}.csv")))?;
+            }
+            Drawn::Raster(raster, data) => {
+                raster.write(dir, stem)?;
+                let path = dir.join(format!("{stem}.npy"));
+                match data {
+                    NpyData::F64(shape, v) => crate::io::write_f64(&path, shape, v.clone())?,
+                    NpyData::U8(shape, v) => crate::io::write_u8(&path, shape, v.clone())?,
+                }
+            }
+        }
+        names.push(stem.clone());
     }
-    Ok(json!({ "figures": names, "png_size_px": super::plot::SIZE_PX }))
+    Ok(json!({ "figures": names, "png_size_px": sizes }))
 }
 
 /// Fig. 6: K_PL and 𝒦_PL against A_m/A_s for α = 1.5 and several A*/A_s.
-fn fig6(df: &DataFrame) -> anyhow::Result<Vec<(&'static str, LinePlot)>> {
+fn fig6(df: &DataFrame) -> anyhow::Result<Vec<(String, Drawn)>> {
     let s = f64_column(df, "a_star_over_a_s")?;
     let m = f64_column(df, "a_m_over_a_s")?;
     let k = f64_column(df, "k_pl")?;
@@ -72,79 +182,483 @@ fn fig6(df: &DataFrame) -> anyhow::Result<Vec<(&'static str, LinePlot)>> {
         .unwrap_or(f64::NAN);
     let mut thresholds: Vec<f64> = s.clone();
     thresholds.dedup();
-    let mut series = Vec::new();
+    let mut plot = LinePlot::new(
+        format!("Fig. 6: power-law model, α = {alpha}"),
+        "A_m / A_s",
+        "K_PL (solid), up-scaled K_PL (dashed)",
+        true,
+        YAxis::Linear,
+    );
     for (name, values, dashed) in [("K_PL", &k, false), ("up-scaled K_PL", &kk, true)] {
         for (c, &t) in thresholds.iter().enumerate() {
             let points: Vec<(f64, f64)> = (0..s.len())
                 .filter(|&i| s[i] == t && m[i].is_finite() && m[i] >= t)
                 .map(|i| (m[i], values[i]))
                 .collect();
-            series.push(Series {
-                label: format!("{name}, A*/A_s = {t}"),
-                points,
-                color: c,
+            plot.series.push(Series {
                 dashed,
+                ..Series::line(format!("{name}, A*/A_s = {t}"), points, c)
             });
         }
     }
-    Ok(vec![(
-        "fig6",
-        LinePlot {
-            title: format!("Fig. 6: power-law model, α = {alpha}"),
-            x_label: "A_m / A_s".into(),
-            y_label: "K_PL (solid), up-scaled K_PL (dashed)".into(),
-            x_log: true,
-            y_log: false,
-            series,
-        },
-    )])
+    Ok(vec![("fig6".into(), Drawn::Line(plot))])
 }
 
-/// Fig. 2e (A_c and the largest cluster) and 2f (dN/dA_c) against W/W0.
-fn fig2ef(df: &DataFrame) -> anyhow::Result<Vec<(&'static str, LinePlot)>> {
+/// Fig. 2e (A_c and the largest cluster) and 2f (dN/dA_c) against W/W0; the loads of the
+/// contact maps (Fig. 2b–d) marked by dashed lines.
+fn fig2ef(df: &DataFrame, marked_loads: &[f64]) -> anyhow::Result<Vec<(String, Drawn)>> {
     let w = f64_column(df, "w_over_w0")?;
     let ac = f64_column(df, "area_fraction_mean")?;
     let largest = f64_column(df, "largest_area_over_ls2_mean")?;
     let dn = f64_column(df, "dn_dac_per_ls2")?;
-    let e = LinePlot {
-        title: "Fig. 2e: contact area and largest cluster".into(),
-        x_label: "W / W0".into(),
-        y_label: "A_c / L²  and  largest A / λ_s²".into(),
-        x_log: true,
-        y_log: true,
-        series: vec![
-            Series {
-                label: "A_c / L² (ensemble mean)".into(),
-                points: w.iter().copied().zip(ac).collect(),
-                color: 0,
-                dashed: false,
+    let mut e = LinePlot::new(
+        "Fig. 2e: contact area and largest cluster",
+        "W / W0",
+        "A_c / L²  and  largest A / λ_s²",
+        true,
+        YAxis::Log,
+    );
+    e.legend = LegendAt::LowerRight;
+    e.x_marks = marked_loads.to_vec();
+    e.series = vec![
+        Series::line(
+            "A_c / L² (ensemble mean)",
+            w.iter().copied().zip(ac).collect(),
+            0,
+        ),
+        Series::line(
+            "largest cluster A / λ_s² (ensemble mean)",
+            w.iter().copied().zip(largest).collect(),
+            1,
+        ),
+    ];
+    let mut f = LinePlot::new(
+        "Fig. 2f: growth of the cluster count",
+        "W / W0",
+        "dN / d(A_c/λ_s²)",
+        true,
+        YAxis::Linear,
+    );
+    f.x_marks = marked_loads.to_vec();
+    f.series = vec![
+        Series::line(
+            "dN/dA_c (central differences of ensemble means)",
+            w.iter().copied().zip(dn).collect(),
+            0,
+        ),
+        Series {
+            rgb: Some((0, 0, 0)),
+            width: 1,
+            ..Series::line("", vec![(w[0], 0.0), (w[w.len() - 1], 0.0)], 0)
+        },
+    ];
+    Ok(vec![
+        ("fig2e".into(), Drawn::Line(e)),
+        ("fig2f".into(), Drawn::Line(f)),
+    ])
+}
+
+/// Colours of the contact maps of Fig. 2b–d.
+const OUT_OF_CONTACT: (u8, u8, u8) = (0, 0, 0);
+const SMALL_CLUSTER: (u8, u8, u8) = (255, 215, 0);
+const LARGE_CLUSTER: (u8, u8, u8) = (220, 30, 30);
+/// The threshold of Fig. 2: `A* = 2 λ_s²`.
+pub const FIG2_A_STAR_OVER_LS2: f64 = 2.0;
+
+/// Fig. 2a (the surface of realization 0) and 2b–d (its contact maps at the kept loads,
+/// clusters with `A ≤ A*` yellow and `A > A*` red on black).
+fn fig2_maps(
+    store: &Store,
+    surface_key: &str,
+    contact_key: &str,
+    maps: &[(usize, f64)],
+    lambda_s_px: f64,
+) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let manifest = store
+        .lookup("surface", surface_key)?
+        .ok_or_else(|| anyhow::anyhow!("input surface {surface_key} is missing from the store"))?;
+    let (n, heights) = crate::io::read_square_f64(&store.read_output(&manifest, "heights.npy")?)?;
+    let (lo, hi) = heights
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    let rgb: Vec<u8> = heights
+        .iter()
+        .flat_map(|&h| {
+            let (r, g, b) = viridis((h - lo) / span);
+            [r, g, b]
+        })
+        .collect();
+    let mut out = vec![(
+        "fig2a".to_string(),
+        Drawn::Raster(
+            RasterPlot {
+                title: "Fig. 2a: rough surface (realization 0)".into(),
+                x_label: "x / L".into(),
+                y_label: "y / L".into(),
+                rows: n,
+                cols: n,
+                rgb,
+                colorbar: Some(ColorBar {
+                    lo,
+                    hi,
+                    label: "height h / L (rms slope 1)".into(),
+                }),
+                legend: Vec::new(),
             },
-            Series {
-                label: "largest cluster A / λ_s² (ensemble mean)".into(),
-                points: w.iter().copied().zip(largest).collect(),
-                color: 1,
-                dashed: false,
-            },
-        ],
+            NpyData::F64(vec![n, n], heights),
+        ),
+    )];
+    let manifest = store
+        .lookup("contact", contact_key)?
+        .ok_or_else(|| anyhow::anyhow!("input contact {contact_key} is missing from the store"))?;
+    let a_star_px = FIG2_A_STAR_OVER_LS2 * lambda_s_px * lambda_s_px;
+    for (panel, &(index, w)) in ["b", "c", "d"].iter().zip(maps) {
+        let path = store.read_output(&manifest, &super::stages::contact_file(index))?;
+        let (rows, cols, map, _) = crate::io::read_contact_map(&path)?;
+        let lab = label(&map, rows, cols, Connectivity::Eight)?;
+        // 0: out of contact, 1: A ≤ A*, 2: A > A*.
+        let class: Vec<u8> = lab
+            .labels
+            .iter()
+            .map(|&id| match id {
+                0 => 0,
+                id if lab.clusters[id as usize - 1].area_px as f64 > a_star_px => 2,
+                _ => 1,
+            })
+            .collect();
+        let rgb = class
+            .iter()
+            .flat_map(|&c| {
+                let (r, g, b) = [OUT_OF_CONTACT, SMALL_CLUSTER, LARGE_CLUSTER][c as usize];
+                [r, g, b]
+            })
+            .collect();
+        out.push((
+            format!("fig2{panel}"),
+            Drawn::Raster(
+                RasterPlot {
+                    title: format!("Fig. 2{panel}: contact clusters at W/W0 = {w:.3}"),
+                    x_label: "x / L".into(),
+                    y_label: "y / L".into(),
+                    rows,
+                    cols,
+                    rgb,
+                    colorbar: None,
+                    legend: vec![
+                        ("A ≤ A*".into(), Some(SMALL_CLUSTER)),
+                        ("A > A*".into(), Some(LARGE_CLUSTER)),
+                        ("out of contact".into(), Some(OUT_OF_CONTACT)),
+                        ("A* = 2 λ_s²".into(), None),
+                    ],
+                },
+                NpyData::U8(vec![rows, cols], class),
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+/// Fits of Fig. 3 are drawn only over at least this many decades of area.
+pub const MIN_FIT_DECADES: f64 = 1.0;
+/// Loads drawn in Figs. 3 and 4a (nearest in each sweep).
+const FIG3_LOADS: [f64; 3] = [0.005, 0.02, 0.06];
+/// Tints of the loads of one family, lightest for the smallest load.
+const LOAD_TINTS: [f64; 3] = [0.6, 0.3, 0.0];
+
+/// The pooled PDF of one study at one load: `(A/λ_s², p)` per bin with clusters.
+fn pdf_points(pdf: &DataFrame, load_index: u32) -> anyhow::Result<(Vec<(f64, f64)>, u64)> {
+    let rows = rows_at(pdf, load_index)?;
+    let x = f64_column(pdf, "centre_over_ls2")?;
+    let p = f64_column(pdf, "pdf_pooled")?;
+    let count: Vec<u64> = pdf
+        .column("count_pooled")?
+        .u64()?
+        .iter()
+        .map(|v| v.unwrap_or(0))
+        .collect();
+    let total = rows.iter().map(|&i| count[i]).sum();
+    Ok((
+        rows.iter()
+            .filter(|&&i| count[i] > 0)
+            .map(|&i| (x[i], p[i]))
+            .collect(),
+        total,
+    ))
+}
+
+/// Points of a fitted curve and its legend text.
+type FittedLine = (Vec<(f64, f64)>, String);
+
+/// The fitted discrete truncated power law at one load, drawn over its fitted range in the
+/// units of the PDF (per λ_s², weighted by the fraction of clusters in the range), and its
+/// legend text. `None` when there is no fit or when the fitted range spans less than
+/// [`MIN_FIT_DECADES`] (the KS choice of `k_min` then sits in the cut-off, e.g. λ_l/λ_s = 8,
+/// and its exponent is not that of the power-law interval).
+fn fitted_power_law(
+    alpha_table: &DataFrame,
+    load_index: u32,
+    clusters: u64,
+    lambda_s_px: f64,
+) -> anyhow::Result<Option<FittedLine>> {
+    let est = str_column(alpha_table, "estimator")?;
+    let alpha = f64_column(alpha_table, "alpha")?;
+    let lo = f64_column(alpha_table, "bootstrap_ci95_low")?;
+    let hi = f64_column(alpha_table, "bootstrap_ci95_high")?;
+    let k_min = f64_column(alpha_table, "k_min_px")?;
+    let k_max = f64_column(alpha_table, "k_max_px")?;
+    let n_fit: Vec<u64> = alpha_table
+        .column("n_fitted")?
+        .u64()?
+        .iter()
+        .map(|v| v.unwrap_or(0))
+        .collect();
+    let Some(i) = rows_at(alpha_table, load_index)?
+        .into_iter()
+        .find(|&i| est[i] == crate::powerlaw::Estimator::DiscreteTruncated.name())
+    else {
+        return Ok(None);
     };
-    let f = LinePlot {
-        title: "Fig. 2f: growth of the cluster count".into(),
-        x_label: "W / W0".into(),
-        y_label: "dN / d(A_c/λ_s²)".into(),
-        x_log: true,
-        y_log: false,
-        series: vec![Series {
-            label: "dN/dA_c (central differences of ensemble means)".into(),
-            points: w.iter().copied().zip(dn).collect(),
-            color: 0,
-            dashed: false,
-        }],
+    let (a, k0, k1) = (alpha[i], k_min[i], k_max[i]);
+    if !(a.is_finite() && k0 >= 1.0 && k1 >= k0 * 10f64.powf(MIN_FIT_DECADES)) || clusters == 0 {
+        return Ok(None);
+    }
+    let (k0, k1) = (k0 as u64, k1 as u64);
+    let z: f64 = (k0..=k1).map(|k| (k as f64).powf(-a)).sum();
+    let weight = n_fit[i] as f64 / clusters as f64;
+    let ls2 = lambda_s_px * lambda_s_px;
+    let steps = 40;
+    let points = (0..=steps)
+        .map(|j| {
+            let k = k0 as f64 * (k1 as f64 / k0 as f64).powf(j as f64 / steps as f64);
+            (k / ls2, weight * k.powf(-a) / z * ls2)
+        })
+        .collect();
+    let text = format!("fitted α = {a:.2}, 95 % CI [{:.2}, {:.2}]", lo[i], hi[i]);
+    Ok(Some((points, text)))
+}
+
+/// Fig. 3 (PDF of A/λ_s² for several λ_l/λ_s and loads, fitted power law; inset: H) and
+/// Fig. 4a (CCDF for the same studies and loads).
+fn fig34a(
+    store: &Store,
+    ratios: &[StudyRef],
+    hurst: &[StudyRef],
+) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let stats = |key: &str, file: &str| read_table(store, "statistics", key, file);
+    let mut main = LinePlot::new(
+        "Fig. 3: cluster-area PDF, H = 0.8",
+        "A / λ_s²",
+        "p(A / λ_s²)",
+        true,
+        YAxis::Log,
+    );
+    let mut ccdf_plot = LinePlot::new(
+        "Fig. 4a: K(A*) = P(A > A*), H = 0.8",
+        "A* / λ_s²",
+        "P(A > A*)",
+        true,
+        YAxis::Log,
+    );
+    ccdf_plot.legend = LegendAt::LowerLeft;
+    for (c, study) in ratios.iter().enumerate() {
+        let pdf = stats(&study.statistics_key, "pdf.parquet")?;
+        let alpha = stats(&study.statistics_key, "alpha.parquet")?;
+        let ccdf = stats(&study.statistics_key, "ccdf.parquet")?;
+        let picked = pick_loads(&loads_of(&pdf)?, &FIG3_LOADS);
+        let load_list = picked
+            .iter()
+            .map(|l| format!("{:.3}", l.1))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let real: Vec<Option<u32>> = u32_column(&ccdf, "realization")?;
+        let area = f64_column(&ccdf, "area_over_ls2")?;
+        let prob = f64_column(&ccdf, "ccdf")?;
+        for (j, &(load_index, _)) in picked.iter().enumerate() {
+            let last = j + 1 == picked.len();
+            let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
+            let (points, clusters) = pdf_points(&pdf, load_index)?;
+            let label = if last {
+                format!("{} (W/W0 = {load_list}, light → dark)", study.label)
+            } else {
+                String::new()
+            };
+            main.series.push(Series {
+                tint,
+                markers: true,
+                width: 1,
+                ..Series::line(label.clone(), points, c)
+            });
+            let steps: Vec<(f64, f64)> = rows_at(&ccdf, load_index)?
+                .into_iter()
+                .filter(|&i| real[i].is_none())
+                .map(|i| (area[i], prob[i]))
+                .collect();
+            ccdf_plot.series.push(Series {
+                tint,
+                ..Series::line(label, steps, c)
+            });
+            if last {
+                if let Some((fit, text)) =
+                    fitted_power_law(&alpha, load_index, clusters, study.lambda_s_px)?
+                {
+                    main.series.push(Series {
+                        dashed: true,
+                        rgb: Some((0, 0, 0)),
+                        ..Series::line(format!("{} fit: {text}", study.label), fit, c)
+                    });
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    if hurst.is_empty() {
+        out.push(("fig3".to_string(), Drawn::Line(main)));
+    } else {
+        let mut inset = LinePlot::new("λ_l/λ_s = 128", "A / λ_s²", "p(A / λ_s²)", true, YAxis::Log);
+        for (c, study) in hurst.iter().enumerate() {
+            let pdf = stats(&study.statistics_key, "pdf.parquet")?;
+            if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[0.06]).first() {
+                let (points, _) = pdf_points(&pdf, load_index)?;
+                inset.series.push(Series {
+                    markers: true,
+                    width: 1,
+                    ..Series::line(format!("{} (W/W0 = {w:.3})", study.label), points, c + 3)
+                });
+            }
+        }
+        out.push((
+            "fig3".to_string(),
+            Drawn::Panels(Panels {
+                plots: vec![main, inset],
+                layout: Layout::Inset {
+                    rect: (0.12, 0.55, 0.38, 0.33),
+                },
+            }),
+        ));
+    }
+    out.push(("fig4a".to_string(), Drawn::Line(ccdf_plot)));
+    Ok(out)
+}
+
+/// Figs. B.1 and B.2: the CCDF of cluster areas per setting. B.1 (one panel per setting):
+/// every realization in grey and the ensemble mean in red, per load; B.2 (one panel per
+/// load): the ensemble mean of each setting.
+fn appendix(
+    store: &Store,
+    figure: &str,
+    settings: &[StudyRef],
+) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let mut tables = Vec::new();
+    for s in settings {
+        tables.push(read_table(
+            store,
+            "statistics",
+            &s.statistics_key,
+            "ccdf.parquet",
+        )?);
+    }
+    let curves = |df: &DataFrame,
+                  load_index: u32,
+                  realization: Option<u32>,
+                  column: &str|
+     -> anyhow::Result<Vec<(f64, f64)>> {
+        let real = u32_column(df, "realization")?;
+        let area = f64_column(df, "area_over_ls2")?;
+        let v = f64_column(df, column)?;
+        Ok(rows_at(df, load_index)?
+            .into_iter()
+            .filter(|&i| real[i] == realization)
+            .map(|i| (area[i], v[i]))
+            .collect())
     };
-    Ok(vec![("fig2e", e), ("fig2f", f)])
+    let mut plots = Vec::new();
+    if figure == "figB1" {
+        for (s, df) in settings.iter().zip(&tables) {
+            let mut plot = LinePlot::new(
+                format!("Fig. B.1: {}", s.label),
+                "A / λ_s²",
+                "P(A > a)",
+                true,
+                YAxis::Log,
+            );
+            plot.legend = LegendAt::LowerLeft;
+            let loads = loads_of(df)?;
+            let mut realizations: Vec<u32> = u32_column(df, "realization")?
+                .into_iter()
+                .flatten()
+                .collect();
+            realizations.sort_unstable();
+            realizations.dedup();
+            for (j, &(load_index, _)) in loads.iter().enumerate() {
+                for (r_i, &r) in realizations.iter().enumerate() {
+                    let label = if j == 0 && r_i == 0 {
+                        "each realization"
+                    } else {
+                        ""
+                    };
+                    plot.series.push(Series {
+                        rgb: Some((170, 170, 170)),
+                        width: 1,
+                        ..Series::line(label, curves(df, load_index, Some(r), "ccdf")?, 0)
+                    });
+                }
+            }
+            for (j, &(load_index, w)) in loads.iter().enumerate() {
+                plot.series.push(Series {
+                    rgb: Some((214, 39, 40)),
+                    tint: 0.5 * (loads.len() - 1 - j) as f64 / loads.len().max(2) as f64,
+                    ..Series::line(
+                        format!("ensemble mean, W/W0 = {w:.3}"),
+                        curves(df, load_index, None, "ccdf_mean")?,
+                        3,
+                    )
+                });
+            }
+            plots.push(plot);
+        }
+    } else {
+        let loads = tables
+            .first()
+            .map(loads_of)
+            .transpose()?
+            .unwrap_or_default();
+        for &(load_index, w) in &loads {
+            let mut plot = LinePlot::new(
+                format!("Fig. B.2: W/W0 = {w:.3}"),
+                "A / λ_s²",
+                "P(A > a), ensemble mean",
+                true,
+                YAxis::Log,
+            );
+            plot.legend = LegendAt::LowerLeft;
+            for (c, (s, df)) in settings.iter().zip(&tables).enumerate() {
+                plot.series.push(Series::line(
+                    s.label.clone(),
+                    curves(df, load_index, None, "ccdf_mean")?,
+                    c,
+                ));
+            }
+            plots.push(plot);
+        }
+    }
+    anyhow::ensure!(!plots.is_empty(), "{figure}: no setting to draw");
+    let columns = plots.len().min(3);
+    Ok(vec![(
+        figure.to_string(),
+        Drawn::Panels(Panels {
+            plots,
+            layout: Layout::Grid { columns },
+        }),
+    )])
 }
 
 /// Thresholds A*/λ_s² drawn in Figs. 4b and 5.
 const FIG45_A_STAR: [f64; 4] = [0.5, 2.0, 8.0, 32.0];
+/// Fig. 4b: the y axis is linear up to this value and logarithmic above (as in the paper).
+const FIG4B_LINEAR_UP_TO: f64 = 1e-5;
 
 /// One series per threshold of `value` against W/W0 from a table with columns
 /// `a_star_over_ls2` and `w_over_w0`.
@@ -161,20 +675,22 @@ fn per_threshold(
         .iter()
         .enumerate()
         .map(|(c, &t)| Series {
-            label: format!("{label}, A*/λ_s² = {t}"),
-            points: (0..a.len())
-                .filter(|&i| a[i] == t)
-                .map(|i| (w[i], v[i]))
-                .collect(),
-            color: c,
             dashed,
+            ..Series::line(
+                format!("{label}, A*/λ_s² = {t}"),
+                (0..a.len())
+                    .filter(|&i| a[i] == t)
+                    .map(|i| (w[i], v[i]))
+                    .collect(),
+                c,
+            )
         })
         .collect())
 }
 
 /// Figs. 4b (K vs load), 5a (𝒦 vs load) and 5b (wear rate vs load), simulated (solid,
 /// pooled over realizations) and from the fitted plateau + power-law model (dashed).
-fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(&'static str, LinePlot)>> {
+fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(String, Drawn)>> {
     let mut k = per_threshold(wear, "k_archard_pooled", "K_num", false)?;
     k.extend(per_threshold(model, "k_pl", "K_PL fit", true)?);
     let mut kk = per_threshold(wear, "k_upscaled_pooled", "up-scaled K_num", false)?;
@@ -185,39 +701,39 @@ fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(&'static st
         true,
     )?);
     let rate = per_threshold(wear, "wear_rate_over_l2_mean", "R / L²", false)?;
-    let plot = |title: &str, y: &str, y_log: bool, series| LinePlot {
-        title: title.into(),
-        x_label: "W / W0".into(),
-        y_label: y.into(),
-        x_log: true,
-        y_log,
-        series,
+    let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
+        let mut p = LinePlot::new(title, "W / W0", y, true, y_axis);
+        p.series = series;
+        p.legend = LegendAt::LowerRight;
+        Drawn::Line(p)
     };
     Ok(vec![
         (
-            "fig4b",
+            "fig4b".into(),
             plot(
                 "Fig. 4b: Archard's wear coefficient, λ_l/λ_s = 128",
-                "K = P(A > A*)",
-                false,
+                "K = P(A > A*)  (linear below 1e-5)",
+                YAxis::LinLog {
+                    threshold: FIG4B_LINEAR_UP_TO,
+                },
                 k,
             ),
         ),
         (
-            "fig5a",
+            "fig5a".into(),
             plot(
                 "Fig. 5a: up-scaled wear coefficient, λ_l/λ_s = 128",
                 "A_c* / A_c",
-                false,
+                YAxis::Linear,
                 kk,
             ),
         ),
         (
-            "fig5b",
+            "fig5b".into(),
             plot(
                 "Fig. 5b: wear rate (ω = 1/3), λ_l/λ_s = 128",
                 "R / L²",
-                true,
+                YAxis::Log,
                 rate,
             ),
         ),

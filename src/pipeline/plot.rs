@@ -1,15 +1,25 @@
-//! Line plots as PNG (150 dpi) and SVG with plotters, text in an embedded font
-//! (DejaVu Sans, assets/fonts, Bitstream Vera licence) so no system font package is needed.
+//! Figures as PNG (150 dpi) and SVG with plotters, text in an embedded font (DejaVu Sans,
+//! assets/fonts, Bitstream Vera licence) so no system font package is needed.
+//!
+//! Three kinds of scene: a line plot ([`LinePlot`], logarithmic, linear or linear-then-log
+//! axes), several line plots side by side or one inset in another ([`Panels`]), and a raster
+//! image with a colour bar or a colour legend ([`RasterPlot`]; the SVG embeds the same
+//! raster as a PNG).
 
+use std::ops::Range;
 use std::path::Path;
 
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::colors::colormaps::ViridisRGB;
 
 /// The embedded font's bytes.
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
-/// Figure size: 6.4 × 4.8 in at 150 dpi.
+/// Size of a single plot: 6.4 × 4.8 in at 150 dpi.
 pub const SIZE_PX: (u32, u32) = (960, 720);
+/// Size of a raster figure (map with its colour bar or legend): 6.4 × 5.6 in at 150 dpi.
+pub const RASTER_SIZE_PX: (u32, u32) = (960, 840);
 
 /// Register the embedded font under the family plotters asks for ("sans-serif").
 fn ensure_font() -> anyhow::Result<()> {
@@ -24,33 +34,140 @@ fn ensure_font() -> anyhow::Result<()> {
 /// Tick labels: plain for moderate magnitudes, `1e6` style otherwise.
 fn tick(v: &f64) -> String {
     let a = v.abs();
-    if a == 0.0 || (1e-3..1e4).contains(&a) {
+    if a < 1e-12 {
+        return "0".into();
+    }
+    if (1e-3..1e4).contains(&a) {
         let s = format!("{v:.4}");
         let s = s.trim_end_matches('0').trim_end_matches('.');
         s.to_string()
     } else {
-        format!("{v:.0e}")
+        let s = format!("{v:.1e}");
+        s.replace(".0e", "e")
     }
 }
 
 /// One curve.
+#[derive(Clone)]
 pub struct Series {
+    /// Legend entry; empty for curves left out of the legend.
     pub label: String,
     pub points: Vec<(f64, f64)>,
     /// Palette index (curves that belong together share a colour).
     pub color: usize,
+    /// Colour overriding the palette.
+    pub rgb: Option<(u8, u8, u8)>,
+    /// Lightness shift towards white in [0, 1) (several loads of one family).
+    pub tint: f64,
     /// Dashed instead of solid.
     pub dashed: bool,
+    /// Line width in pixels (0: markers only).
+    pub width: u32,
+    /// Draw a circle at each point.
+    pub markers: bool,
+}
+
+impl Default for Series {
+    fn default() -> Self {
+        Series {
+            label: String::new(),
+            points: Vec::new(),
+            color: 0,
+            rgb: None,
+            tint: 0.0,
+            dashed: false,
+            width: 2,
+            markers: false,
+        }
+    }
+}
+
+impl Series {
+    /// A solid line of palette colour `color`.
+    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>, color: usize) -> Self {
+        Series {
+            label: label.into(),
+            points,
+            color,
+            ..Series::default()
+        }
+    }
+
+    fn rgb_color(&self) -> RGBColor {
+        let RGBColor(r, g, b) = match self.rgb {
+            Some((r, g, b)) => RGBColor(r, g, b),
+            None => PALETTE[self.color % PALETTE.len()],
+        };
+        let t = self.tint.clamp(0.0, 0.95);
+        let mix = |c: u8| (c as f64 + t * (255.0 - c as f64)).round() as u8;
+        RGBColor(mix(r), mix(g), mix(b))
+    }
+}
+
+/// The y axis of a line plot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum YAxis {
+    Linear,
+    Log,
+    /// Linear from 0 up to `threshold`, logarithmic above (paper Fig. 4b).
+    LinLog {
+        threshold: f64,
+    },
 }
 
 /// A 2-D line plot.
+#[derive(Clone)]
 pub struct LinePlot {
     pub title: String,
     pub x_label: String,
     pub y_label: String,
     pub x_log: bool,
-    pub y_log: bool,
+    pub y_axis: YAxis,
     pub series: Vec<Series>,
+    /// Abscissae marked by vertical dashed grey lines (e.g. the loads of Fig. 2b–d).
+    pub x_marks: Vec<f64>,
+    /// Where the legend goes.
+    pub legend: LegendAt,
+}
+
+impl LinePlot {
+    /// A plot with no series yet, legend at the upper right.
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+        x_log: bool,
+        y_axis: YAxis,
+    ) -> Self {
+        LinePlot {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            x_log,
+            y_axis,
+            series: Vec::new(),
+            x_marks: Vec::new(),
+            legend: LegendAt::UpperRight,
+        }
+    }
+}
+
+/// Corner of the legend box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LegendAt {
+    UpperRight,
+    LowerLeft,
+    LowerRight,
+}
+
+impl LegendAt {
+    fn position(self) -> SeriesLabelPosition {
+        match self {
+            LegendAt::UpperRight => SeriesLabelPosition::UpperRight,
+            LegendAt::LowerLeft => SeriesLabelPosition::LowerLeft,
+            LegendAt::LowerRight => SeriesLabelPosition::LowerRight,
+        }
+    }
 }
 
 const PALETTE: [RGBColor; 8] = [
@@ -64,21 +181,92 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
+/// Linear from 0 to `threshold`, logarithmic above: `t(y) = y/threshold` below and
+/// `1 + log10(y/threshold)` above, drawn linearly in `t`.
+#[derive(Clone, Debug)]
+struct LinLogCoord {
+    threshold: f64,
+    hi: f64,
+}
+
+impl LinLogCoord {
+    fn t(&self, v: f64) -> f64 {
+        if v <= self.threshold {
+            v / self.threshold
+        } else {
+            1.0 + (v / self.threshold).log10()
+        }
+    }
+}
+
+impl Ranged for LinLogCoord {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let f = self.t(*value) / self.t(self.hi);
+        limit.0 + (f * (limit.1 - limit.0) as f64).round() as i32
+    }
+
+    fn key_points<H: KeyPointHint>(&self, _hint: H) -> Vec<f64> {
+        let mut out = vec![0.0, self.threshold / 2.0, self.threshold];
+        let mut v = self.threshold * 10.0;
+        while v <= self.hi * (1.0 + 1e-12) {
+            out.push(v);
+            v *= 10.0;
+        }
+        out
+    }
+
+    fn range(&self) -> Range<f64> {
+        0.0..self.hi
+    }
+}
+
+fn finite_on(x_log: bool, y_axis: YAxis) -> impl Fn(&(f64, f64)) -> bool {
+    move |&(x, y)| {
+        x.is_finite()
+            && y.is_finite()
+            && (!x_log || x > 0.0)
+            && match y_axis {
+                YAxis::Linear => true,
+                YAxis::Log => y > 0.0,
+                YAxis::LinLog { .. } => y >= 0.0,
+            }
+    }
+}
+
+fn padded(lo: f64, hi: f64, log: bool) -> (f64, f64) {
+    if log {
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo / 2.0, hi * 2.0)
+        };
+        (lo / 1.2, hi * 1.2)
+    } else {
+        let pad = if hi > lo { 0.05 * (hi - lo) } else { 1.0 };
+        (lo - pad, hi + pad)
+    }
+}
+
+type DrawResult = anyhow::Result<()>;
+
+fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow::anyhow!("plotting: {e:?}")
+}
+
 impl LinePlot {
     /// Finite points (positive on logarithmic axes) of every series.
     fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let keep = finite_on(self.x_log, self.y_axis);
         self.series
             .iter()
             .flat_map(|s| s.points.iter().copied())
-            .filter(|&(x, y)| {
-                x.is_finite()
-                    && y.is_finite()
-                    && (!self.x_log || x > 0.0)
-                    && (!self.y_log || y > 0.0)
-            })
+            .filter(move |p| keep(p))
     }
 
-    fn range(&self, pick: impl Fn((f64, f64)) -> f64, log: bool) -> anyhow::Result<(f64, f64)> {
+    fn extent(&self, pick: impl Fn((f64, f64)) -> f64) -> anyhow::Result<(f64, f64)> {
         let (lo, hi) = self
             .points()
             .map(pick)
@@ -86,42 +274,30 @@ impl LinePlot {
                 (a.min(v), b.max(v))
             });
         anyhow::ensure!(lo.is_finite(), "plot '{}' has no finite point", self.title);
-        Ok(if log {
-            let (lo, hi) = if hi > lo {
-                (lo, hi)
-            } else {
-                (lo / 2.0, hi * 2.0)
-            };
-            (lo / 1.2, hi * 1.2)
-        } else {
-            let pad = if hi > lo { 0.05 * (hi - lo) } else { 1.0 };
-            (lo - pad, hi + pad)
-        })
+        Ok((lo, hi))
     }
 
     /// Write `<stem>.png` and `<stem>.svg` in `dir`.
-    pub fn write(&self, dir: &Path, stem: &str) -> anyhow::Result<()> {
-        ensure_font()?;
-        let png = dir.join(format!("{stem}.png"));
-        self.draw(BitMapBackend::new(&png, SIZE_PX).into_drawing_area())?;
-        let svg = dir.join(format!("{stem}.svg"));
-        self.draw(SVGBackend::new(&svg, SIZE_PX).into_drawing_area())?;
-        Ok(())
+    pub fn write(&self, dir: &Path, stem: &str) -> DrawResult {
+        write_scene(dir, stem, SIZE_PX, self)
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("plotting: {e:?}");
-        root.fill(&WHITE).map_err(err)?;
-        let (x0, x1) = self.range(|p| p.0, self.x_log)?;
-        let (y0, y1) = self.range(|p| p.1, self.y_log)?;
-        let mut builder = ChartBuilder::on(&root);
+    /// Draw into `area` with fonts scaled by `scale`.
+    fn draw_on<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, scale: f64) -> DrawResult {
+        let (x0, x1) = self.extent(|p| p.0)?;
+        let (x0, x1) = padded(x0, x1, self.x_log);
+        let (y0, y1) = self.extent(|p| p.1)?;
+        let px = |v: f64| ((v * scale).round() as i32).max(8);
+        let mut builder = ChartBuilder::on(area);
         builder
-            .caption(&self.title, ("sans-serif", 26))
-            .margin(18)
-            .x_label_area_size(60)
-            .y_label_area_size(90);
+            .caption(&self.title, ("sans-serif", px(26.0)))
+            .margin(px(18.0))
+            .x_label_area_size(px(60.0))
+            .y_label_area_size(px(90.0));
+        let keep = finite_on(self.x_log, self.y_axis);
+        let marker = ((3.0 * scale).round() as i32).max(2);
         macro_rules! finish {
-            ($chart:expr) => {{
+            ($chart:expr, $ylo:expr, $yhi:expr) => {{
                 let mut chart = $chart;
                 chart
                     .configure_mesh()
@@ -131,68 +307,167 @@ impl LinePlot {
                     .y_label_formatter(&tick)
                     .x_desc(&self.x_label)
                     .y_desc(&self.y_label)
-                    .label_style(("sans-serif", 18))
-                    .axis_desc_style(("sans-serif", 20))
+                    .label_style(("sans-serif", px(18.0)))
+                    .axis_desc_style(("sans-serif", px(20.0)))
                     .draw()
-                    .map_err(err)?;
-                for s in &self.series {
-                    let color = PALETTE[s.color % PALETTE.len()];
-                    let dashed = s.dashed;
-                    let pts: Vec<(f64, f64)> = s
-                        .points
-                        .iter()
-                        .copied()
-                        .filter(|&(x, y)| {
-                            x.is_finite()
-                                && y.is_finite()
-                                && (!self.x_log || x > 0.0)
-                                && (!self.y_log || y > 0.0)
-                        })
-                        .collect();
-                    let anno = if dashed {
-                        chart
-                            .draw_series(DashedLineSeries::new(pts, 8, 5, color.stroke_width(2)))
-                            .map_err(err)?
-                    } else {
-                        chart
-                            .draw_series(LineSeries::new(pts, color.stroke_width(2)))
-                            .map_err(err)?
-                    };
-                    anno.label(s.label.as_str()).legend(move |(x, y)| {
-                        if dashed {
-                            PathElement::new(vec![(x, y), (x + 8, y)], color.stroke_width(2))
-                        } else {
-                            PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
-                        }
-                    });
+                    .map_err(plot_err)?;
+                let grey = RGBColor(150, 150, 150);
+                for &x in &self.x_marks {
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            vec![(x, $ylo), (x, $yhi)],
+                            6,
+                            4,
+                            grey.stroke_width(1),
+                        ))
+                        .map_err(plot_err)?;
                 }
-                chart
-                    .configure_series_labels()
-                    .label_font(("sans-serif", 16))
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .draw()
-                    .map_err(err)?;
+                let mut any_label = false;
+                for s in &self.series {
+                    let color = s.rgb_color();
+                    let dashed = s.dashed;
+                    let width = s.width;
+                    let pts: Vec<(f64, f64)> =
+                        s.points.iter().copied().filter(|p| keep(p)).collect();
+                    let style = color.stroke_width(width.max(1));
+                    if s.markers {
+                        chart
+                            .draw_series(
+                                pts.iter().map(|&p| Circle::new(p, marker, color.filled())),
+                            )
+                            .map_err(plot_err)?;
+                    }
+                    if width > 0 {
+                        let anno = if dashed {
+                            chart
+                                .draw_series(DashedLineSeries::new(pts, 8, 5, style))
+                                .map_err(plot_err)?
+                        } else {
+                            chart
+                                .draw_series(LineSeries::new(pts, style))
+                                .map_err(plot_err)?
+                        };
+                        if !s.label.is_empty() {
+                            any_label = true;
+                            let markers = s.markers;
+                            anno.label(s.label.as_str()).legend(move |(x, y)| {
+                                let end = if dashed { x + 8 } else { x + 24 };
+                                let line = PathElement::new(vec![(x, y), (end, y)], style);
+                                let dot = Circle::new(
+                                    (x + 12, y),
+                                    if markers { 4 } else { 0 },
+                                    color.filled(),
+                                );
+                                EmptyElement::at((0, 0)) + line + dot
+                            });
+                        }
+                    } else if !s.label.is_empty() {
+                        any_label = true;
+                        let anno = chart
+                            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+                            .map_err(plot_err)?;
+                        anno.label(s.label.as_str())
+                            .legend(move |(x, y)| Circle::new((x + 12, y), 4, color.filled()));
+                    }
+                }
+                if any_label {
+                    chart
+                        .configure_series_labels()
+                        .position(self.legend.position())
+                        .label_font(("sans-serif", px(16.0)))
+                        .background_style(WHITE.mix(0.85))
+                        .border_style(BLACK)
+                        .draw()
+                        .map_err(plot_err)?;
+                }
             }};
         }
-        match (self.x_log, self.y_log) {
-            (true, true) => finish!(builder
-                .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(err)?),
-            (true, false) => finish!(builder
-                .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
-                .map_err(err)?),
-            (false, true) => finish!(builder
-                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-                .map_err(err)?),
-            (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?),
+        let x_range = x0..x1;
+        match self.y_axis {
+            YAxis::Log => {
+                let (y0, y1) = padded(y0, y1, true);
+                if self.x_log {
+                    finish!(
+                        builder
+                            .build_cartesian_2d(x_range.log_scale(), (y0..y1).log_scale())
+                            .map_err(plot_err)?,
+                        y0,
+                        y1
+                    )
+                } else {
+                    finish!(
+                        builder
+                            .build_cartesian_2d(x_range, (y0..y1).log_scale())
+                            .map_err(plot_err)?,
+                        y0,
+                        y1
+                    )
+                }
+            }
+            YAxis::Linear => {
+                let (y0, y1) = padded(y0, y1, false);
+                if self.x_log {
+                    finish!(
+                        builder
+                            .build_cartesian_2d(x_range.log_scale(), y0..y1)
+                            .map_err(plot_err)?,
+                        y0,
+                        y1
+                    )
+                } else {
+                    finish!(
+                        builder
+                            .build_cartesian_2d(x_range, y0..y1)
+                            .map_err(plot_err)?,
+                        y0,
+                        y1
+                    )
+                }
+            }
+            YAxis::LinLog { threshold } => {
+                anyhow::ensure!(
+                    threshold > 0.0,
+                    "linear-log axis needs a positive threshold"
+                );
+                let y_coord = LinLogCoord {
+                    threshold,
+                    hi: (y1 * 1.5).max(threshold * 2.0),
+                };
+                let hi = y_coord.hi;
+                if self.x_log {
+                    finish!(
+                        builder
+                            .build_cartesian_2d(x_range.log_scale(), y_coord)
+                            .map_err(plot_err)?,
+                        0.0,
+                        hi
+                    )
+                } else {
+                    finish!(
+                        builder
+                            .build_cartesian_2d(x_range, y_coord)
+                            .map_err(plot_err)?,
+                        0.0,
+                        hi
+                    )
+                }
+            }
         }
-        root.present().map_err(err)?;
         Ok(())
     }
 
-    /// The plotted data as CSV (`series, x, y`), beside the images.
-    pub fn write_data(&self, path: &Path) -> anyhow::Result<()> {
+    /// Rows `panel, series, x, y` of the plotted data.
+    fn data_rows(&self, panel: &str, out: &mut csv::Writer<std::fs::File>) -> DrawResult {
+        for s in &self.series {
+            for (x, y) in &s.points {
+                out.write_record([panel, &s.label, &x.to_string(), &y.to_string()])?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The plotted data as CSV (`series, <x label>, <y label>`), beside the images.
+    pub fn write_data(&self, path: &Path) -> DrawResult {
         let mut w = csv::Writer::from_path(path)?;
         w.write_record(["series", &self.x_label, &self.y_label])?;
         for s in &self.series {
@@ -202,5 +477,335 @@ impl LinePlot {
         }
         w.flush()?;
         Ok(())
+    }
+}
+
+/// Several line plots in one figure.
+pub struct Panels {
+    pub plots: Vec<LinePlot>,
+    pub layout: Layout,
+}
+
+/// How [`Panels`] are arranged.
+#[derive(Clone, Copy, Debug)]
+pub enum Layout {
+    /// Side by side in `columns` columns (rows as needed), each panel 640 × 560 px.
+    Grid { columns: usize },
+    /// The second plot inset in the first, at fractions (left, top, width, height) of it.
+    Inset { rect: (f64, f64, f64, f64) },
+}
+
+impl Panels {
+    /// Figure size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        match self.layout {
+            Layout::Grid { columns } => {
+                let cols = columns.clamp(1, self.plots.len().max(1));
+                let rows = self.plots.len().div_ceil(cols).max(1);
+                (640 * cols as u32, 560 * rows as u32)
+            }
+            Layout::Inset { .. } => SIZE_PX,
+        }
+    }
+
+    /// Write `<stem>.png` and `<stem>.svg` in `dir`.
+    pub fn write(&self, dir: &Path, stem: &str) -> DrawResult {
+        write_scene(dir, stem, self.size(), self)
+    }
+
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        match self.layout {
+            Layout::Grid { columns } => {
+                let cols = columns.clamp(1, self.plots.len().max(1));
+                let rows = self.plots.len().div_ceil(cols).max(1);
+                let areas = root.split_evenly((rows, cols));
+                for (plot, area) in self.plots.iter().zip(&areas) {
+                    plot.draw_on(area, 0.8)?;
+                }
+                Ok(())
+            }
+            Layout::Inset {
+                rect: (left, top, width, height),
+            } => {
+                anyhow::ensure!(self.plots.len() == 2, "an inset figure has two plots");
+                self.plots[0].draw_on(root, 1.0)?;
+                let (w, h) = root.dim_in_pixel();
+                let inset = root.clone().shrink(
+                    (
+                        (left * w as f64).round() as i32,
+                        (top * h as f64).round() as i32,
+                    ),
+                    (
+                        (width * w as f64).round() as u32,
+                        (height * h as f64).round() as u32,
+                    ),
+                );
+                inset.fill(&WHITE).map_err(plot_err)?;
+                self.plots[1].draw_on(&inset, 0.6)
+            }
+        }
+    }
+
+    /// The plotted data as CSV (`panel, series, x, y`; axis labels in the panel titles).
+    pub fn write_data(&self, path: &Path) -> DrawResult {
+        let mut w = csv::Writer::from_path(path)?;
+        w.write_record(["panel", "series", "x", "y"])?;
+        for p in &self.plots {
+            let name = format!("{} [x: {}; y: {}]", p.title, p.x_label, p.y_label);
+            p.data_rows(&name, &mut w)?;
+        }
+        w.flush()?;
+        Ok(())
+    }
+}
+
+/// A colour bar beside a raster: values `lo … hi` mapped through viridis.
+#[derive(Clone, Debug)]
+pub struct ColorBar {
+    pub lo: f64,
+    pub hi: f64,
+    pub label: String,
+}
+
+/// An sRGB colour.
+pub type Rgb = (u8, u8, u8);
+
+/// A raster image (row 0 at the top, as numpy's `imshow`) drawn on `[0, 1]²`.
+pub struct RasterPlot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// Rows × columns of RGB pixels.
+    pub rows: usize,
+    pub cols: usize,
+    pub rgb: Vec<u8>,
+    pub colorbar: Option<ColorBar>,
+    /// Legend beside the image: (label, colour), text alone without a colour.
+    pub legend: Vec<(String, Option<Rgb>)>,
+}
+
+/// Viridis colour of `t` in [0, 1].
+pub fn viridis(t: f64) -> (u8, u8, u8) {
+    let RGBColor(r, g, b) = ViridisRGB::get_color(t.clamp(0.0, 1.0));
+    (r, g, b)
+}
+
+impl RasterPlot {
+    /// Nearest-neighbour resampling of the raster to `w × h` pixels.
+    fn resampled(&self, w: u32, h: u32) -> Vec<u8> {
+        let mut out = vec![0u8; (w * h * 3) as usize];
+        for y in 0..h as usize {
+            let r = (y * self.rows) / h as usize;
+            for x in 0..w as usize {
+                let c = (x * self.cols) / w as usize;
+                let s = 3 * (r * self.cols + c);
+                let d = 3 * (y * w as usize + x);
+                out[d..d + 3].copy_from_slice(&self.rgb[s..s + 3]);
+            }
+        }
+        out
+    }
+
+    /// Write `<stem>.png` and `<stem>.svg` in `dir`.
+    pub fn write(&self, dir: &Path, stem: &str) -> DrawResult {
+        anyhow::ensure!(
+            self.rows > 0 && self.cols > 0 && self.rgb.len() == 3 * self.rows * self.cols,
+            "raster '{}' has {} bytes for {}×{} pixels",
+            self.title,
+            self.rgb.len(),
+            self.rows,
+            self.cols
+        );
+        write_scene(dir, stem, RASTER_SIZE_PX, self)
+    }
+
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        let (w, _) = root.dim_in_pixel();
+        let (main, side) = root.split_horizontally(w - 160);
+        let main = main
+            .titled(&self.title, ("sans-serif", 26))
+            .map_err(plot_err)?;
+        // Margins chosen so that the image area is square (pixels of the map are square).
+        let (margin, x_area, y_area, top) = (18u32, 60u32, 80u32, 10u32);
+        let (mw, mh) = main.dim_in_pixel();
+        let pw = mw.saturating_sub(2 * margin + y_area);
+        let ph = mh.saturating_sub(top + margin + x_area);
+        let (extra_right, extra_bottom) = if pw > ph { (pw - ph, 0) } else { (0, ph - pw) };
+        let mut builder = ChartBuilder::on(&main);
+        builder
+            .margin_left(margin)
+            .margin_right(margin + extra_right)
+            .margin_top(top)
+            .margin_bottom(margin + extra_bottom)
+            .x_label_area_size(x_area)
+            .y_label_area_size(y_area);
+        let mut chart = builder
+            .build_cartesian_2d(0.0..1.0, 1.0..0.0)
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(6)
+            .y_labels(6)
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 20))
+            .draw()
+            .map_err(plot_err)?;
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        let (pw, ph) = ((xr.end - xr.start) as u32, (yr.end - yr.start) as u32);
+        let buffer = self.resampled(pw, ph);
+        let element =
+            BitMapElement::<(i32, i32)>::with_owned_buffer((xr.start, yr.start), (pw, ph), buffer)
+                .ok_or_else(|| anyhow::anyhow!("raster buffer has the wrong size"))?;
+        root.draw(&element).map_err(plot_err)?;
+        // Legend entries beside the image: a coloured square and its label, or text alone.
+        let x = w as i32 - 150;
+        let mut y = yr.start;
+        for (label, color) in &self.legend {
+            if let Some((r, g, b)) = color {
+                let square = [(x, y), (x + 18, y + 18)];
+                root.draw(&Rectangle::new(square, RGBColor(*r, *g, *b).filled()))
+                    .map_err(plot_err)?;
+                root.draw(&Rectangle::new(square, BLACK))
+                    .map_err(plot_err)?;
+            }
+            let tx = if color.is_some() { x + 26 } else { x };
+            root.draw(&Text::new(label.clone(), (tx, y), ("sans-serif", 18)))
+                .map_err(plot_err)?;
+            y += 30;
+        }
+        if let Some(bar) = &self.colorbar {
+            let mut cb = ChartBuilder::on(&side);
+            cb.margin_top(yr.start)
+                .margin_bottom((main.dim_in_pixel().1 as i32 - yr.end).max(0))
+                .margin_right(10)
+                .y_label_area_size(0)
+                .right_y_label_area_size(90);
+            let mut chart = cb
+                .build_cartesian_2d(0.0..1.0, bar.lo..bar.hi)
+                .map_err(plot_err)?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .disable_x_axis()
+                .y_labels(8)
+                .y_label_formatter(&tick)
+                .y_desc(&bar.label)
+                .label_style(("sans-serif", 16))
+                .axis_desc_style(("sans-serif", 18))
+                .draw()
+                .map_err(plot_err)?;
+            let steps = 256;
+            let span = bar.hi - bar.lo;
+            chart
+                .draw_series((0..steps).map(|i| {
+                    let a = bar.lo + span * i as f64 / steps as f64;
+                    let b = bar.lo + span * (i + 1) as f64 / steps as f64;
+                    let (r, g, bl) = viridis((i as f64 + 0.5) / steps as f64);
+                    Rectangle::new([(0.0, a), (1.0, b)], RGBColor(r, g, bl).filled())
+                }))
+                .map_err(plot_err)?;
+        }
+        Ok(())
+    }
+}
+
+/// Something drawn on a drawing area of any backend.
+trait Scene {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult;
+}
+
+impl Scene for LinePlot {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        self.draw_on(root, 1.0)
+    }
+}
+
+impl Scene for Panels {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        self.draw_on(root)
+    }
+}
+
+impl Scene for RasterPlot {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        self.draw_on(root)
+    }
+}
+
+/// Render a scene to `<stem>.png` and `<stem>.svg` in `dir`.
+fn write_scene(dir: &Path, stem: &str, size: (u32, u32), scene: &impl Scene) -> DrawResult {
+    ensure_font()?;
+    let png = dir.join(format!("{stem}.png"));
+    {
+        let root = BitMapBackend::new(&png, size).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        scene.draw(&root)?;
+        root.present().map_err(plot_err)?;
+    }
+    let svg = dir.join(format!("{stem}.svg"));
+    {
+        let root = SVGBackend::new(&svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        scene.draw(&root)?;
+        root.present().map_err(plot_err)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_then_log_axis_is_continuous_and_monotonic() {
+        let c = LinLogCoord {
+            threshold: 1e-5,
+            hi: 1.0,
+        };
+        // Linear part: proportional; log part: one unit per decade; continuous at the joint.
+        assert_eq!(c.t(0.0), 0.0);
+        assert!((c.t(5e-6) - 0.5).abs() < 1e-15);
+        assert!((c.t(1e-5) - 1.0).abs() < 1e-15);
+        assert!((c.t(1e-5 * (1.0 + 1e-12)) - 1.0).abs() < 1e-11);
+        assert!((c.t(1e-3) - 3.0).abs() < 1e-12);
+        let pixels: Vec<i32> = [0.0, 2e-6, 1e-5, 1e-4, 1e-2, 1.0]
+            .iter()
+            .map(|v| c.map(v, (500, 0)))
+            .collect();
+        assert_eq!(pixels.first(), Some(&500));
+        assert_eq!(pixels.last(), Some(&0));
+        assert!(pixels.windows(2).all(|w| w[1] < w[0]), "{pixels:?}");
+        assert_eq!(
+            c.key_points(10usize),
+            vec![0.0, 5e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0]
+        );
+    }
+
+    #[test]
+    fn raster_resampling_keeps_every_pixel_when_enlarging() {
+        let raster = RasterPlot {
+            title: String::new(),
+            x_label: String::new(),
+            y_label: String::new(),
+            rows: 2,
+            cols: 3,
+            rgb: (0..18).collect(),
+            colorbar: None,
+            legend: Vec::new(),
+        };
+        let out = raster.resampled(6, 4);
+        // Each source pixel (r, c) fills the 2×2 block at (2r, 2c).
+        for y in 0..4 {
+            for x in 0..6 {
+                let (r, c) = (y / 2, x / 2);
+                let d = 3 * (y * 6 + x);
+                assert_eq!(out[d], (3 * (r * 3 + c)) as u8);
+            }
+        }
     }
 }

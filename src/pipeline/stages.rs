@@ -40,22 +40,49 @@ pub const STATISTICS_VERSION: u32 = 1;
 /// Version of the analytic stage.
 pub const ANALYTIC_VERSION: u32 = 1;
 /// Version of the figures stage.
-pub const FIGURES_VERSION: u32 = 1;
+pub const FIGURES_VERSION: u32 = 3;
+
+/// One study's statistics as a figure reads them.
+#[derive(Debug, Clone)]
+pub struct StudyRef {
+    /// Legend text, e.g. `λ_l/λ_s = 128`.
+    pub label: String,
+    pub statistics_key: String,
+    pub lambda_s_px: f64,
+}
 
 /// What a figures instance draws.
 #[derive(Debug, Clone)]
 pub enum FigureJob {
     /// Paper Fig. 6 from the analytic stage's model curves.
     Fig6 { analytic_key: String },
-    /// Paper Fig. 2e–f from the statistics of study `fig2`.
+    /// Paper Fig. 2a–d: the surface and contact maps of realization 0 of study `fig2` at
+    /// the loads whose pressure the study keeps (`(load index, W/W0)`).
+    Fig2Maps {
+        surface_key: String,
+        contact_key: String,
+        maps: Vec<(usize, f64)>,
+        lambda_s_px: f64,
+    },
+    /// Paper Fig. 2e–f from the statistics of study `fig2`, the loads of Fig. 2b–d marked.
     Fig2ef {
         statistics_key: String,
-        lambda_s_px: f64,
+        marked_loads: Vec<f64>,
+    },
+    /// Paper Fig. 3 (with its H inset) and Fig. 4a from the `fig3_*` studies.
+    Fig34a {
+        ratios: Vec<StudyRef>,
+        hurst: Vec<StudyRef>,
     },
     /// Paper Figs. 4b, 5a, 5b from the statistics and fitted model of study `fig3_ll128`.
     Fig45 {
         statistics_key: String,
         analytic_key: String,
+    },
+    /// Paper Fig. B.1 (`figB1`, studies `b1_*`) or B.2 (`figB2`, studies `b2_*`).
+    Appendix {
+        figure: &'static str,
+        settings: Vec<StudyRef>,
     },
 }
 
@@ -209,10 +236,10 @@ fn push_unique(out: &mut Vec<Instance>, inst: Instance) -> String {
 /// Every instance the given studies need, deduplicated by key, in stage order.
 pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
     let mut out: Vec<Instance> = Vec::new();
-    let mut fig2_statistics: Option<(String, f64)> = None;
-    let mut fig45_inputs: Option<(String, String)> = None;
+    let mut keys: Vec<StudyKeys> = Vec::new();
     for plan in plans {
         let mut clusters_keys = Vec::new();
+        let mut first_keys: Option<(String, String)> = None;
         for r in 0..plan.realizations {
             let params = plan.surface_for(r);
             let params_json = surface_params_json(&params);
@@ -238,6 +265,7 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 max_iterations: plan.max_iterations,
             };
             let params_json = contact_params_json(&job);
+            let surface_key_0 = surface_key.clone();
             let inputs = vec![surface_key];
             let contact_key = push_unique(
                 &mut out,
@@ -261,6 +289,9 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 connectivity: Connectivity::Eight,
             };
             let params_json = clusters_params_json(&job);
+            if first_keys.is_none() {
+                first_keys = Some((surface_key_0, contact_key.clone()));
+            }
             let inputs = vec![contact_key];
             clusters_keys.push(push_unique(
                 &mut out,
@@ -302,9 +333,6 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 job: Job::Statistics(job),
             },
         );
-        if plan.name == "fig2" {
-            fig2_statistics = Some((statistics_key.clone(), plan.surface.lambda_s_px));
-        }
         let job = AnalyticJob {
             statistics_key: Some(statistics_key.clone()),
             lambda_s_px: plan.surface.lambda_s_px,
@@ -324,9 +352,14 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
                 job: Job::Analytic(job),
             },
         );
-        if plan.name == "fig3_ll128" {
-            fig45_inputs = Some((statistics_key, analytic_key));
-        }
+        let (surface_key, contact_key) = first_keys.unwrap_or_default();
+        keys.push(StudyKeys {
+            plan,
+            surface_key,
+            contact_key,
+            statistics_key,
+            analytic_key,
+        });
     }
     // The model curves of Fig. 6 need no simulation; listed under every study.
     if !plans.is_empty() {
@@ -360,39 +393,174 @@ pub fn instances(plans: &[StudyPlan]) -> Vec<Instance> {
             job: Job::Figure(FigureJob::Fig6 { analytic_key }),
         });
     }
-    if let Some((statistics_key, analytic_key)) = fig45_inputs {
-        let params_json = json!({ "figure": "fig45" });
-        let inputs = vec![statistics_key.clone(), analytic_key.clone()];
-        out.push(Instance {
-            stage: "figures",
-            version: FIGURES_VERSION,
-            key: instance_key("figures", FIGURES_VERSION, &params_json, &inputs),
-            params: params_json,
-            inputs,
-            studies: vec!["fig3_ll128".to_string()],
-            realization: None,
-            job: Job::Figure(FigureJob::Fig45 {
-                statistics_key,
-                analytic_key,
-            }),
-        });
+    out.extend(figure_instances(&keys));
+    out
+}
+
+/// The keys of one study's instances that figures read.
+struct StudyKeys<'a> {
+    plan: &'a StudyPlan,
+    /// Surface and contact of realization 0 (empty without realizations).
+    surface_key: String,
+    contact_key: String,
+    statistics_key: String,
+    analytic_key: String,
+}
+
+impl StudyKeys<'_> {
+    fn reference(&self, label: String) -> StudyRef {
+        StudyRef {
+            label,
+            statistics_key: self.statistics_key.clone(),
+            lambda_s_px: self.plan.surface.lambda_s_px,
+        }
     }
-    if let Some((statistics_key, lambda_s_px)) = fig2_statistics {
-        let params_json = json!({ "figure": "fig2ef", "lambda_s_px": lambda_s_px });
-        let inputs = vec![statistics_key.clone()];
-        out.push(Instance {
-            stage: "figures",
-            version: FIGURES_VERSION,
-            key: instance_key("figures", FIGURES_VERSION, &params_json, &inputs),
-            params: params_json,
+}
+
+/// A figures instance drawing `job` from `inputs`, listed under `studies`.
+fn figure_instance(
+    params: Value,
+    inputs: Vec<String>,
+    studies: Vec<String>,
+    job: FigureJob,
+) -> Instance {
+    Instance {
+        stage: "figures",
+        version: FIGURES_VERSION,
+        key: instance_key("figures", FIGURES_VERSION, &params, &inputs),
+        params,
+        inputs,
+        studies,
+        realization: None,
+        job: Job::Figure(job),
+    }
+}
+
+/// The figures instances of the paper figures whose studies are in the profile: Fig. 2 from
+/// `fig2`, Figs. 3–4a from `fig3_ll*` (inset `fig3_h*` and `fig3_ll128`), Figs. 4b–5 from
+/// `fig3_ll128`, Fig. B.1 from `b1_*` and B.2 from `b2_*`.
+fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
+    let mut out = Vec::new();
+    let find = |name: &str| keys.iter().find(|k| k.plan.name == name);
+    let names = |ks: &[&StudyKeys]| ks.iter().map(|k| k.plan.name.clone()).collect::<Vec<_>>();
+    if let Some(k) = find("fig2") {
+        let marked: Vec<(usize, f64)> = k
+            .plan
+            .keep_pressure
+            .iter()
+            .map(|&i| (i, k.plan.loads[i]))
+            .collect();
+        let lambda_s_px = k.plan.surface.lambda_s_px;
+        if !k.contact_key.is_empty() && !marked.is_empty() {
+            out.push(figure_instance(
+                json!({ "figure": "fig2_maps", "maps": marked, "lambda_s_px": lambda_s_px,
+                        "a_star_over_ls2": super::figures::FIG2_A_STAR_OVER_LS2 }),
+                vec![k.surface_key.clone(), k.contact_key.clone()],
+                vec![k.plan.name.clone()],
+                FigureJob::Fig2Maps {
+                    surface_key: k.surface_key.clone(),
+                    contact_key: k.contact_key.clone(),
+                    maps: marked.clone(),
+                    lambda_s_px,
+                },
+            ));
+        }
+        let marked_loads: Vec<f64> = marked.iter().map(|m| m.1).collect();
+        out.push(figure_instance(
+            json!({ "figure": "fig2ef", "marked_loads": marked_loads }),
+            vec![k.statistics_key.clone()],
+            vec![k.plan.name.clone()],
+            FigureJob::Fig2ef {
+                statistics_key: k.statistics_key.clone(),
+                marked_loads,
+            },
+        ));
+    }
+    let ratio = |k: &StudyKeys| k.plan.surface.lambda_l_px / k.plan.surface.lambda_s_px;
+    let mut by_ratio: Vec<&StudyKeys> = keys
+        .iter()
+        .filter(|k| k.plan.name.starts_with("fig3_ll"))
+        .collect();
+    by_ratio.sort_by(|a, b| ratio(a).total_cmp(&ratio(b)));
+    let mut by_hurst: Vec<&StudyKeys> = keys
+        .iter()
+        .filter(|k| k.plan.name.starts_with("fig3_h") || k.plan.name == "fig3_ll128")
+        .collect();
+    by_hurst.sort_by(|a, b| a.plan.surface.hurst.total_cmp(&b.plan.surface.hurst));
+    if !by_ratio.is_empty() {
+        let ratios: Vec<StudyRef> = by_ratio
+            .iter()
+            .map(|k| k.reference(format!("λ_l/λ_s = {}", ratio(k))))
+            .collect();
+        let hurst: Vec<StudyRef> = by_hurst
+            .iter()
+            .map(|k| k.reference(format!("H = {}", k.plan.surface.hurst)))
+            .collect();
+        let mut inputs: Vec<String> = ratios.iter().map(|r| r.statistics_key.clone()).collect();
+        inputs.extend(hurst.iter().map(|r| r.statistics_key.clone()));
+        let label_list = |v: &[StudyRef]| v.iter().map(|r| r.label.clone()).collect::<Vec<_>>();
+        let mut studies = names(&by_ratio);
+        for n in names(&by_hurst) {
+            if !studies.contains(&n) {
+                studies.push(n);
+            }
+        }
+        out.push(figure_instance(
+            json!({ "figure": "fig3_fig4a", "ratios": label_list(&ratios),
+                    "hurst": label_list(&hurst), "loads": [0.005, 0.02, 0.06] }),
             inputs,
-            studies: vec!["fig2".to_string()],
-            realization: None,
-            job: Job::Figure(FigureJob::Fig2ef {
-                statistics_key,
-                lambda_s_px,
-            }),
-        });
+            studies,
+            FigureJob::Fig34a { ratios, hurst },
+        ));
+    }
+    if let Some(k) = find("fig3_ll128") {
+        out.push(figure_instance(
+            json!({ "figure": "fig45" }),
+            vec![k.statistics_key.clone(), k.analytic_key.clone()],
+            vec![k.plan.name.clone()],
+            FigureJob::Fig45 {
+                statistics_key: k.statistics_key.clone(),
+                analytic_key: k.analytic_key.clone(),
+            },
+        ));
+    }
+    for (figure, prefix) in [("figB1", "b1_"), ("figB2", "b2_")] {
+        let mut settings: Vec<&StudyKeys> = keys
+            .iter()
+            .filter(|k| k.plan.name.starts_with(prefix))
+            .collect();
+        let setting = |k: &StudyKeys| {
+            let s = &k.plan.surface;
+            if figure == "figB1" {
+                s.n as f64 / s.lambda_l_px
+            } else {
+                s.lambda_s_px
+            }
+        };
+        settings.sort_by(|a, b| setting(a).total_cmp(&setting(b)));
+        if settings.is_empty() {
+            continue;
+        }
+        let refs: Vec<StudyRef> = settings
+            .iter()
+            .map(|k| {
+                k.reference(if figure == "figB1" {
+                    format!("L/λ_l = {}", setting(k))
+                } else {
+                    format!("λ_s/Δl = {}", setting(k))
+                })
+            })
+            .collect();
+        out.push(figure_instance(
+            json!({ "figure": figure,
+                    "settings": refs.iter().map(|r| r.label.clone()).collect::<Vec<_>>() }),
+            refs.iter().map(|r| r.statistics_key.clone()).collect(),
+            names(&settings),
+            FigureJob::Appendix {
+                figure,
+                settings: refs,
+            },
+        ));
     }
     out
 }

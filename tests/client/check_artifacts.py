@@ -1,0 +1,252 @@
+"""Real-client check of a wearcoef data directory: open every artifact the way a user would
+(pandas with pyarrow, numpy, Pillow) and check column names, dtypes, row counts, array
+shapes and the cross-stage relations documented in docs/CONVENTIONS.md.
+
+Usage: python check_artifacts.py <data dir> <profile>
+Exit status 0 when every check passes; otherwise each failure is printed and the status is 1.
+"""
+
+import json
+import os
+import sys
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+from PIL import Image
+
+U32, U64, F64, BOOL, STR = "uint32", "uint64", "double", "bool", "string"
+
+# (stage, file) -> [(column, arrow type)] as documented in docs/CONVENTIONS.md.
+SCHEMAS = {
+    ("contact", "loads.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("mean_pressure", F64),
+        ("area_fraction", F64), ("n_contact_px", U64), ("iterations", U32),
+        ("convolutions", U32), ("error", F64), ("converged", BOOL)],
+    ("clusters", "clusters.parquet"): [
+        ("realization", U32), ("load_index", U32), ("w_over_w0", F64), ("cluster_id", U32),
+        ("area_px", U64), ("area_over_ls2", F64), ("perimeter_px", U64),
+        ("extent_x_px", U32), ("extent_y_px", U32), ("percolating", BOOL)],
+    ("clusters", "loads.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("n_clusters", U32), ("area_fraction", F64),
+        ("largest_area_over_ls2", F64), ("n_percolating", U32)],
+    ("statistics", "loads.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("area_fraction_mean", F64),
+        ("area_fraction_ci95", F64), ("n_clusters_mean", F64), ("n_clusters_ci95", F64),
+        ("largest_area_over_ls2_mean", F64), ("largest_area_over_ls2_ci95", F64),
+        ("dn_dac_per_ls2", F64), ("realizations_percolating", U32)],
+    ("statistics", "pdf.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("bin", U32), ("lower_over_ls2", F64),
+        ("upper_over_ls2", F64), ("centre_over_ls2", F64), ("width_px", U64),
+        ("count_pooled", U64), ("pdf_pooled", F64), ("pdf_mean", F64), ("pdf_ci95", F64)],
+    ("statistics", "ccdf.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("realization", U32), ("area_px", U64),
+        ("area_over_ls2", F64), ("ccdf", F64), ("ccdf_mean", F64), ("ccdf_ci95", F64)],
+    ("statistics", "wear.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("a_star_over_ls2", F64),
+        ("k_archard_pooled", F64), ("k_archard_mean", F64), ("k_archard_ci95", F64),
+        ("k_upscaled_pooled", F64), ("k_upscaled_mean", F64), ("k_upscaled_ci95", F64),
+        ("wear_rate_over_l2_mean", F64), ("wear_rate_over_l2_ci95", F64)],
+    ("statistics", "alpha.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("estimator", STR), ("alpha", F64),
+        ("std_error", F64), ("bootstrap_ci95_low", F64), ("bootstrap_ci95_high", F64),
+        ("k_min_px", F64), ("k_max_px", F64), ("k_s_px", F64), ("k_s_over_ls2", F64),
+        ("n_fitted", U64), ("ks_distance", F64), ("note", STR)],
+    ("analytic", "model.parquet"): [
+        ("load_index", U32), ("w_over_w0", F64), ("a_star_over_ls2", F64), ("alpha", F64),
+        ("a_s_over_ls2", F64), ("a_m_over_ls2", F64), ("k_pl", F64), ("k_upscaled_pl", F64)],
+    ("analytic", "fig6.parquet"): [
+        ("alpha", F64), ("a_star_over_a_s", F64), ("a_m_over_a_s", F64), ("k_pl", F64),
+        ("k_upscaled_pl", F64)],
+}
+CATALOG_COLUMNS = [("stage", STR), ("study", STR), ("realization", U32), ("file", STR),
+                   ("path", STR), ("key", STR)]
+A_STAR_GRID = 13  # thresholds A*/λ_s² = 1/4 … 1024
+ESTIMATORS = 2
+FIG6_ROWS = 5 * (121 + 1)
+
+failures = []
+
+
+def check(cond, message):
+    if not cond:
+        failures.append(message)
+    return cond
+
+
+def arrow_type(t):
+    s = str(t)
+    return "string" if s in ("string", "large_string", "string_view") else s
+
+
+def check_schema(path, expected):
+    schema = pq.read_schema(path)
+    got = [(f.name, arrow_type(f.type)) for f in schema]
+    check(got == expected, f"{path}: columns/types {got} != documented {expected}")
+
+
+def manifest_of(path):
+    with open(os.path.join(os.path.dirname(path), "manifest.json")) as f:
+        return json.load(f)
+
+
+def unpacked_count(packed, n):
+    bits = np.unpackbits(packed, axis=1)[:, :n]
+    return int(bits.sum())
+
+
+def main(data_dir, profile):
+    catalog_path = os.path.join(data_dir, profile, "index.parquet")
+    schema = pq.read_schema(catalog_path)
+    got = [(f.name, arrow_type(f.type)) for f in schema][: len(CATALOG_COLUMNS)]
+    check(got == CATALOG_COLUMNS, f"catalog leading columns {got} != {CATALOG_COLUMNS}")
+    cat = pd.read_parquet(catalog_path)
+    check(len(cat) > 0, "catalog is empty")
+    for p in cat["path"]:
+        check(os.path.isfile(p), f"catalog lists a missing file {p}")
+    stages = set(cat["stage"])
+    for s in ["surface", "contact", "clusters", "statistics", "analytic", "figures"]:
+        check(s in stages, f"no {s} artifact in the catalog")
+
+    def rows(stage, file=None, **eq):
+        sel = cat[cat["stage"] == stage]
+        if file is not None:
+            sel = sel[sel["file"] == file]
+        for k, v in eq.items():
+            sel = sel[sel[k] == v]
+        return sel
+
+    parquet_files = 0
+    # Contact: loads table, one packed map per load, pressure fields where kept.
+    contact_loads = {}
+    for _, r in rows("contact", "loads.parquet").iterrows():
+        check_schema(r.path, SCHEMAS[("contact", "loads.parquet")])
+        df = pd.read_parquet(r.path)
+        parquet_files += 1
+        d = os.path.dirname(r.path)
+        maps = sorted(f for f in os.listdir(d) if f.startswith("contact_"))
+        check(len(df) == len(maps), f"{r.path}: {len(df)} rows but {len(maps)} contact maps")
+        check(bool(df["converged"].all()), f"{r.path}: a stored load did not converge")
+        surface_key = manifest_of(r.path)["inputs"][0]
+        heights = np.load(rows("surface", "heights.npy", key=surface_key)["path"].iloc[0])
+        n = heights.shape[0]
+        for i, f in enumerate(maps):
+            m = np.load(os.path.join(d, f))
+            check(m.dtype == np.uint8 and m.shape == (n, (n + 7) // 8),
+                  f"{d}/{f}: dtype {m.dtype} shape {m.shape}, expected uint8 {(n, (n + 7) // 8)}")
+            check(unpacked_count(m, n) == int(df["n_contact_px"].iloc[i]),
+                  f"{d}/{f}: {unpacked_count(m, n)} contact pixels, table says "
+                  f"{df['n_contact_px'].iloc[i]}")
+            pf = os.path.join(d, f.replace("contact_", "pressure_"))
+            if os.path.exists(pf):
+                p = np.load(pf)
+                check(p.dtype == np.float64 and p.shape == (n, n) and (p >= 0).all(),
+                      f"{pf}: dtype {p.dtype}, shape {p.shape}, min {p.min()}")
+                check(abs(p.mean() - df["mean_pressure"].iloc[i]) <= 1e-12 * max(1.0, p.mean()),
+                      f"{pf}: mean {p.mean()} != mean_pressure {df['mean_pressure'].iloc[i]}")
+                check(((p > 0).sum()) == int(df["n_contact_px"].iloc[i]),
+                      f"{pf}: positive pressures do not match the contact pixels")
+        contact_loads[(r.study, r.realization)] = df
+
+    # Surfaces: float64 (n, n), finite, zero mean, C order.
+    for _, r in rows("surface", "heights.npy").iterrows():
+        h = np.load(r.path)
+        check(h.dtype == np.float64 and h.ndim == 2 and h.shape[0] == h.shape[1]
+              and h.flags["C_CONTIGUOUS"] and np.isfinite(h).all(),
+              f"{r.path}: dtype {h.dtype}, shape {h.shape}")
+        check(abs(h.mean()) <= 1e-12 * max(h.std(), 1e-300), f"{r.path}: mean {h.mean()}")
+        check(h.shape[0] == int(r.n), f"{r.path}: shape {h.shape} but n = {r.n} in catalog")
+
+    # Clusters: one row per cluster; counts and areas match the per-load table and contact.
+    for _, r in rows("clusters", "clusters.parquet").iterrows():
+        check_schema(r.path, SCHEMAS[("clusters", "clusters.parquet")])
+        cl = pd.read_parquet(r.path)
+        lp = os.path.join(os.path.dirname(r.path), "loads.parquet")
+        check_schema(lp, SCHEMAS[("clusters", "loads.parquet")])
+        loads = pd.read_parquet(lp)
+        parquet_files += 2
+        counts = cl.groupby("load_index").size().reindex(loads["load_index"], fill_value=0)
+        check((counts.values == loads["n_clusters"].values).all(),
+              f"{r.path}: clusters per load {counts.values} != n_clusters "
+              f"{loads['n_clusters'].values}")
+        contact = contact_loads.get((r.study, r.realization))
+        if check(contact is not None, f"{r.path}: no contact table for {r.study}/{r.realization}"):
+            area = cl.groupby("load_index")["area_px"].sum().reindex(
+                contact["load_index"], fill_value=0)
+            check((area.values == contact["n_contact_px"].values).all(),
+                  f"{r.path}: cluster areas do not add up to the contact pixels")
+
+    # Statistics: row counts per load, PDF normalisation, A* grid, two estimators.
+    for _, r in rows("statistics", "loads.parquet").iterrows():
+        d = os.path.dirname(r.path)
+        tables = {}
+        for f in ["loads", "pdf", "ccdf", "wear", "alpha"]:
+            path = os.path.join(d, f + ".parquet")
+            check_schema(path, SCHEMAS[("statistics", f + ".parquet")])
+            tables[f] = pd.read_parquet(path)
+            parquet_files += 1
+        nl = len(tables["loads"])
+        contacts = [v for (s, _), v in contact_loads.items() if s == r.study]
+        check(contacts and nl == len(contacts[0]),
+              f"{r.path}: {nl} loads, contact stage has {len(contacts[0]) if contacts else 0}")
+        check(len(tables["wear"]) == nl * A_STAR_GRID, f"{d}/wear.parquet: {len(tables['wear'])} rows")
+        check(len(tables["alpha"]) == nl * ESTIMATORS, f"{d}/alpha.parquet: {len(tables['alpha'])} rows")
+        ls = float(r.lambda_s_px)
+        pdf = tables["pdf"]
+        norm = (pdf["pdf_pooled"] * pdf["width_px"] / ls**2).groupby(pdf["load_index"]).sum()
+        check(np.allclose(norm.values, 1.0, atol=1e-12),
+              f"{d}/pdf.parquet: Σ p·width per load = {norm.values}, expected 1")
+        ccdf = tables["ccdf"]
+        check(ccdf["ccdf"].between(0, 1).all(), f"{d}/ccdf.parquet: ccdf outside [0, 1]")
+
+    # Analytic: model rows per load and threshold; Fig. 6 curves.
+    for _, r in rows("analytic").iterrows():
+        if not r.file.endswith(".parquet"):
+            continue
+        check_schema(r.path, SCHEMAS[("analytic", r.file)])
+        df = pd.read_parquet(r.path)
+        parquet_files += 1
+        if r.file == "fig6.parquet":
+            check(len(df) == FIG6_ROWS, f"{r.path}: {len(df)} rows, expected {FIG6_ROWS}")
+        else:
+            check(len(df) % A_STAR_GRID == 0 and len(df) > 0, f"{r.path}: {len(df)} rows")
+
+    # Figures: PNG valid and of the size the manifest states, SVG is XML, CSV/NPY readable.
+    figures = 0
+    for _, r in rows("figures").iterrows():
+        stem, ext = os.path.splitext(r.file)
+        sizes = manifest_of(r.path)["results"]["png_size_px"]
+        if ext == ".png":
+            figures += 1
+            with Image.open(r.path) as im:
+                im.verify()
+            with Image.open(r.path) as im:
+                im.load()
+                check(list(im.size) == sizes[stem] and im.mode == "RGB",
+                      f"{r.path}: {im.size} {im.mode}, manifest says {sizes[stem]}")
+                check(np.asarray(im).std() > 0, f"{r.path}: a blank image")
+        elif ext == ".svg":
+            root = ET.parse(r.path).getroot()
+            check(root.tag.endswith("svg") and root.get("width") == str(sizes[stem][0]),
+                  f"{r.path}: not an SVG of width {sizes[stem][0]}")
+        elif ext == ".csv":
+            df = pd.read_csv(r.path)
+            check(len(df) > 0 and df.iloc[:, -1].notna().any(), f"{r.path}: no data")
+        elif ext == ".npy":
+            a = np.load(r.path)
+            check(a.ndim == 2 and a.size > 0, f"{r.path}: shape {a.shape}")
+    expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig3", "fig4a", "fig4b",
+                "fig5a", "fig5b", "fig6", "figB1", "figB2"]
+    drawn = {os.path.splitext(f)[0] for f in rows("figures")["file"] if f.endswith(".png")}
+    check(set(expected) <= drawn, f"missing figures: {sorted(set(expected) - drawn)}")
+
+    print(f"checked {len(cat)} catalog rows, {parquet_files} Parquet files, {figures} PNGs; "
+          f"{len(failures)} failure(s)")
+    for f in failures:
+        print("FAIL:", f)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1], sys.argv[2]))

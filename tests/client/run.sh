@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Real-client test (`make test-client`, part of `make test`): run the quick profile end to end
+# in a scratch directory, then open every artifact with pandas/pyarrow, numpy and Pillow in a
+# Python venv this script creates (kept at $CLIENT_VENV, by default beside the build products,
+# and reused while it imports).
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/../.." && pwd)
+: "${CARGO_TARGET_DIR:=/var/tmp/wearcoef-target}"
+bin="${WEARCOEF_BIN:-$CARGO_TARGET_DIR/release/wearcoef}"
+venv="${CLIENT_VENV:-$CARGO_TARGET_DIR/client-venv}"
+if ! "$venv/bin/python" -c "import numpy, pandas, pyarrow, PIL" 2>/dev/null; then
+    echo "creating the client venv in $venv (numpy, pandas, pyarrow, pillow from PyPI)"
+    rm -rf "$venv"
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install --quiet --disable-pip-version-check \
+        "numpy>=1.26" "pandas>=2.2" "pyarrow>=16" "pillow>=10" || {
+        echo "error: could not install the client venv (needs PyPI access)" >&2
+        exit 1
+    }
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cp "$repo/pipeline.yaml" "$work/"
+cd "$work"
+start=$(date +%s%N)
+"$bin" run --profile quick --jobs 2
+end=$(date +%s%N)
+echo "quick profile end to end: $(( (end - start) / 1000000 )) ms"
+"$venv/bin/python" "$repo/tests/client/check_artifacts.py" data quick
