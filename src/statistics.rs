@@ -193,6 +193,50 @@ pub fn derivative(x: &[f64], y: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Two-sample Kolmogorov–Smirnov distance `sup_x |F_a(x) − F_b(x)|` between the empirical
+/// distribution functions of two samples (ties handled: both functions are evaluated after
+/// every occurrence of a value). 0 when either sample is empty.
+pub fn ks_two_sample(a: &[f64], b: &[f64]) -> f64 {
+    if a.is_empty() || b.is_empty() {
+        return 0.0;
+    }
+    let mut a = a.to_vec();
+    let mut b = b.to_vec();
+    a.sort_by(f64::total_cmp);
+    b.sort_by(f64::total_cmp);
+    let (n, m) = (a.len() as f64, b.len() as f64);
+    let (mut i, mut j, mut d) = (0usize, 0usize, 0.0f64);
+    while i < a.len() || j < b.len() {
+        // The next distinct value of the union, then every copy of it in both samples.
+        let x = match (a.get(i), b.get(j)) {
+            (Some(&u), Some(&v)) => u.min(v),
+            (Some(&u), None) => u,
+            (None, Some(&v)) => v,
+            (None, None) => break,
+        };
+        while i < a.len() && a[i] <= x {
+            i += 1;
+        }
+        while j < b.len() && b[j] <= x {
+            j += 1;
+        }
+        d = d.max((i as f64 / n - j as f64 / m).abs());
+    }
+    d
+}
+
+/// Asymptotic 95 % critical value of the two-sample KS distance for sample sizes `n` and
+/// `m`: `c(0.05) sqrt((n + m)/(n m))` with `c(0.05) = sqrt(−ln(0.025)/2) = 1.3581`. Two
+/// samples of one distribution exceed it with probability ≈ 5 % (continuous data; discrete
+/// data exceed it less often, so it is conservative). Infinite for an empty sample.
+pub fn ks_critical_95(n: usize, m: usize) -> f64 {
+    if n == 0 || m == 0 {
+        return f64::INFINITY;
+    }
+    let c = (-(0.025f64).ln() / 2.0).sqrt();
+    c * ((n + m) as f64 / (n as f64 * m as f64)).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -252,5 +296,40 @@ mod tests {
         assert!(d.iter().all(|&v| (v - 2.0).abs() < 1e-15));
         let d = derivative(&[0.0, 1.0, 2.0], &[0.0, 1.0, 4.0]);
         assert_eq!(d[1], 2.0);
+    }
+
+    #[test]
+    fn ks_two_sample_matches_a_brute_force_supremum_with_ties() {
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % 40
+        };
+        for trial in 0..200 {
+            let n = 1 + trial % 37;
+            let m = 1 + (trial * 7) % 23;
+            let a: Vec<f64> = (0..n).map(|_| next() as f64).collect();
+            let b: Vec<f64> = (0..m).map(|_| (next() + trial as u64 % 5) as f64).collect();
+            let cdf = |s: &[f64], x: f64| s.iter().filter(|&&v| v <= x).count() as f64 / s.len() as f64;
+            let brute = a
+                .iter()
+                .chain(&b)
+                .map(|&x| (cdf(&a, x) - cdf(&b, x)).abs())
+                .fold(0.0, f64::max);
+            assert!((ks_two_sample(&a, &b) - brute).abs() < 1e-15, "trial {trial}");
+            assert_eq!(ks_two_sample(&a, &b), ks_two_sample(&b, &a));
+        }
+        assert_eq!(ks_two_sample(&[1.0, 2.0, 2.0], &[2.0, 1.0, 2.0]), 0.0);
+        assert_eq!(ks_two_sample(&[1.0, 2.0], &[3.0, 4.0, 5.0]), 1.0);
+        assert_eq!(ks_two_sample(&[], &[1.0]), 0.0);
+    }
+
+    #[test]
+    fn ks_critical_value_is_the_asymptotic_formula() {
+        // Kolmogorov's c(0.05) = 1.35810 (tables); equal sizes n: c·sqrt(2/n).
+        assert!((ks_critical_95(100, 100) - 1.358_101 * (0.02f64).sqrt()).abs() < 1e-6);
+        assert!(ks_critical_95(0, 5).is_infinite());
     }
 }
