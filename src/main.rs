@@ -417,6 +417,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
 }
 
 fn solve(args: SolveArgs) -> anyhow::Result<()> {
+    if let Some((i, w)) = args
+        .loads
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+    {
+        return Err(InputError(format!(
+            "--loads: load {} is {w}; loads W/W0 must be finite and ≥ 0",
+            i + 1
+        ))
+        .into());
+    }
     let (n, heights) = wearcoef::io::read_square_f64(&args.surface)?;
     if n < 2 || n % 2 != 0 {
         return Err(InputError(format!(

@@ -312,13 +312,17 @@ mod tests {
             let m = 1 + (trial * 7) % 23;
             let a: Vec<f64> = (0..n).map(|_| next() as f64).collect();
             let b: Vec<f64> = (0..m).map(|_| (next() + trial as u64 % 5) as f64).collect();
-            let cdf = |s: &[f64], x: f64| s.iter().filter(|&&v| v <= x).count() as f64 / s.len() as f64;
+            let cdf =
+                |s: &[f64], x: f64| s.iter().filter(|&&v| v <= x).count() as f64 / s.len() as f64;
             let brute = a
                 .iter()
                 .chain(&b)
                 .map(|&x| (cdf(&a, x) - cdf(&b, x)).abs())
                 .fold(0.0, f64::max);
-            assert!((ks_two_sample(&a, &b) - brute).abs() < 1e-15, "trial {trial}");
+            assert!(
+                (ks_two_sample(&a, &b) - brute).abs() < 1e-15,
+                "trial {trial}"
+            );
             assert_eq!(ks_two_sample(&a, &b), ks_two_sample(&b, &a));
         }
         assert_eq!(ks_two_sample(&[1.0, 2.0, 2.0], &[2.0, 1.0, 2.0]), 0.0);

@@ -100,6 +100,10 @@ enum Drawn {
     Panels(Panels),
     /// A raster and the plotted array as `.npy` (shape, values).
     Raster(RasterPlot, NpyData),
+    /// A table written as `<stem>.parquet`.
+    Table(DataFrame),
+    /// A value recorded under `<stem>` in the manifest's results.
+    Result(Value),
 }
 
 enum NpyData {
@@ -140,13 +144,17 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
     };
     let mut names = Vec::new();
     let mut sizes = serde_json::Map::new();
+    let mut notes = serde_json::Map::new();
     for (stem, item) in &drawn {
         let size = match item {
             Drawn::Line(_) => super::plot::SIZE_PX,
             Drawn::Panels(p) => p.size(),
             Drawn::Raster(..) => super::plot::RASTER_SIZE_PX,
+            Drawn::Table(_) | Drawn::Result(_) => (0, 0),
         };
-        sizes.insert(stem.clone(), json!([size.0, size.1]));
+        if size.0 > 0 {
+            sizes.insert(stem.clone(), json!([size.0, size.1]));
+        }
         match item {
             Drawn::Line(plot) => {
                 plot.write(dir, stem)?;
@@ -155,6 +163,15 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
             Drawn::Panels(panels) => {
                 panels.write(dir, stem)?;
                 panels.write_data(&dir.join(format!("{stem}.csv")))?;
+            }
+            Drawn::Result(v) => {
+                notes.insert(stem.clone(), v.clone());
+                continue;
+            }
+            Drawn::Table(df) => {
+                let file = std::fs::File::create(dir.join(format!("{stem}.parquet")))?;
+                ParquetWriter::new(file).finish(&mut df.clone())?;
+                continue;
             }
             Drawn::Raster(raster, data) => {
                 raster.write(dir, stem)?;
@@ -167,7 +184,11 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
         }
         names.push(stem.clone());
     }
-    Ok(json!({ "figures": names, "png_size_px": sizes }))
+    let mut result = json!({ "figures": names, "png_size_px": sizes });
+    for (k, v) in notes {
+        result[k] = v;
+    }
+    Ok(result)
 }
 
 /// Fig. 6: K_PL and 𝒦_PL against A_m/A_s for α = 1.5 and several A*/A_s.
@@ -646,13 +667,403 @@ fn appendix(
     }
     anyhow::ensure!(!plots.is_empty(), "{figure}: no setting to draw");
     let columns = plots.len().min(3);
-    Ok(vec![(
+    let mut out = vec![(
         figure.to_string(),
         Drawn::Panels(Panels {
             plots,
             layout: Layout::Grid { columns },
         }),
-    )])
+    )];
+    let table = convergence_table(store, settings)?;
+    out.push((
+        format!("{figure}_convergence"),
+        Drawn::Panels(convergence_plots(figure, settings, &table)),
+    ));
+    out.push((
+        format!("{figure}_convergence"),
+        Drawn::Table(table.frame()?),
+    ));
+    out.push(("convergence".into(), Drawn::Result(table.choice())));
+    Ok(out)
+}
+
+/// Largest KS distance to the reference (over loads) below which a setting, or a number of
+/// realizations, counts as converged (Appendix B studies; README "Model no more than a scene
+/// needs").
+pub const CONVERGENCE_KS_TOLERANCE: f64 = 0.05;
+/// Exponent compared between settings: the plateau + power-law fit over the whole
+/// distribution (the free-`x_min` tail fit of λ_l/λ_s = 8 surfaces lands in the cut-off).
+const CONVERGENCE_ESTIMATOR: crate::powerlaw::Estimator =
+    crate::powerlaw::Estimator::DiscretePlateauPowerLaw;
+
+/// Cluster areas (A/λ_s², percolating clusters left out as in the statistics stage) of one
+/// study: `[realization][load]`, and the loads `(load_index, W/W0)`.
+type StudyAreas = (Vec<Vec<Vec<f64>>>, Vec<(u32, f64)>);
+
+fn study_areas(store: &Store, statistics_key: &str) -> anyhow::Result<StudyAreas> {
+    let manifest = store
+        .lookup("statistics", statistics_key)?
+        .ok_or_else(|| anyhow::anyhow!("input statistics {statistics_key} is missing"))?;
+    let loads = loads_of(&read_table(
+        store,
+        "statistics",
+        statistics_key,
+        "loads.parquet",
+    )?)?;
+    let mut out = Vec::new();
+    for key in &manifest.inputs {
+        let df = read_table(store, "clusters", key, "clusters.parquet")?;
+        let idx = u32_column(&df, "load_index")?;
+        let area = f64_column(&df, "area_over_ls2")?;
+        let perc: Vec<bool> = df
+            .column("percolating")?
+            .bool()?
+            .iter()
+            .map(|v| v.unwrap_or(false))
+            .collect();
+        let mut per_load = vec![Vec::new(); loads.len()];
+        for i in 0..area.len() {
+            if perc[i] {
+                continue;
+            }
+            if let Some(l) = loads.iter().position(|l| Some(l.0) == idx[i]) {
+                per_load[l].push(area[i]);
+            }
+        }
+        out.push(per_load);
+    }
+    Ok((out, loads))
+}
+
+/// One row of the convergence table.
+struct ConvergenceRow {
+    kind: &'static str,
+    study: String,
+    setting: f64,
+    realizations: u32,
+    load_index: u32,
+    w_over_w0: f64,
+    n_clusters: u64,
+    n_reference: u64,
+    ks: f64,
+    critical: f64,
+    alpha: Option<f64>,
+    alpha_reference: Option<f64>,
+}
+
+struct ConvergenceTable {
+    rows: Vec<ConvergenceRow>,
+}
+
+impl ConvergenceTable {
+    fn frame(&self) -> anyhow::Result<DataFrame> {
+        let r = &self.rows;
+        let col_f = |name: &str, f: &dyn Fn(&ConvergenceRow) -> f64| {
+            Column::new(name.into(), r.iter().map(f).collect::<Vec<f64>>())
+        };
+        let col_o = |name: &str, f: &dyn Fn(&ConvergenceRow) -> Option<f64>| {
+            Column::new(name.into(), r.iter().map(f).collect::<Vec<Option<f64>>>())
+        };
+        Ok(DataFrame::new(
+            r.len(),
+            vec![
+                Column::new("kind".into(), r.iter().map(|x| x.kind).collect::<Vec<_>>()),
+                Column::new(
+                    "study".into(),
+                    r.iter().map(|x| x.study.as_str()).collect::<Vec<_>>(),
+                ),
+                col_f("setting", &|x| x.setting),
+                Column::new(
+                    "realizations".into(),
+                    r.iter().map(|x| x.realizations).collect::<Vec<u32>>(),
+                ),
+                Column::new(
+                    "load_index".into(),
+                    r.iter().map(|x| x.load_index).collect::<Vec<u32>>(),
+                ),
+                col_f("w_over_w0", &|x| x.w_over_w0),
+                Column::new(
+                    "n_clusters".into(),
+                    r.iter().map(|x| x.n_clusters).collect::<Vec<u64>>(),
+                ),
+                Column::new(
+                    "n_clusters_reference".into(),
+                    r.iter().map(|x| x.n_reference).collect::<Vec<u64>>(),
+                ),
+                col_f("ks_distance", &|x| x.ks),
+                col_f("ks_critical_95", &|x| x.critical),
+                col_o("alpha", &|x| x.alpha),
+                col_o("alpha_reference", &|x| x.alpha_reference),
+                col_o(
+                    "alpha_difference",
+                    &|x| match (x.alpha, x.alpha_reference) {
+                        (Some(a), Some(b)) => Some(a - b),
+                        _ => None,
+                    },
+                ),
+                Column::new(
+                    "alpha_estimator".into(),
+                    vec![CONVERGENCE_ESTIMATOR.name(); r.len()],
+                ),
+            ],
+        )?)
+    }
+
+    /// The smallest setting whose KS distance to the finest is within the tolerance at every
+    /// load, and per setting the smallest number of realizations whose pooled ensemble is
+    /// within the tolerance of the full one at every load.
+    fn choice(&self) -> Value {
+        let worst = |kind: &str, pick: &dyn Fn(&ConvergenceRow) -> Option<f64>| {
+            let mut m: Vec<(f64, f64)> = Vec::new();
+            for r in self.rows.iter().filter(|r| r.kind == kind) {
+                let Some(x) = pick(r) else { continue };
+                match m.iter_mut().find(|e| e.0 == x) {
+                    Some(e) => e.1 = e.1.max(r.ks),
+                    None => m.push((x, r.ks)),
+                }
+            }
+            m.sort_by(|a, b| a.0.total_cmp(&b.0));
+            m
+        };
+        let settings = worst("setting", &|r| Some(r.setting));
+        // The smallest value from which every larger one is within the tolerance.
+        let first_converged = |curve: &[(f64, f64)]| {
+            (0..curve.len())
+                .find(|&i| curve[i..].iter().all(|e| e.1 <= CONVERGENCE_KS_TOLERANCE))
+                .map(|i| curve[i].0)
+        };
+        let chosen_setting = first_converged(&settings);
+        let mut per_setting = serde_json::Map::new();
+        let mut values: Vec<f64> = settings.iter().map(|e| e.0).collect();
+        values.dedup();
+        for s in values {
+            let by_r = worst("realizations", &|r| {
+                (r.setting == s).then_some(r.realizations as f64)
+            });
+            let chosen = first_converged(&by_r).map(|r| r as u32);
+            per_setting.insert(format!("{s}"), json!(chosen));
+        }
+        json!({
+            "tolerance": CONVERGENCE_KS_TOLERANCE,
+            "alpha_estimator": CONVERGENCE_ESTIMATOR.name(),
+            "max_ks_by_setting": settings,
+            "smallest_converged_setting": chosen_setting,
+            "smallest_converged_realizations_by_setting": per_setting,
+        })
+    }
+}
+
+/// The setting value of a study reference (the number in its label, e.g. `L/λ_l = 4`).
+fn setting_of(s: &StudyRef) -> f64 {
+    s.label
+        .rsplit('=')
+        .next()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(f64::NAN)
+}
+
+/// KS distance and exponent difference of each setting to the finest (last) setting per load,
+/// and of the first `r` realizations of each setting to all of them.
+fn convergence_table(store: &Store, settings: &[StudyRef]) -> anyhow::Result<ConvergenceTable> {
+    let mut data = Vec::new();
+    for s in settings {
+        let (areas, loads) = study_areas(store, &s.statistics_key)?;
+        let alpha = read_table(store, "statistics", &s.statistics_key, "alpha.parquet")?;
+        let est = str_column(&alpha, "estimator")?;
+        let a = f64_column(&alpha, "alpha")?;
+        let idx = u32_column(&alpha, "load_index")?;
+        let alpha_at = |l: u32| {
+            (0..a.len())
+                .find(|&i| idx[i] == Some(l) && est[i] == CONVERGENCE_ESTIMATOR.name())
+                .map(|i| a[i])
+                .filter(|v| v.is_finite())
+        };
+        let alphas: Vec<Option<f64>> = loads.iter().map(|l| alpha_at(l.0)).collect();
+        data.push((areas, loads, alphas));
+    }
+    let pooled = |areas: &[Vec<Vec<f64>>], r: usize, l: usize| -> Vec<f64> {
+        areas[..r]
+            .iter()
+            .flat_map(|x| x[l].iter().copied())
+            .collect()
+    };
+    let mut rows = Vec::new();
+    let Some((ref_areas, ref_loads, ref_alpha)) = data.last() else {
+        return Ok(ConvergenceTable { rows });
+    };
+    for (s, (areas, loads, alphas)) in settings.iter().zip(&data) {
+        let setting = setting_of(s);
+        for (l, &(load_index, w)) in loads.iter().enumerate() {
+            let all = pooled(areas, areas.len(), l);
+            if let Some(rl) = ref_loads.iter().position(|x| (x.1 - w).abs() <= 1e-12 * w) {
+                let reference = pooled(ref_areas, ref_areas.len(), rl);
+                rows.push(ConvergenceRow {
+                    kind: "setting",
+                    study: s.label.clone(),
+                    setting,
+                    realizations: areas.len() as u32,
+                    load_index,
+                    w_over_w0: w,
+                    n_clusters: all.len() as u64,
+                    n_reference: reference.len() as u64,
+                    ks: crate::statistics::ks_two_sample(&all, &reference),
+                    critical: crate::statistics::ks_critical_95(all.len(), reference.len()),
+                    alpha: alphas[l],
+                    alpha_reference: ref_alpha[rl],
+                });
+            }
+            for r in 1..=areas.len() {
+                let part = pooled(areas, r, l);
+                rows.push(ConvergenceRow {
+                    kind: "realizations",
+                    study: s.label.clone(),
+                    setting,
+                    realizations: r as u32,
+                    load_index,
+                    w_over_w0: w,
+                    n_clusters: part.len() as u64,
+                    n_reference: all.len() as u64,
+                    ks: crate::statistics::ks_two_sample(&part, &all),
+                    critical: crate::statistics::ks_critical_95(part.len(), all.len()),
+                    alpha: None,
+                    alpha_reference: None,
+                });
+            }
+        }
+    }
+    Ok(ConvergenceTable { rows })
+}
+
+/// The convergence figure: KS distance and exponent difference to the finest setting against
+/// the setting (one curve per load), and KS distance of `r` realizations to all of them.
+fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTable) -> Panels {
+    let name = if figure == "figB1" {
+        "L/λ_l"
+    } else {
+        "λ_s/Δl"
+    };
+    let mut ks = LinePlot::new(
+        format!("{figure}: KS distance to the finest"),
+        name,
+        "KS distance",
+        false,
+        YAxis::Linear,
+    );
+    let mut da = LinePlot::new(
+        format!("{figure}: α − α(finest)"),
+        name,
+        "α − α(finest), plateau + power-law MLE",
+        false,
+        YAxis::Linear,
+    );
+    let mut real = LinePlot::new(
+        format!("{figure}: first r realizations vs all"),
+        "realizations r",
+        "max KS distance over loads",
+        false,
+        YAxis::Linear,
+    );
+    let mut loads: Vec<(u32, f64)> = table
+        .rows
+        .iter()
+        .filter(|r| r.kind == "setting")
+        .map(|r| (r.load_index, r.w_over_w0))
+        .collect();
+    loads.sort_by(|a, b| a.1.total_cmp(&b.1));
+    loads.dedup_by(|a, b| a.1 == b.1);
+    for (c, &(_, w)) in loads.iter().enumerate() {
+        let rows: Vec<&ConvergenceRow> = table
+            .rows
+            .iter()
+            .filter(|r| r.kind == "setting" && r.w_over_w0 == w)
+            .collect();
+        ks.series.push(Series {
+            markers: true,
+            ..Series::line(
+                format!("W/W0 = {w:.3}"),
+                rows.iter().map(|r| (r.setting, r.ks)).collect(),
+                c,
+            )
+        });
+        ks.series.push(Series {
+            dashed: true,
+            width: 1,
+            ..Series::line(
+                if c == 0 { "95 % critical value" } else { "" },
+                rows.iter().map(|r| (r.setting, r.critical)).collect(),
+                c,
+            )
+        });
+        da.series.push(Series {
+            markers: true,
+            ..Series::line(
+                format!("W/W0 = {w:.3}"),
+                rows.iter()
+                    .filter_map(|r| Some((r.setting, r.alpha? - r.alpha_reference?)))
+                    .collect(),
+                c,
+            )
+        });
+    }
+    let xs: Vec<f64> = settings.iter().map(setting_of).collect();
+    if let (Some(&lo), Some(&hi)) = (xs.first(), xs.last()) {
+        ks.series.push(Series {
+            rgb: Some((0, 0, 0)),
+            dashed: true,
+            ..Series::line(
+                format!("tolerance {CONVERGENCE_KS_TOLERANCE}"),
+                vec![
+                    (lo, CONVERGENCE_KS_TOLERANCE),
+                    (hi, CONVERGENCE_KS_TOLERANCE),
+                ],
+                0,
+            )
+        });
+    }
+    for (c, s) in settings.iter().enumerate() {
+        let setting = setting_of(s);
+        let mut by_r: Vec<(f64, f64)> = Vec::new();
+        for r in table
+            .rows
+            .iter()
+            .filter(|r| r.kind == "realizations" && r.setting == setting)
+        {
+            let x = r.realizations as f64;
+            match by_r.iter_mut().find(|e| e.0 == x) {
+                Some(e) => e.1 = e.1.max(r.ks),
+                None => by_r.push((x, r.ks)),
+            }
+        }
+        real.series.push(Series {
+            markers: true,
+            ..Series::line(s.label.clone(), by_r, c + 4)
+        });
+    }
+    real.series.push(Series {
+        rgb: Some((0, 0, 0)),
+        dashed: true,
+        ..Series::line(
+            format!("tolerance {CONVERGENCE_KS_TOLERANCE}"),
+            vec![
+                (1.0, CONVERGENCE_KS_TOLERANCE),
+                (
+                    20.0_f64.min(
+                        table
+                            .rows
+                            .iter()
+                            .map(|r| r.realizations as f64)
+                            .fold(1.0, f64::max),
+                    ),
+                    CONVERGENCE_KS_TOLERANCE,
+                ),
+            ],
+            0,
+        )
+    });
+    Panels {
+        plots: vec![ks, da, real],
+        layout: Layout::Grid { columns: 3 },
+    }
 }
 
 /// Thresholds A*/λ_s² drawn in Figs. 4b and 5.

@@ -6,6 +6,7 @@ mod clusters;
 mod config;
 mod contact;
 mod powerlaw;
+mod stability;
 mod stages;
 mod store;
 mod surface;
