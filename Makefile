@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-labelling clean
+.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-labelling speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -29,7 +29,7 @@ test-client: build
 fmt:
 	cargo fmt
 
-bench: bench-fft bench-solver bench-peers bench-labelling
+bench: bench-fft bench-solver bench-peers bench-labelling speed-accuracy
 
 bench-fft:
 	bash benches/fft_compare.sh
@@ -40,6 +40,10 @@ bench-solver:
 # Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
 bench-labelling:
 	bash benches/labelling_compare.sh
+
+# Speed against accuracy: solver tolerance and discretisation (figures/speed_accuracy.*).
+speed-accuracy:
+	cargo bench --bench speed_accuracy
 
 # Contact sweeps of wearcoef and Tamaas (PyPI) on the same surfaces, in the same run.
 bench-peers:

@@ -8,7 +8,7 @@ pub mod catalog;
 mod cluster_stages;
 mod figures;
 pub mod hash;
-mod plot;
+pub mod plot;
 pub mod runner;
 pub mod stages;
 pub mod store;

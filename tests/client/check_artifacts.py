@@ -60,6 +60,11 @@ SCHEMAS = {
         ("alpha", F64), ("a_star_over_a_s", F64), ("a_m_over_a_s", F64), ("k_pl", F64),
         ("k_upscaled_pl", F64)],
 }
+CONVERGENCE = [
+    ("kind", STR), ("study", STR), ("setting", F64), ("realizations", U32), ("load_index", U32),
+    ("w_over_w0", F64), ("n_clusters", U64), ("n_clusters_reference", U64),
+    ("ks_distance", F64), ("ks_critical_95", F64), ("alpha", F64), ("alpha_reference", F64),
+    ("alpha_difference", F64), ("alpha_estimator", STR)]
 CATALOG_COLUMNS = [("stage", STR), ("study", STR), ("realization", U32), ("file", STR),
                    ("path", STR), ("key", STR)]
 A_STAR_GRID = 13  # thresholds A*/λ_s² = 1/4 … 1024
@@ -233,11 +238,21 @@ def main(data_dir, profile):
         elif ext == ".csv":
             df = pd.read_csv(r.path)
             check(len(df) > 0 and df.iloc[:, -1].notna().any(), f"{r.path}: no data")
+        elif ext == ".parquet":
+            check_schema(r.path, CONVERGENCE)
+            df = pd.read_parquet(r.path)
+            parquet_files += 1
+            check(len(df) > 0 and df["ks_distance"].between(0, 1).all()
+                  and set(df["kind"]) == {"setting", "realizations"},
+                  f"{r.path}: {len(df)} rows, kinds {set(df['kind'])}")
+            finest = df[(df["kind"] == "setting") & (df["setting"] == df["setting"].max())]
+            check((finest["ks_distance"] == 0).all(), f"{r.path}: finest setting not at 0")
         elif ext == ".npy":
             a = np.load(r.path)
             check(a.ndim == 2 and a.size > 0, f"{r.path}: shape {a.shape}")
     expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig3", "fig4a", "fig4b",
-                "fig5a", "fig5b", "fig6", "figB1", "figB2"]
+                "fig5a", "fig5b", "fig6", "figB1", "figB2", "figB1_convergence",
+                "figB2_convergence"]
     drawn = {os.path.splitext(f)[0] for f in rows("figures")["file"] if f.endswith(".png")}
     check(set(expected) <= drawn, f"missing figures: {sorted(set(expected) - drawn)}")
 
