@@ -109,7 +109,13 @@ fn alpha(areas: &[u64]) -> f64 {
 fn max_rel(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
-        .map(|(x, y)| if *y == 0.0 { x.abs() } else { (x - y).abs() / y.abs() })
+        .map(|(x, y)| {
+            if *y == 0.0 {
+                x.abs()
+            } else {
+                (x - y).abs() / y.abs()
+            }
+        })
         .fold(0.0, f64::max)
 }
 
@@ -170,7 +176,10 @@ fn main() {
                 ("exponent α", (alpha(&s.clusters[last]) - ref_alpha).abs()),
             ],
         };
-        eprintln!("(a) tol {tol:e}: {:.2} s, errors {:?}", s.seconds, row.errors);
+        eprintln!(
+            "(a) tol {tol:e}: {:.2} s, errors {:?}",
+            s.seconds, row.errors
+        );
         rows.push(row);
     }
 
