@@ -1067,7 +1067,7 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
 }
 
 /// Thresholds A*/λ_s² drawn in Figs. 4b and 5.
-const FIG45_A_STAR: [f64; 4] = [0.5, 2.0, 8.0, 32.0];
+const FIG45_A_STAR: [f64; 5] = [2.0, 8.0, 32.0, 128.0, 512.0];
 /// Fig. 4b: the y axis is linear up to this value and logarithmic above (as in the paper).
 const FIG4B_LINEAR_UP_TO: f64 = 1e-5;
 
@@ -1082,13 +1082,17 @@ fn per_threshold(
     let a = f64_column(df, "a_star_over_ls2")?;
     let w = f64_column(df, "w_over_w0")?;
     let v = f64_column(df, value)?;
-    Ok(FIG45_A_STAR
+    let mut out: Vec<Series> = FIG45_A_STAR
         .iter()
         .enumerate()
         .map(|(c, &t)| Series {
             dashed,
             ..Series::line(
-                format!("{label}, A*/λ_s² = {t}"),
+                if dashed {
+                    String::new()
+                } else {
+                    format!("{label}, A*/λ_s² = {t}")
+                },
                 (0..a.len())
                     .filter(|&i| a[i] == t)
                     .map(|i| (w[i], v[i]))
@@ -1096,7 +1100,16 @@ fn per_threshold(
                 c,
             )
         })
-        .collect())
+        .collect();
+    if dashed {
+        // One legend entry for all the dashed curves (same colours as the simulated ones).
+        out.push(Series {
+            dashed: true,
+            rgb: Some((0, 0, 0)),
+            ..Series::line(format!("{label} (dashed, colour = A*)"), Vec::new(), 0)
+        });
+    }
+    Ok(out)
 }
 
 /// Figs. 4b (K vs load), 5a (𝒦 vs load) and 5b (wear rate vs load), simulated (solid,
@@ -1115,7 +1128,11 @@ fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(String, Dra
     let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
         let mut p = LinePlot::new(title, "W / W0", y, true, y_axis);
         p.series = series;
-        p.legend = LegendAt::LowerRight;
+        p.legend = if y_axis == YAxis::Log {
+            LegendAt::LowerRight
+        } else {
+            LegendAt::MiddleLeft
+        };
         Drawn::Line(p)
     };
     Ok(vec![

@@ -155,6 +155,7 @@ impl LinePlot {
 /// Corner of the legend box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LegendAt {
+    MiddleLeft,
     UpperRight,
     LowerLeft,
     LowerRight,
@@ -163,6 +164,7 @@ pub enum LegendAt {
 impl LegendAt {
     fn position(self) -> SeriesLabelPosition {
         match self {
+            LegendAt::MiddleLeft => SeriesLabelPosition::MiddleLeft,
             LegendAt::UpperRight => SeriesLabelPosition::UpperRight,
             LegendAt::LowerLeft => SeriesLabelPosition::LowerLeft,
             LegendAt::LowerRight => SeriesLabelPosition::LowerRight,

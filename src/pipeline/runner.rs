@@ -5,7 +5,6 @@ use std::io::IsTerminal;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 
@@ -102,9 +101,7 @@ pub fn run(
     let start = Instant::now();
     let (plans, wanted_stages) = select(pipeline, origin, &opts.profile, &opts.targets)?;
     store.remove_stale_temporaries()?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.jobs.max(1))
-        .build()?;
+    let jobs = opts.jobs.max(1);
 
     let all = stages::instances(&plans);
     let mut computed = 0;
@@ -124,16 +121,7 @@ pub fn run(
             continue;
         }
         let bar = progress(missing.len(), stage, opts.quiet);
-        let results: Vec<anyhow::Result<()>> = pool.install(|| {
-            missing
-                .par_iter()
-                .map(|inst| {
-                    let r = build(store, inst);
-                    bar.inc(1);
-                    r
-                })
-                .collect()
-        });
+        let results = build_all(store, &missing, jobs, &bar)?;
         bar.finish_and_clear();
         for r in results {
             r?;
@@ -199,6 +187,56 @@ fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {
     );
     bar.set_prefix(stage.to_string());
     bar
+}
+
+/// Compute `missing` with `min(jobs, instances)` workers, each with its own rayon pool of
+/// `jobs` threads for the instance's inner parallelism (so a lone last instance still uses
+/// every core; while several run, the OS shares the cores between them). Separate pools keep
+/// one instance's parallel loops from running another instance while they wait, so each
+/// manifest's `wall_seconds` is that instance's own elapsed time. Results in input order.
+fn build_all(
+    store: &Store,
+    missing: &[&Instance],
+    jobs: usize,
+    bar: &ProgressBar,
+) -> anyhow::Result<Vec<anyhow::Result<()>>> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let workers = jobs.min(missing.len()).max(1);
+    let threads_each = jobs;
+    let next = AtomicUsize::new(0);
+    let mut results: Vec<Option<anyhow::Result<()>>> = (0..missing.len()).map(|_| None).collect();
+    std::thread::scope(|scope| -> anyhow::Result<()> {
+        let handles: Vec<_> = (0..workers)
+            .map(|_| {
+                scope.spawn(|| -> anyhow::Result<Vec<(usize, anyhow::Result<()>)>> {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads_each)
+                        .build()?;
+                    let mut out = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(inst) = missing.get(i) else { break };
+                        out.push((i, pool.install(|| build(store, inst))));
+                        bar.inc(1);
+                    }
+                    Ok(out)
+                })
+            })
+            .collect();
+        for h in handles {
+            let done = h
+                .join()
+                .map_err(|_| anyhow::anyhow!("a worker thread panicked"))??;
+            for (i, r) in done {
+                results[i] = Some(r);
+            }
+        }
+        Ok(())
+    })?;
+    Ok(results
+        .into_iter()
+        .map(|r| r.unwrap_or_else(|| Err(anyhow::anyhow!("instance not computed"))))
+        .collect())
 }
 
 fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
