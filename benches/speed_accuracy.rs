@@ -28,17 +28,16 @@ use wearcoef::grid::Grid;
 use wearcoef::pipeline::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
 use wearcoef::powerlaw::fit_plateau_power_law;
 use wearcoef::spectral::Fft2;
-use wearcoef::statistics::{ks_critical_95, ks_two_sample};
+use wearcoef::statistics::{ks_critical_95, ks_two_sample, log_edges};
 use wearcoef::surface::{self, Method, SurfaceParams};
 
 const LOADS: usize = 30;
 const DEFAULT_TOLERANCE: f64 = 1e-10;
 const DEFAULT_LAMBDA_S_OVER_DL: f64 = 8.0;
 
+/// The paper's sweep: W/W0 log-spaced in [0.001, 0.06].
 fn loads() -> Vec<f64> {
-    (0..LOADS)
-        .map(|i| 0.001 * (60.0f64).powf(i as f64 / (LOADS - 1) as f64))
-        .collect()
+    log_edges(0.001, 0.06, LOADS - 1)
 }
 
 fn heights(n: usize, lambda_l_px: f64, lambda_s_px: f64, seed: u64) -> Vec<f64> {

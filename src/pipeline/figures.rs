@@ -94,6 +94,63 @@ fn rows_at(df: &DataFrame, load_index: u32) -> anyhow::Result<Vec<usize>> {
         .collect())
 }
 
+/// The columns of a statistics stage `ccdf.parquet` that figures draw, read once.
+struct CcdfTable {
+    load_index: Vec<Option<u32>>,
+    w_over_w0: Vec<f64>,
+    realization: Vec<Option<u32>>,
+    area_over_ls2: Vec<f64>,
+    ccdf: Vec<f64>,
+    ccdf_mean: Vec<f64>,
+}
+
+impl CcdfTable {
+    fn read(store: &Store, statistics_key: &str) -> anyhow::Result<Self> {
+        let df = read_table(store, "statistics", statistics_key, "ccdf.parquet")?;
+        Ok(CcdfTable {
+            load_index: u32_column(&df, "load_index")?,
+            w_over_w0: f64_column(&df, "w_over_w0")?,
+            realization: u32_column(&df, "realization")?,
+            area_over_ls2: f64_column(&df, "area_over_ls2")?,
+            ccdf: f64_column(&df, "ccdf")?,
+            ccdf_mean: f64_column(&df, "ccdf_mean")?,
+        })
+    }
+
+    /// `(A/λ_s², P(A > a))` at load `load_index` of one realization, or of the pooled
+    /// ensemble (`None`), or the ensemble mean of the realizations' CCDFs (`mean`).
+    fn curve(&self, load_index: u32, realization: Option<u32>, mean: bool) -> Vec<(f64, f64)> {
+        let v = if mean { &self.ccdf_mean } else { &self.ccdf };
+        (0..v.len())
+            .filter(|&i| {
+                self.load_index[i] == Some(load_index) && self.realization[i] == realization
+            })
+            .map(|i| (self.area_over_ls2[i], v[i]))
+            .collect()
+    }
+
+    /// Distinct loads `(load_index, W/W0)`, in order.
+    fn loads(&self) -> Vec<(u32, f64)> {
+        let mut out: Vec<(u32, f64)> = Vec::new();
+        for (l, &w) in self.load_index.iter().zip(&self.w_over_w0) {
+            if let Some(l) = *l {
+                if !out.iter().any(|e| e.0 == l) {
+                    out.push((l, w));
+                }
+            }
+        }
+        out
+    }
+
+    /// Realizations present, increasing.
+    fn realizations(&self) -> Vec<u32> {
+        let mut r: Vec<u32> = self.realization.iter().flatten().copied().collect();
+        r.sort_unstable();
+        r.dedup();
+        r
+    }
+}
+
 /// Something a figures instance writes.
 enum Drawn {
     Line(LinePlot),
@@ -145,44 +202,38 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
     let mut names = Vec::new();
     let mut sizes = serde_json::Map::new();
     let mut notes = serde_json::Map::new();
-    for (stem, item) in &drawn {
-        let size = match item {
-            Drawn::Line(_) => super::plot::SIZE_PX,
-            Drawn::Panels(p) => p.size(),
-            Drawn::Raster(..) => super::plot::RASTER_SIZE_PX,
-            Drawn::Table(_) | Drawn::Result(_) => (0, 0),
-        };
-        if size.0 > 0 {
-            sizes.insert(stem.clone(), json!([size.0, size.1]));
-        }
+    for (stem, item) in drawn {
         match item {
             Drawn::Line(plot) => {
-                plot.write(dir, stem)?;
+                plot.write(dir, &stem)?;
                 plot.write_data(&dir.join(format!("{stem}.csv")))?;
+                sizes.insert(stem.clone(), json!(super::plot::SIZE_PX));
             }
             Drawn::Panels(panels) => {
-                panels.write(dir, stem)?;
+                panels.write(dir, &stem)?;
                 panels.write_data(&dir.join(format!("{stem}.csv")))?;
-            }
-            Drawn::Result(v) => {
-                notes.insert(stem.clone(), v.clone());
-                continue;
-            }
-            Drawn::Table(df) => {
-                let file = std::fs::File::create(dir.join(format!("{stem}.parquet")))?;
-                ParquetWriter::new(file).finish(&mut df.clone())?;
-                continue;
+                sizes.insert(stem.clone(), json!(panels.size()));
             }
             Drawn::Raster(raster, data) => {
-                raster.write(dir, stem)?;
+                raster.write(dir, &stem)?;
                 let path = dir.join(format!("{stem}.npy"));
                 match data {
-                    NpyData::F64(shape, v) => crate::io::write_f64(&path, shape, v.clone())?,
-                    NpyData::U8(shape, v) => crate::io::write_u8(&path, shape, v.clone())?,
+                    NpyData::F64(shape, v) => crate::io::write_f64(&path, &shape, v)?,
+                    NpyData::U8(shape, v) => crate::io::write_u8(&path, &shape, v)?,
                 }
+                sizes.insert(stem.clone(), json!(super::plot::RASTER_SIZE_PX));
+            }
+            Drawn::Table(mut df) => {
+                let file = std::fs::File::create(dir.join(format!("{stem}.parquet")))?;
+                ParquetWriter::new(file).finish(&mut df)?;
+                continue;
+            }
+            Drawn::Result(v) => {
+                notes.insert(stem, v);
+                continue;
             }
         }
-        names.push(stem.clone());
+        names.push(stem);
     }
     let mut result = json!({ "figures": names, "png_size_px": sizes });
     for (k, v) in notes {
@@ -487,16 +538,13 @@ fn fig34a(
     for (c, study) in ratios.iter().enumerate() {
         let pdf = stats(&study.statistics_key, "pdf.parquet")?;
         let alpha = stats(&study.statistics_key, "alpha.parquet")?;
-        let ccdf = stats(&study.statistics_key, "ccdf.parquet")?;
+        let ccdf = CcdfTable::read(store, &study.statistics_key)?;
         let picked = pick_loads(&loads_of(&pdf)?, &FIG3_LOADS);
         let load_list = picked
             .iter()
             .map(|l| format!("{:.3}", l.1))
             .collect::<Vec<_>>()
             .join(", ");
-        let real: Vec<Option<u32>> = u32_column(&ccdf, "realization")?;
-        let area = f64_column(&ccdf, "area_over_ls2")?;
-        let prob = f64_column(&ccdf, "ccdf")?;
         for (j, &(load_index, _)) in picked.iter().enumerate() {
             let last = j + 1 == picked.len();
             let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
@@ -512,14 +560,9 @@ fn fig34a(
                 width: 1,
                 ..Series::line(label.clone(), points, c)
             });
-            let steps: Vec<(f64, f64)> = rows_at(&ccdf, load_index)?
-                .into_iter()
-                .filter(|&i| real[i].is_none())
-                .map(|i| (area[i], prob[i]))
-                .collect();
             ccdf_plot.series.push(Series {
                 tint,
-                ..Series::line(label, steps, c)
+                ..Series::line(label, ccdf.curve(load_index, None, false), c)
             });
             if last {
                 if let Some((fit, text)) =
@@ -572,32 +615,13 @@ fn appendix(
     figure: &str,
     settings: &[StudyRef],
 ) -> anyhow::Result<Vec<(String, Drawn)>> {
-    let mut tables = Vec::new();
-    for s in settings {
-        tables.push(read_table(
-            store,
-            "statistics",
-            &s.statistics_key,
-            "ccdf.parquet",
-        )?);
-    }
-    let curves = |df: &DataFrame,
-                  load_index: u32,
-                  realization: Option<u32>,
-                  column: &str|
-     -> anyhow::Result<Vec<(f64, f64)>> {
-        let real = u32_column(df, "realization")?;
-        let area = f64_column(df, "area_over_ls2")?;
-        let v = f64_column(df, column)?;
-        Ok(rows_at(df, load_index)?
-            .into_iter()
-            .filter(|&i| real[i] == realization)
-            .map(|i| (area[i], v[i]))
-            .collect())
-    };
+    let tables = settings
+        .iter()
+        .map(|s| CcdfTable::read(store, &s.statistics_key))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let mut plots = Vec::new();
     if figure == "figB1" {
-        for (s, df) in settings.iter().zip(&tables) {
+        for (s, table) in settings.iter().zip(&tables) {
             let mut plot = LinePlot::new(
                 format!("Fig. B.1: {}", s.label),
                 "A / λ_s²",
@@ -606,15 +630,9 @@ fn appendix(
                 YAxis::Log,
             );
             plot.legend = LegendAt::LowerLeft;
-            let loads = loads_of(df)?;
-            let mut realizations: Vec<u32> = u32_column(df, "realization")?
-                .into_iter()
-                .flatten()
-                .collect();
-            realizations.sort_unstable();
-            realizations.dedup();
+            let loads = table.loads();
             for (j, &(load_index, _)) in loads.iter().enumerate() {
-                for (r_i, &r) in realizations.iter().enumerate() {
+                for (r_i, &r) in table.realizations().iter().enumerate() {
                     let label = if j == 0 && r_i == 0 {
                         "each realization"
                     } else {
@@ -623,7 +641,7 @@ fn appendix(
                     plot.series.push(Series {
                         rgb: Some((170, 170, 170)),
                         width: 1,
-                        ..Series::line(label, curves(df, load_index, Some(r), "ccdf")?, 0)
+                        ..Series::line(label, table.curve(load_index, Some(r), false), 0)
                     });
                 }
             }
@@ -633,7 +651,7 @@ fn appendix(
                     tint: 0.5 * (loads.len() - 1 - j) as f64 / loads.len().max(2) as f64,
                     ..Series::line(
                         format!("ensemble mean, W/W0 = {w:.3}"),
-                        curves(df, load_index, None, "ccdf_mean")?,
+                        table.curve(load_index, None, true),
                         3,
                     )
                 });
@@ -641,11 +659,7 @@ fn appendix(
             plots.push(plot);
         }
     } else {
-        let loads = tables
-            .first()
-            .map(loads_of)
-            .transpose()?
-            .unwrap_or_default();
+        let loads = tables.first().map(CcdfTable::loads).unwrap_or_default();
         for &(load_index, w) in &loads {
             let mut plot = LinePlot::new(
                 format!("Fig. B.2: W/W0 = {w:.3}"),
@@ -655,10 +669,10 @@ fn appendix(
                 YAxis::Log,
             );
             plot.legend = LegendAt::LowerLeft;
-            for (c, (s, df)) in settings.iter().zip(&tables).enumerate() {
+            for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
                 plot.series.push(Series::line(
                     s.label.clone(),
-                    curves(df, load_index, None, "ccdf_mean")?,
+                    table.curve(load_index, None, true),
                     c,
                 ));
             }
@@ -812,20 +826,30 @@ impl ConvergenceTable {
     /// The smallest setting whose KS distance to the finest is within the tolerance at every
     /// load, and per setting the smallest number of realizations whose pooled ensemble is
     /// within the tolerance of the full one at every load.
-    fn choice(&self) -> Value {
-        let worst = |kind: &str, pick: &dyn Fn(&ConvergenceRow) -> Option<f64>| {
-            let mut m: Vec<(f64, f64)> = Vec::new();
-            for r in self.rows.iter().filter(|r| r.kind == kind) {
-                let Some(x) = pick(r) else { continue };
-                match m.iter_mut().find(|e| e.0 == x) {
-                    Some(e) => e.1 = e.1.max(r.ks),
-                    None => m.push((x, r.ks)),
-                }
+    /// Largest KS distance over loads of the rows of `kind`, per abscissa `pick(row)` (rows
+    /// where it is `None` left out), in increasing abscissa.
+    fn max_ks(&self, kind: &str, pick: &dyn Fn(&ConvergenceRow) -> Option<f64>) -> Vec<(f64, f64)> {
+        let mut m: Vec<(f64, f64)> = Vec::new();
+        for r in self.rows.iter().filter(|r| r.kind == kind) {
+            let Some(x) = pick(r) else { continue };
+            match m.iter_mut().find(|e| e.0 == x) {
+                Some(e) => e.1 = e.1.max(r.ks),
+                None => m.push((x, r.ks)),
             }
-            m.sort_by(|a, b| a.0.total_cmp(&b.0));
-            m
-        };
-        let settings = worst("setting", &|r| Some(r.setting));
+        }
+        m.sort_by(|a, b| a.0.total_cmp(&b.0));
+        m
+    }
+
+    /// The realization curve of one setting: largest KS over loads against `r`.
+    fn max_ks_by_realizations(&self, setting: f64) -> Vec<(f64, f64)> {
+        self.max_ks("realizations", &|r| {
+            (r.setting == setting).then_some(r.realizations as f64)
+        })
+    }
+
+    fn choice(&self) -> Value {
+        let settings = self.max_ks("setting", &|r| Some(r.setting));
         // The smallest value from which every larger one is within the tolerance.
         let first_converged = |curve: &[(f64, f64)]| {
             (0..curve.len())
@@ -837,10 +861,7 @@ impl ConvergenceTable {
         let mut values: Vec<f64> = settings.iter().map(|e| e.0).collect();
         values.dedup();
         for s in values {
-            let by_r = worst("realizations", &|r| {
-                (r.setting == s).then_some(r.realizations as f64)
-            });
-            let chosen = first_converged(&by_r).map(|r| r as u32);
+            let chosen = first_converged(&self.max_ks_by_realizations(s)).map(|r| r as u32);
             per_setting.insert(format!("{s}"), json!(chosen));
         }
         json!({
@@ -851,15 +872,6 @@ impl ConvergenceTable {
             "smallest_converged_realizations_by_setting": per_setting,
         })
     }
-}
-
-/// The setting value of a study reference (the number in its label, e.g. `L/λ_l = 4`).
-fn setting_of(s: &StudyRef) -> f64 {
-    s.label
-        .rsplit('=')
-        .next()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(f64::NAN)
 }
 
 /// KS distance and exponent difference of each setting to the finest (last) setting per load,
@@ -892,7 +904,7 @@ fn convergence_table(store: &Store, settings: &[StudyRef]) -> anyhow::Result<Con
         return Ok(ConvergenceTable { rows });
     };
     for (s, (areas, loads, alphas)) in settings.iter().zip(&data) {
-        let setting = setting_of(s);
+        let setting = s.value;
         for (l, &(load_index, w)) in loads.iter().enumerate() {
             let all = pooled(areas, areas.len(), l);
             if let Some(rl) = ref_loads.iter().position(|x| (x.1 - w).abs() <= 1e-12 * w) {
@@ -1005,7 +1017,7 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
             )
         });
     }
-    let xs: Vec<f64> = settings.iter().map(setting_of).collect();
+    let xs: Vec<f64> = settings.iter().map(|s| s.value).collect();
     if let (Some(&lo), Some(&hi)) = (xs.first(), xs.last()) {
         ks.series.push(Series {
             rgb: Some((0, 0, 0)),
@@ -1021,19 +1033,7 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
         });
     }
     for (c, s) in settings.iter().enumerate() {
-        let setting = setting_of(s);
-        let mut by_r: Vec<(f64, f64)> = Vec::new();
-        for r in table
-            .rows
-            .iter()
-            .filter(|r| r.kind == "realizations" && r.setting == setting)
-        {
-            let x = r.realizations as f64;
-            match by_r.iter_mut().find(|e| e.0 == x) {
-                Some(e) => e.1 = e.1.max(r.ks),
-                None => by_r.push((x, r.ks)),
-            }
-        }
+        let by_r = table.max_ks_by_realizations(s.value);
         real.series.push(Series {
             markers: true,
             ..Series::line(s.label.clone(), by_r, c + 4)

@@ -47,6 +47,8 @@ pub const FIGURES_VERSION: u32 = 7;
 pub struct StudyRef {
     /// Legend text, e.g. `λ_l/λ_s = 128`.
     pub label: String,
+    /// The value the figure varies (λ_l/λ_s, H, L/λ_l or λ_s/Δl), the number in `label`.
+    pub value: f64,
     pub statistics_key: String,
     pub lambda_s_px: f64,
 }
@@ -408,9 +410,11 @@ struct StudyKeys<'a> {
 }
 
 impl StudyKeys<'_> {
-    fn reference(&self, label: String) -> StudyRef {
+    /// `name = value` as the legend text.
+    fn reference(&self, name: &str, value: f64) -> StudyRef {
         StudyRef {
-            label,
+            label: format!("{name} = {value}"),
+            value,
             statistics_key: self.statistics_key.clone(),
             lambda_s_px: self.plan.surface.lambda_s_px,
         }
@@ -490,11 +494,11 @@ fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
     if !by_ratio.is_empty() {
         let ratios: Vec<StudyRef> = by_ratio
             .iter()
-            .map(|k| k.reference(format!("λ_l/λ_s = {}", ratio(k))))
+            .map(|k| k.reference("λ_l/λ_s", ratio(k)))
             .collect();
         let hurst: Vec<StudyRef> = by_hurst
             .iter()
-            .map(|k| k.reference(format!("H = {}", k.plan.surface.hurst)))
+            .map(|k| k.reference("H", k.plan.surface.hurst))
             .collect();
         let mut inputs: Vec<String> = ratios.iter().map(|r| r.statistics_key.clone()).collect();
         inputs.extend(hurst.iter().map(|r| r.statistics_key.clone()));
@@ -544,11 +548,14 @@ fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
         let refs: Vec<StudyRef> = settings
             .iter()
             .map(|k| {
-                k.reference(if figure == "figB1" {
-                    format!("L/λ_l = {}", setting(k))
-                } else {
-                    format!("λ_s/Δl = {}", setting(k))
-                })
+                k.reference(
+                    if figure == "figB1" {
+                        "L/λ_l"
+                    } else {
+                        "λ_s/Δl"
+                    },
+                    setting(k),
+                )
             })
             .collect();
         out.push(figure_instance(
