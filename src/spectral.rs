@@ -24,6 +24,9 @@ use rustfft::{num_complex::Complex64, Fft, FftPlanner};
 
 /// Side of the square tiles used by the cache-blocked transpose.
 const TILE: usize = 32;
+/// Columns gathered together by [`Fft2::convolve_start`] (four complex values = one
+/// 64-byte cache line per row).
+const GATHER: usize = 4;
 /// Upper bound on the number of independent work blocks (each owns its scratch).
 const MAX_BLOCKS: usize = 64;
 
@@ -48,6 +51,8 @@ pub struct Fft2Scratch {
 struct Block {
     real_row: Vec<f64>,
     complex: Vec<Complex64>,
+    /// [`GATHER`] columns of length `n` for [`Fft2::convolve_start`].
+    columns: Vec<Complex64>,
 }
 
 impl Fft2 {
@@ -86,7 +91,9 @@ impl Fft2 {
         vec![Complex64::new(0.0, 0.0); self.spectrum_len()]
     }
 
-    /// Allocate the scratch these plans need (about `n²` doubles).
+    /// Allocate the scratch these plans need (about `n²` doubles, plus `n` per work block
+    /// and [`GATHER`]·`n` complex values per block that takes columns in
+    /// [`Self::convolve_start`]).
     pub fn make_scratch(&self) -> Fft2Scratch {
         let n = self.n;
         let rows_per_block = self.rows_per_block();
@@ -101,17 +108,33 @@ impl Fft2 {
         .max()
         .unwrap_or(0)
         .max(1);
+        // Blocks that take column groups in `convolve_start` (the others take none).
+        let column_blocks = Self::column_groups(n).div_ceil(Self::groups_per_block(n, n_blocks));
         Fft2Scratch {
             n,
             rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
             blocks: (0..n_blocks)
-                .map(|_| Block {
+                .map(|b| Block {
                     real_row: vec![0.0; n],
                     complex: vec![Complex64::new(0.0, 0.0); complex_len],
+                    columns: vec![
+                        Complex64::new(0.0, 0.0);
+                        if b < column_blocks { GATHER * n } else { 0 }
+                    ],
                 })
                 .collect(),
             rows_per_block,
         }
+    }
+
+    /// Groups of [`GATHER`] columns of the half spectrum.
+    fn column_groups(n: usize) -> usize {
+        (n / 2 + 1).div_ceil(GATHER)
+    }
+
+    /// Column groups per work block in [`Self::convolve_start`].
+    fn groups_per_block(n: usize, blocks: usize) -> usize {
+        Self::column_groups(n).div_ceil(blocks)
     }
 
     /// Rows per work block: the fixed decomposition of a field into
@@ -170,21 +193,8 @@ impl Fft2 {
             scratch.blocks.len(),
             "one state per work block"
         );
-        let rpb = scratch.rows_per_block;
         // 1. r2c along x for every row y.
-        scratch
-            .rows
-            .par_chunks_mut(rpb * h)
-            .zip(blocks)
-            .zip(scratch.blocks.par_iter_mut())
-            .for_each(|((rows_out, mut state), block)| {
-                for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
-                    produce(&mut state, r, &mut block.real_row);
-                    self.r2c
-                        .process_with_scratch(&mut block.real_row, row_out, &mut block.complex)
-                        .expect("r2c lengths are fixed by the plan");
-                }
-            });
+        self.r2c_rows(blocks, produce, scratch);
         // 2. transpose (n × h) → (h × n).
         transpose(&scratch.rows, output, n, h);
         // 3. complex FFT along y for every kx.
@@ -249,7 +259,6 @@ impl Fft2 {
             scratch.blocks.len(),
             "one state per work block"
         );
-        let rpb = scratch.rows_per_block;
         let cpb = h.div_ceil(scratch.blocks.len());
         // 1. inverse complex FFT along y for every kx.
         spectrum
@@ -263,6 +272,135 @@ impl Fft2 {
         // 2. transpose (h × n) → (n × h).
         transpose(spectrum, &mut scratch.rows, h, n);
         // 3. c2r along x for every row.
+        self.c2r_rows(blocks, consume, scratch);
+    }
+
+    /// First half of a convolution fused with the transforms: the real field is produced
+    /// row by row (as in [`Self::forward_rows`]) and transformed along x; then, in place in
+    /// the scratch, each group of [`GATHER`] columns `kx` is gathered (one cache line per
+    /// row), transformed along y, handed to `column(kx, values)` (the values by wrapped
+    /// `ky`, to be multiplied in place by a Fourier multiplier; what it returns is stored in
+    /// `column_values[kx]`), transformed back along y while still in cache and written
+    /// back. [`Self::convolve_finish`] must follow before `scratch` is used again.
+    /// Compared with [`Self::forward`], a multiplier pass and [`Self::inverse`], this does
+    /// without the spectrum buffer, both transposes and three passes over the spectrum, and
+    /// gives bit-identical results: every 1-D transform and product is the same computation
+    /// on the same values.
+    pub fn convolve_start<S, I, F, C>(
+        &self,
+        blocks: I,
+        produce: F,
+        column: C,
+        column_values: &mut [f64],
+        scratch: &mut Fft2Scratch,
+    ) where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+        C: Fn(usize, &mut [Complex64]) -> f64 + Sync,
+    {
+        let n = self.n;
+        let h = n / 2 + 1;
+        assert_eq!(scratch.n, n, "scratch was made for another grid size");
+        assert_eq!(column_values.len(), h, "one value per column kx");
+        assert_eq!(
+            blocks.len(),
+            scratch.blocks.len(),
+            "one state per work block"
+        );
+        // 1. r2c along x for every row y.
+        self.r2c_rows(blocks, produce, scratch);
+        // 2. columns, in place, GATHER at a time; block b takes groups b·gpb.. .
+        let gpb = Self::groups_per_block(n, scratch.blocks.len());
+        let rows = SharedRows(scratch.rows.as_mut_ptr());
+        scratch
+            .blocks
+            .par_iter_mut()
+            .zip(column_values.par_chunks_mut(gpb * GATHER))
+            .enumerate()
+            .for_each(|(b, (block, values))| {
+                for (g, values) in values.chunks_mut(GATHER).enumerate() {
+                    let kx0 = (b * gpb + g) * GATHER;
+                    let width = values.len();
+                    let cols = &mut block.columns[..width * n];
+                    for r in 0..n {
+                        for j in 0..width {
+                            // SAFETY: `r·h + kx0 + j < n·h` (kx0 + j < h); columns
+                            // kx0..kx0 + width belong to this group alone, and nothing
+                            // else touches `scratch.rows` during this loop.
+                            cols[j * n + r] = unsafe { rows.get().add(r * h + kx0 + j).read() };
+                        }
+                    }
+                    for (j, col) in cols.chunks_exact_mut(n).enumerate() {
+                        let len = self.col_forward.get_inplace_scratch_len();
+                        self.col_forward
+                            .process_with_scratch(col, &mut block.complex[..len]);
+                        values[j] = column(kx0 + j, col);
+                        let len = self.col_inverse.get_inplace_scratch_len();
+                        self.col_inverse
+                            .process_with_scratch(col, &mut block.complex[..len]);
+                    }
+                    for r in 0..n {
+                        for j in 0..width {
+                            // SAFETY: as for the gather above.
+                            unsafe { rows.get().add(r * h + kx0 + j).write(cols[j * n + r]) };
+                        }
+                    }
+                }
+            });
+    }
+
+    /// Second half of a convolution started by [`Self::convolve_start`]: c2r along x, each
+    /// row of the result handed to `consume` as in [`Self::inverse_rows`] (same
+    /// normalisation and Hermitian projection).
+    pub fn convolve_finish<S, I, F>(&self, blocks: I, consume: F, scratch: &mut Fft2Scratch)
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &[f64]) + Sync,
+    {
+        assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
+        assert_eq!(
+            blocks.len(),
+            scratch.blocks.len(),
+            "one state per work block"
+        );
+        self.c2r_rows(blocks, consume, scratch);
+    }
+
+    /// r2c along x of every row made by `produce`, into `scratch.rows`.
+    fn r2c_rows<S, I, F>(&self, blocks: I, produce: F, scratch: &mut Fft2Scratch)
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+    {
+        let h = self.n / 2 + 1;
+        let rpb = scratch.rows_per_block;
+        scratch
+            .rows
+            .par_chunks_mut(rpb * h)
+            .zip(blocks)
+            .zip(scratch.blocks.par_iter_mut())
+            .for_each(|((rows_out, mut state), block)| {
+                for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
+                    produce(&mut state, r, &mut block.real_row);
+                    self.r2c
+                        .process_with_scratch(&mut block.real_row, row_out, &mut block.complex)
+                        .expect("r2c lengths are fixed by the plan");
+                }
+            });
+    }
+
+    /// c2r along x for every row of `scratch.rows`, each result row handed to `consume`.
+    fn c2r_rows<S, I, F>(&self, blocks: I, consume: F, scratch: &mut Fft2Scratch)
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &[f64]) + Sync,
+    {
+        let h = self.n / 2 + 1;
+        let rpb = scratch.rows_per_block;
         scratch
             .rows
             .par_chunks_mut(rpb * h)
@@ -288,6 +426,21 @@ impl Fft2 {
             "spectrum must have (n/2+1)·n values"
         );
         assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
+    }
+}
+
+/// The row-transformed data shared by the column tasks of [`Fft2::convolve_start`], each
+/// of which reads and writes only its own columns.
+struct SharedRows(*mut Complex64);
+
+// SAFETY: the tasks access disjoint elements (see `convolve_start`).
+unsafe impl Send for SharedRows {}
+unsafe impl Sync for SharedRows {}
+
+impl SharedRows {
+    /// The pointer (a method, so that closures capture the whole wrapper).
+    fn get(&self) -> *mut Complex64 {
+        self.0
     }
 }
 

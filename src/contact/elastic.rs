@@ -9,7 +9,6 @@
 //! Tamaas), with the Nyquist index taken as `|k| = n/2`.
 
 use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
 
 use crate::grid::Grid;
 use crate::spectral::{Fft2, Fft2Scratch};
@@ -30,7 +29,6 @@ pub struct ElasticOperator {
 /// Working memory of [`ElasticOperator::apply`]; allocate once with
 /// [`ElasticOperator::make_workspace`].
 pub struct OperatorWorkspace {
-    spectrum: Vec<Complex64>,
     scratch: Fft2Scratch,
     partials: Vec<f64>,
 }
@@ -88,7 +86,6 @@ impl ElasticOperator {
 
     pub fn make_workspace(&self) -> OperatorWorkspace {
         OperatorWorkspace {
-            spectrum: self.fft.make_spectrum(),
             scratch: self.fft.make_scratch(),
             partials: vec![0.0; self.grid.half_len()],
         }
@@ -107,9 +104,20 @@ impl ElasticOperator {
         output: &mut [f64],
         ws: &mut OperatorWorkspace,
     ) -> f64 {
-        self.fft.forward(input, &mut ws.spectrum, &mut ws.scratch);
-        let energy = self.multiply(ws);
-        self.fft.inverse(&mut ws.spectrum, output, &mut ws.scratch);
+        let n = self.grid.n();
+        assert_eq!(input.len(), n * n, "input must have n² values");
+        assert_eq!(output.len(), n * n, "output must have n² values");
+        let block_len = self.rows_per_block() * n;
+        let energy = self.start_rows(
+            input.par_chunks(block_len),
+            |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
+            ws,
+        );
+        self.finish_rows(
+            output.par_chunks_mut(block_len),
+            |rows: &mut &mut [f64], r, row| rows[r * n..(r + 1) * n].copy_from_slice(row),
+            ws,
+        );
         energy
     }
 
@@ -119,53 +127,47 @@ impl ElasticOperator {
         self.fft.rows_per_block()
     }
 
-    /// First half of a fused application of `K`: the input field is produced row by row
-    /// by `produce` (see [`Fft2::forward_rows`]), transformed and multiplied; returns
-    /// `⟨t, K t⟩` (Parseval). The result stays in `ws` for [`Self::finish_rows`], which
-    /// must follow before `ws` is used again.
+    /// First half of a fused application of `K` ([`Fft2::convolve_start`]): the input
+    /// field is produced row by row by `produce`, transformed, multiplied and transformed
+    /// back along y; returns `⟨t, K t⟩` (Parseval). The result stays in `ws` for
+    /// [`Self::finish_rows`], which must follow before `ws` is used again.
     pub fn start_rows<S, I, F>(&self, blocks: I, produce: F, ws: &mut OperatorWorkspace) -> f64
     where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
         F: Fn(&mut S, usize, &mut [f64]) + Sync,
     {
-        self.fft
-            .forward_rows(blocks, produce, &mut ws.spectrum, &mut ws.scratch);
-        self.multiply(ws)
+        let n = self.grid.n();
+        let h = self.grid.half_len();
+        self.fft.convolve_start(
+            blocks,
+            produce,
+            |jx, col| {
+                let m = &self.multiplier[jx * h..(jx + 1) * h];
+                let mut energy = 0.0;
+                for (iy, c) in col.iter_mut().enumerate() {
+                    let g = m[iy.min(n - iy)];
+                    energy += g * c.norm_sqr();
+                    *c *= g;
+                }
+                self.grid.half_weight(jx) * energy
+            },
+            &mut ws.partials,
+            &mut ws.scratch,
+        );
+        ws.partials.iter().sum()
     }
 
     /// Second half of a fused application of `K` started by [`Self::start_rows`]: the
-    /// result `K t` is handed to `consume` row by row (see [`Fft2::inverse_rows`]) instead
-    /// of being stored.
+    /// result `K t` is handed to `consume` row by row (see [`Fft2::convolve_finish`])
+    /// instead of being stored.
     pub fn finish_rows<S, I, F>(&self, blocks: I, consume: F, ws: &mut OperatorWorkspace)
     where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
         F: Fn(&mut S, usize, &[f64]) + Sync,
     {
-        self.fft
-            .inverse_rows(&mut ws.spectrum, blocks, consume, &mut ws.scratch);
-    }
-
-    /// Multiply the spectrum in `ws` by the operator's multiplier; returns the energy.
-    fn multiply(&self, ws: &mut OperatorWorkspace) -> f64 {
-        let n = self.grid.n();
-        let h = self.grid.half_len();
-        ws.spectrum
-            .par_chunks_mut(n)
-            .zip(self.multiplier.par_chunks(h))
-            .zip(ws.partials.par_iter_mut())
-            .enumerate()
-            .for_each(|(jx, ((row, m), part))| {
-                let mut energy = 0.0;
-                for (iy, c) in row.iter_mut().enumerate() {
-                    let g = m[iy.min(n - iy)];
-                    energy += g * c.norm_sqr();
-                    *c *= g;
-                }
-                *part = self.grid.half_weight(jx) * energy;
-            });
-        ws.partials.iter().sum()
+        self.fft.convolve_finish(blocks, consume, &mut ws.scratch);
     }
 
     /// `output += K Δ` for a few point loads `(node index, Δp)`, by direct summation of the
@@ -224,6 +226,52 @@ mod tests {
                     (ui - expected * pi).abs() <= 1e-12 * expected,
                     "mode ({a},{b})"
                 );
+            }
+        }
+    }
+
+    /// The fused convolution (columns transformed, multiplied and transformed back in
+    /// cache) gives the same bits as the unfused one: forward FFT, multiplier pass, inverse
+    /// FFT, with the energy summed per column in the same order.
+    #[test]
+    fn fused_convolution_is_bit_identical_to_the_unfused_one() {
+        for n in [2usize, 6, 8, 30, 64, 130] {
+            let grid = Grid::unit(n).unwrap();
+            let op = ElasticOperator::new(grid, 1.3);
+            let mut ws = op.make_workspace();
+            let mut state: u64 = 7 + n as u64;
+            let p: Vec<f64> = (0..n * n)
+                .map(|_| {
+                    state = state
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    (state >> 11) as f64 / (1u64 << 53) as f64 - 0.25
+                })
+                .collect();
+            let mut fused = vec![0.0; n * n];
+            let fused_energy = op.apply_with_energy(&p, &mut fused, &mut ws);
+
+            let fft = Fft2::new(n);
+            let mut scratch = fft.make_scratch();
+            let mut spectrum = fft.make_spectrum();
+            fft.forward(&p, &mut spectrum, &mut scratch);
+            let h = grid.half_len();
+            let mut energy = 0.0;
+            for (jx, col) in spectrum.chunks_exact_mut(n).enumerate() {
+                let m = &op.multiplier[jx * h..(jx + 1) * h];
+                let mut e = 0.0;
+                for (iy, c) in col.iter_mut().enumerate() {
+                    let g = m[iy.min(n - iy)];
+                    e += g * c.norm_sqr();
+                    *c *= g;
+                }
+                energy += grid.half_weight(jx) * e;
+            }
+            let mut unfused = vec![0.0; n * n];
+            fft.inverse(&mut spectrum, &mut unfused, &mut scratch);
+            assert_eq!(fused_energy.to_bits(), energy.to_bits(), "n={n}: energy");
+            for (i, (a, b)) in fused.iter().zip(&unfused).enumerate() {
+                assert_eq!(a.to_bits(), b.to_bits(), "n={n}, node {i}: {a} vs {b}");
             }
         }
     }

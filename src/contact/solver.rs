@@ -20,7 +20,10 @@
 //! step preserves the load. The direction pass is fused with the forward FFT (each row of
 //! `t` is handed to the transform as it is made) and the update pass with the inverse FFT
 //! (each row of `K t` is consumed as it comes out, never stored): the line search needs
-//! only `⟨t, K t⟩`, which is known before the inverse transform starts. All reductions use
+//! only `⟨t, K t⟩`, which is known before the inverse transform starts. Between the two, the
+//! column transforms, the multiplier and Parseval's sum run per group of columns in cache
+//! ([`crate::spectral::Fft2::convolve_start`]); an exact recomputation of `u = K p` gathers
+//! the next gradient statistics from the rows of `K p` as they come out. All reductions use
 //! the FFT's fixed row blocks, so results are bit-identical whatever the number of threads.
 //!
 //! **Defined behaviour where the method breaks down**:
@@ -234,8 +237,8 @@ enum Pending {
 }
 
 impl<'a> Solver<'a> {
-    /// Check the surface and allocate every buffer (about 6.5 n² doubles with the
-    /// operator's, besides the heights).
+    /// Check the surface and allocate every buffer (about 5 n² doubles with the operator's
+    /// at n = 512, fewer per n² at larger n; besides the heights).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
         let len = n * n;
@@ -345,8 +348,7 @@ impl<'a> Solver<'a> {
             self.pressure.fill(target);
         }
         self.has_solution = false;
-        self.op
-            .apply(&self.pressure, &mut self.deflection, &mut self.ws);
+        let mut next_stats: Option<[f64; 6]> = Some(self.exact_deflection(1.0, 0.0));
         report.convolutions += 1;
 
         let mut pending = Pending::Exact;
@@ -358,7 +360,6 @@ impl<'a> Solver<'a> {
         let mut best = f64::INFINITY;
         let mut best_at = 0usize;
         let mut direction_mean = 0.0f64;
-        let mut next_stats: Option<[f64; 6]> = None;
         let self_influence = self.op.self_influence();
 
         loop {
@@ -376,10 +377,8 @@ impl<'a> Solver<'a> {
             if error <= cfg.tolerance && !exact {
                 // Confirm with an exact deflection (and the exact load) before declaring
                 // convergence.
-                self.op
-                    .apply(&self.pressure, &mut self.deflection, &mut self.ws);
+                next_stats = Some(self.exact_deflection(target * len as f64 / sum_p, shift));
                 report.convolutions += 1;
-                pending = Pending::Scale(target * len as f64 / sum_p);
                 exact = true;
                 linear_steps = 0;
                 continue;
@@ -437,8 +436,7 @@ impl<'a> Solver<'a> {
             shift = new_shift;
             if total <= 0.0 {
                 self.pressure.fill(target);
-                self.op
-                    .apply(&self.pressure, &mut self.deflection, &mut self.ws);
+                next_stats = Some(self.exact_deflection(1.0, shift));
                 report.convolutions += 1;
                 exact = true;
                 restart = true;
@@ -461,10 +459,8 @@ impl<'a> Solver<'a> {
                 exact = false;
                 linear_steps += 1;
             } else {
-                self.op
-                    .apply(&self.pressure, &mut self.deflection, &mut self.ws);
+                next_stats = Some(self.exact_deflection(scale, shift));
                 report.convolutions += 1;
-                pending = Pending::Scale(scale);
                 exact = true;
                 linear_steps = 0;
             }
@@ -487,45 +483,76 @@ impl<'a> Solver<'a> {
     /// Apply `pending`, then over all nodes: `min(g)`, and over the contact set `S = {p > 0}`:
     /// `|S|, Σg, Σg², Σpg, Σp`, with `g = u − h − shift`.
     fn pass_gradient(&mut self, pending: Pending, shift: f64) -> [f64; 6] {
-        let (chunk, h) = (self.chunk, self.heights);
+        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let scale = match pending {
+            Pending::Exact => None,
+            Pending::Scale(s) => Some(s),
+        };
         self.pressure
             .par_chunks_mut(chunk)
             .zip(self.deflection.par_chunks_mut(chunk))
             .zip(h.par_chunks(chunk))
             .zip(self.partials.par_iter_mut())
             .for_each(|(((pc, uc), hc), part)| {
-                if let Pending::Scale(s) = pending {
-                    for (p, u) in pc.iter_mut().zip(uc.iter_mut()) {
-                        *p *= s;
-                        *u *= s;
-                    }
-                }
-                let gap = |u: &[f64; LANES], h: &[f64; LANES]| {
-                    let mut g = [0.0; LANES];
-                    for l in 0..LANES {
-                        g[l] = u[l] - h[l] - shift;
-                    }
-                    g
-                };
                 let mut acc = GradientLanes::new();
-                let whole = pc.len() / LANES * LANES;
-                for ((p, u), h) in pc[..whole]
-                    .chunks_exact(LANES)
-                    .zip(uc.chunks_exact(LANES))
-                    .zip(hc.chunks_exact(LANES))
+                for ((p, u), h) in pc
+                    .chunks_exact_mut(n)
+                    .zip(uc.chunks_exact_mut(n))
+                    .zip(hc.chunks_exact(n))
                 {
-                    acc.add(&lanes(p), &gap(&lanes(u), &lanes(h)));
-                }
-                if whole < pc.len() {
-                    let k = pc.len() - whole;
-                    let mut tail = GradientLanes::new();
-                    let g = gap(&padded(&uc[whole..], 0.0), &padded(&hc[whole..], 0.0));
-                    tail.add(&padded(&pc[whole..], 0.0), &g);
-                    acc.merge_lanes(&tail, k);
+                    dispatch_gradient(shift, scale, p, u, h, &mut acc);
                 }
                 *part = acc.finish();
             });
         Self::sum_gradient(&self.partials)
+    }
+
+    /// `u ← s K p`, `p ← s p` (an exact deflection, then the load correction), with the
+    /// statistics of [`Self::pass_gradient`] gathered as the rows of `K p` come out of the
+    /// inverse FFT: the same values as `apply` followed by `pass_gradient(Scale(s))`,
+    /// one pass over the fields fewer.
+    fn exact_deflection(&mut self, scale: f64, shift: f64) -> [f64; 6] {
+        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        self.op.start_rows(
+            self.pressure.par_chunks(chunk),
+            |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
+            &mut self.ws,
+        );
+        let blocks = self
+            .pressure
+            .par_chunks_mut(chunk)
+            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(h.par_chunks(chunk))
+            .zip(self.update_acc.par_iter_mut());
+        self.op.finish_rows(
+            blocks,
+            |(((pc, uc), hc), acc), r, kp| {
+                if r == 0 {
+                    acc.grad = GradientLanes::new();
+                }
+                let at = r * n..(r + 1) * n;
+                let u = &mut uc[at.clone()];
+                u.copy_from_slice(kp);
+                dispatch_gradient(
+                    shift,
+                    Some(scale),
+                    &mut pc[at.clone()],
+                    u,
+                    &hc[at],
+                    &mut acc.grad,
+                );
+            },
+            &mut self.ws,
+        );
+        let mut stats = [0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY];
+        for acc in &self.update_acc {
+            let part = acc.grad.finish();
+            for k in 0..5 {
+                stats[k] += part[k];
+            }
+            stats[5] = stats[5].min(part[5]);
+        }
+        stats
     }
 
     fn sum_gradient(partials: &[[f64; 6]]) -> [f64; 6] {
@@ -564,7 +591,7 @@ impl<'a> Solver<'a> {
                     **part = [0.0; 6];
                 }
                 let at = r * n..(r + 1) * n;
-                direction_row(
+                dispatch_direction(
                     level,
                     beta,
                     direction_mean,
@@ -683,6 +710,116 @@ impl<'a> Solver<'a> {
     }
 }
 
+/// Define `$name`, which runs `$body` compiled with AVX2 where the processor has it and as
+/// is elsewhere. IEEE arithmetic without fused multiply-add gives the same bits either way.
+macro_rules! avx2_dispatch {
+    ($(#[$attr:meta])* fn $name:ident = $body:ident($($arg:ident: $ty:ty),* $(,)?);) => {
+        $(#[$attr])*
+        #[allow(clippy::too_many_arguments)]
+        fn $name($($arg: $ty),*) {
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2")]
+                #[allow(clippy::too_many_arguments)]
+                unsafe fn avx2($($arg: $ty),*) {
+                    $body($($arg),*)
+                }
+                if std::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the processor supports AVX2 (checked just above).
+                    unsafe { avx2($($arg),*) };
+                    return;
+                }
+            }
+            $body($($arg),*)
+        }
+    };
+}
+
+avx2_dispatch! {
+    /// [`gradient_row`] with AVX2 where available.
+    fn dispatch_gradient = gradient_row(
+        shift: f64,
+        scale: Option<f64>,
+        p: &mut [f64],
+        u: &mut [f64],
+        h: &[f64],
+        acc: &mut GradientLanes,
+    );
+}
+
+avx2_dispatch! {
+    /// [`direction_row`] with AVX2 where available.
+    fn dispatch_direction = direction_row(
+        level: f64,
+        beta: f64,
+        direction_mean: f64,
+        t: &mut [f64],
+        p: &[f64],
+        u: &[f64],
+        h: &[f64],
+        row: &mut [f64],
+        part: &mut [f64; 6],
+    );
+}
+
+avx2_dispatch! {
+    /// [`update_row`] with AVX2 where available.
+    fn dispatch_update = update_row(
+        a: &UpdateArgs,
+        base: usize,
+        pc: &mut [f64],
+        uc: &mut [f64],
+        tc: &[f64],
+        rc: &[f64],
+        hc: &[f64],
+        acc: &mut UpdateAcc,
+        changes: &mut [(usize, f64); MAX_SPARSE],
+    );
+}
+
+/// One row of [`Solver::pass_gradient`]: `p ← s p`, `u ← s u` if a scale is given, then the
+/// gradient statistics of the row with `g = u − h − shift` added to `acc`.
+#[inline(always)]
+fn gradient_row(
+    shift: f64,
+    scale: Option<f64>,
+    p: &mut [f64],
+    u: &mut [f64],
+    h: &[f64],
+    acc: &mut GradientLanes,
+) {
+    if let Some(s) = scale {
+        for (p, u) in p.iter_mut().zip(u.iter_mut()) {
+            *p *= s;
+            *u *= s;
+        }
+    }
+    let gap = |u: &[f64; LANES], h: &[f64; LANES]| {
+        let mut g = [0.0; LANES];
+        for l in 0..LANES {
+            g[l] = u[l] - h[l] - shift;
+        }
+        g
+    };
+    let whole = p.len() / LANES * LANES;
+    for ((p, u), h) in p[..whole]
+        .chunks_exact(LANES)
+        .zip(u.chunks_exact(LANES))
+        .zip(h.chunks_exact(LANES))
+    {
+        acc.add(&lanes(p), &gap(&lanes(u), &lanes(h)));
+    }
+    if whole < p.len() {
+        // Tail of a row whose length is not a multiple of LANES: the padding (p = 0) is
+        // off the contact set; only the valid lanes enter the minimum.
+        let k = p.len() - whole;
+        let mut tail = GradientLanes::new();
+        let g = gap(&padded(&u[whole..], 0.0), &padded(&h[whole..], 0.0));
+        tail.add(&padded(&p[whole..], 0.0), &g);
+        acc.merge_lanes(&tail, k);
+    }
+}
+
 /// Direction update of one row (see [`Solver::direction_and_transform`]): writes `t` and
 /// the FFT's input row, adds `(g − ḡ_S) t` to the lane sums `part[..LANES]`.
 #[allow(clippy::too_many_arguments)]
@@ -768,48 +905,6 @@ impl UpdateAcc {
             readmitted: 0,
         }
     }
-}
-
-/// Run [`update_row`] with AVX2 code generation where the processor has it. IEEE
-/// arithmetic without fused multiply-add gives the same bits on either path.
-#[allow(clippy::too_many_arguments)]
-fn dispatch_update(
-    a: &UpdateArgs,
-    base: usize,
-    pc: &mut [f64],
-    uc: &mut [f64],
-    tc: &[f64],
-    rc: &[f64],
-    hc: &[f64],
-    acc: &mut UpdateAcc,
-    changes: &mut [(usize, f64); MAX_SPARSE],
-) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor supports AVX2 (checked just above).
-            unsafe { update_row_avx2(a, base, pc, uc, tc, rc, hc, acc, changes) };
-            return;
-        }
-    }
-    update_row(a, base, pc, uc, tc, rc, hc, acc, changes);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn update_row_avx2(
-    a: &UpdateArgs,
-    base: usize,
-    pc: &mut [f64],
-    uc: &mut [f64],
-    tc: &[f64],
-    rc: &[f64],
-    hc: &[f64],
-    acc: &mut UpdateAcc,
-    changes: &mut [(usize, f64); MAX_SPARSE],
-) {
-    update_row(a, base, pc, uc, tc, rc, hc, acc, changes)
 }
 
 /// One block of `LANES` nodes of the update pass; returns the departures from the linear
