@@ -182,7 +182,11 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
             statistics_key,
             marked_loads,
             ..
-        } => fig2ef(&stats(statistics_key, "loads.parquet")?, marked_loads)?,
+        } => {
+            let mut out = fig2ef(&stats(statistics_key, "loads.parquet")?, marked_loads)?;
+            out.extend(fig2_convergence(store, statistics_key)?);
+            out
+        }
         FigureJob::Fig2Maps {
             surface_key,
             contact_key,
@@ -327,6 +331,210 @@ fn fig2ef(df: &DataFrame, marked_loads: &[f64]) -> anyhow::Result<Vec<(String, D
     Ok(vec![
         ("fig2e".into(), Drawn::Line(e)),
         ("fig2f".into(), Drawn::Line(f)),
+    ])
+}
+
+/// Per realization and load, the quantities behind Fig. 2e–f: contact area `A_c/λ_s²`,
+/// cluster count `N` and largest cluster `A/λ_s²`, all clusters counted (percolating ones
+/// included), as in the statistics stage's `loads.parquet`. Returns `[realization][load]`
+/// and the loads.
+type StudyCurves = (Vec<Vec<[f64; 3]>>, Vec<(u32, f64)>);
+
+fn study_curves(store: &Store, statistics_key: &str) -> anyhow::Result<StudyCurves> {
+    let manifest = store
+        .lookup("statistics", statistics_key)?
+        .ok_or_else(|| anyhow::anyhow!("input statistics {statistics_key} is missing"))?;
+    let loads = loads_of(&read_table(
+        store,
+        "statistics",
+        statistics_key,
+        "loads.parquet",
+    )?)?;
+    let mut out = Vec::new();
+    for key in &manifest.inputs {
+        let df = read_table(store, "clusters", key, "clusters.parquet")?;
+        let idx = u32_column(&df, "load_index")?;
+        let area = f64_column(&df, "area_over_ls2")?;
+        let mut per_load = vec![[0.0f64; 3]; loads.len()];
+        for (i, a) in area.iter().enumerate() {
+            if let Some(l) = loads.iter().position(|l| Some(l.0) == idx[i]) {
+                let v = &mut per_load[l];
+                v[0] += a;
+                v[1] += 1.0;
+                v[2] = v[2].max(*a);
+            }
+        }
+        out.push(per_load);
+    }
+    Ok((out, loads))
+}
+
+/// Largest relative deviation (over loads) of the ensemble-mean curves of Fig. 2e–f over the
+/// first `r` realizations from the means over all of them, below which `r` realizations
+/// count as enough (the same 5 % as the Appendix B rule's KS tolerance).
+pub const FIG2_CURVE_TOLERANCE: f64 = 0.05;
+/// Largest shift, in load steps, of the load where the mean cluster count peaks (where
+/// dN/dA_c of Fig. 2f changes sign) from the full ensemble's.
+pub const FIG2_PEAK_TOLERANCE_STEPS: usize = 1;
+
+/// One row of the Fig. 2 realization-convergence table (first `r` realizations).
+struct Fig2ConvergenceRow {
+    realizations: u32,
+    /// Per quantity (A_c, N, largest): largest relative deviation over loads of the mean of
+    /// the first `r` realizations from the mean of all.
+    deviation: [f64; 3],
+    /// Per quantity: largest relative half-width over loads of the 95 % band of the mean of
+    /// the first `r` realizations (Student t).
+    band: [f64; 3],
+    /// Position in the loads and W/W0 where the mean cluster count of the first `r`
+    /// realizations peaks.
+    peak_index: usize,
+    peak_w: f64,
+}
+
+/// Realization convergence of Fig. 2e–f: per `r = 2 … R`, the deviations of the first-`r`
+/// mean curves from the full ensemble's, their 95 % bands and the load where the mean cluster
+/// count peaks. Drawn as `fig2_convergence` (table `.parquet`, chart) with the rule's result
+/// in the manifest.
+fn fig2_convergence(store: &Store, statistics_key: &str) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let (curves, loads) = study_curves(store, statistics_key)?;
+    let total = curves.len();
+    if total < 2 || loads.is_empty() {
+        return Ok(vec![(
+            "convergence".into(),
+            Drawn::Result(json!({ "note": "fewer than 2 realizations: no convergence curve" })),
+        )]);
+    }
+    let means = |r: usize| -> Vec<[(f64, f64); 3]> {
+        (0..loads.len())
+            .map(|l| {
+                let band = |q: usize| {
+                    let v: Vec<f64> = curves[..r].iter().map(|c| c[l][q]).collect();
+                    let (m, _, half) = crate::statistics::mean_band(&v);
+                    (m, half)
+                };
+                [band(0), band(1), band(2)]
+            })
+            .collect()
+    };
+    let peak = |m: &[[(f64, f64); 3]]| {
+        (0..m.len())
+            .max_by(|&a, &b| m[a][1].0.total_cmp(&m[b][1].0).then(b.cmp(&a)))
+            .unwrap_or(0)
+    };
+    let all = means(total);
+    let all_peak = peak(&all);
+    let mut rows = Vec::new();
+    for r in 2..=total {
+        let m = means(r);
+        let mut deviation = [0.0f64; 3];
+        let mut band = [0.0f64; 3];
+        for (l, ml) in m.iter().enumerate() {
+            for q in 0..3 {
+                let reference = all[l][q].0;
+                if reference > 0.0 {
+                    deviation[q] = deviation[q].max((ml[q].0 - reference).abs() / reference);
+                }
+                if ml[q].0 > 0.0 && ml[q].1.is_finite() {
+                    band[q] = band[q].max(ml[q].1 / ml[q].0);
+                }
+            }
+        }
+        let p = peak(&m);
+        rows.push(Fig2ConvergenceRow {
+            realizations: r as u32,
+            deviation,
+            band,
+            peak_index: p,
+            peak_w: loads[p].1,
+        });
+    }
+    let ok = |row: &Fig2ConvergenceRow| {
+        row.deviation.iter().all(|&d| d <= FIG2_CURVE_TOLERANCE)
+            && row.peak_index.abs_diff(all_peak) <= FIG2_PEAK_TOLERANCE_STEPS
+    };
+    // The smallest r from which every larger count also meets the rule.
+    let chosen = (0..rows.len())
+        .find(|&i| rows[i..].iter().all(ok))
+        .map(|i| rows[i].realizations);
+    let names = ["area", "count", "largest"];
+    let f64_col = |name: String, f: &dyn Fn(&Fig2ConvergenceRow) -> f64| {
+        Column::new(name.into(), rows.iter().map(f).collect::<Vec<f64>>())
+    };
+    let mut columns = vec![Column::new(
+        "realizations".into(),
+        rows.iter().map(|x| x.realizations).collect::<Vec<u32>>(),
+    )];
+    for (q, name) in names.iter().enumerate() {
+        columns.push(f64_col(format!("{name}_max_rel_deviation"), &|x| {
+            x.deviation[q]
+        }));
+    }
+    for (q, name) in names.iter().enumerate() {
+        columns.push(f64_col(format!("{name}_max_rel_ci95"), &|x| x.band[q]));
+    }
+    columns.push(Column::new(
+        "count_peak_load_index".into(),
+        rows.iter()
+            .map(|x| loads[x.peak_index].0)
+            .collect::<Vec<u32>>(),
+    ));
+    columns.push(f64_col("count_peak_w_over_w0".into(), &|x| x.peak_w));
+    let table = DataFrame::new(rows.len(), columns)?;
+
+    let mut plot = LinePlot::new(
+        "Fig. 2e–f: first r realizations vs all",
+        "realizations r",
+        "max relative deviation of the mean over loads",
+        false,
+        YAxis::Log,
+    );
+    plot.legend = LegendAt::UpperRight;
+    let labels = [
+        "A_c (Fig. 2e)",
+        "largest cluster (Fig. 2e)",
+        "N (Fig. 2f: dN/dA_c)",
+    ];
+    for (c, (q, label)) in [0usize, 2, 1].iter().zip(labels).enumerate() {
+        plot.series.push(Series::line(
+            label,
+            rows.iter()
+                .filter(|x| x.deviation[*q] > 0.0)
+                .map(|x| (x.realizations as f64, x.deviation[*q]))
+                .collect(),
+            c,
+        ));
+    }
+    plot.series.push(Series {
+        rgb: Some((0, 0, 0)),
+        dashed: true,
+        width: 1,
+        ..Series::line(
+            format!("tolerance {FIG2_CURVE_TOLERANCE}"),
+            vec![
+                (2.0, FIG2_CURVE_TOLERANCE),
+                (total as f64, FIG2_CURVE_TOLERANCE),
+            ],
+            0,
+        )
+    });
+    let last = rows.last().expect("at least one row");
+    let result = json!({
+        "tolerance_rel_deviation": FIG2_CURVE_TOLERANCE,
+        "tolerance_peak_load_steps": FIG2_PEAK_TOLERANCE_STEPS,
+        "realizations": total,
+        "smallest_converged_realizations": chosen,
+        "count_peak_w_over_w0": loads[all_peak].1,
+        "max_rel_ci95_at_all_realizations": {
+            "area": last.band[0],
+            "count": last.band[1],
+            "largest": last.band[2],
+        },
+    });
+    Ok(vec![
+        ("fig2_convergence".into(), Drawn::Table(table)),
+        ("fig2_convergence".into(), Drawn::Line(plot)),
+        ("convergence".into(), Drawn::Result(result)),
     ])
 }
 

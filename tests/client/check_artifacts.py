@@ -65,6 +65,13 @@ CONVERGENCE = [
     ("w_over_w0", F64), ("n_clusters", U64), ("n_clusters_reference", U64),
     ("ks_distance", F64), ("ks_critical_95", F64), ("alpha", F64), ("alpha_reference", F64),
     ("alpha_difference", F64), ("alpha_estimator", STR)]
+FIG2_CONVERGENCE = [("realizations", U32)] + [
+    (f"{q}_{m}", F64) for m in ["max_rel_deviation", "max_rel_ci95"]
+    for q in ["area", "count", "largest"]] + [
+    ("count_peak_load_index", U32), ("count_peak_w_over_w0", F64)]
+# Two-sided 95 % Student t quantiles for 1 … 10 degrees of freedom.
+T975 = [12.706204736, 4.302652730, 3.182446305, 2.776445105, 2.570581836, 2.446911851,
+        2.364624252, 2.306004135, 2.262157163, 2.228138852]
 CATALOG_COLUMNS = [("stage", STR), ("study", STR), ("realization", U32), ("file", STR),
                    ("path", STR), ("key", STR)]
 A_STAR_GRID = 13  # thresholds A*/λ_s² = 1/4 … 1024
@@ -99,6 +106,40 @@ def manifest_of(path):
 def unpacked_count(packed, n):
     bits = np.unpackbits(packed, axis=1)[:, :n]
     return int(bits.sum())
+
+
+def check_fig2_convergence(path, clusters_rows):
+    """Recompute the Fig. 2 realization-convergence table from the fig2 study's clusters
+    tables (docs/CONVENTIONS.md, "Fig. 2 convergence") and compare."""
+    per_real = []
+    for _, c in clusters_rows.sort_values("realization").iterrows():
+        df = pd.read_parquet(c.path)
+        g = df.groupby("load_index")["area_over_ls2"]
+        per_real.append(pd.DataFrame({"area": g.sum(), "count": g.size(), "largest": g.max()}))
+    loads = sorted(set().union(*[set(p.index) for p in per_real]))
+    cube = np.array([p.reindex(loads, fill_value=0).to_numpy(float) for p in per_real])
+    total = len(per_real)
+    table = pd.read_parquet(path)
+    check(list(table["realizations"]) == list(range(2, total + 1)),
+          f"{path}: realizations {list(table['realizations'])}, expected 2..{total}")
+    full = cube.mean(axis=0)
+    for _, row in table.iterrows():
+        r = int(row["realizations"])
+        first = cube[:r]
+        mean = first.mean(axis=0)
+        half = T975[r - 2] * first.std(axis=0, ddof=1) / np.sqrt(r)
+        for q, name in enumerate(["area", "count", "largest"]):
+            ok = full[:, q] > 0
+            dev = np.max(np.abs(mean[ok, q] - full[ok, q]) / full[ok, q], initial=0.0)
+            pos = mean[:, q] > 0
+            band = np.max(half[pos, q] / mean[pos, q], initial=0.0)
+            check(np.isclose(row[f"{name}_max_rel_deviation"], dev, rtol=1e-9, atol=1e-15),
+                  f"{path}: r={r} {name} deviation {row[f'{name}_max_rel_deviation']} != {dev}")
+            # The stage's Student t table has 4 decimals.
+            check(np.isclose(row[f"{name}_max_rel_ci95"], band, rtol=1e-4),
+                  f"{path}: r={r} {name} band {row[f'{name}_max_rel_ci95']} != {band}")
+        check(int(row["count_peak_load_index"]) == loads[int(np.argmax(mean[:, 1]))],
+              f"{path}: r={r} peak at {row['count_peak_load_index']}")
 
 
 def main(data_dir, profile):
@@ -238,6 +279,10 @@ def main(data_dir, profile):
         elif ext == ".csv":
             df = pd.read_csv(r.path)
             check(len(df) > 0 and df.iloc[:, -1].notna().any(), f"{r.path}: no data")
+        elif r.file == "fig2_convergence.parquet":
+            check_schema(r.path, FIG2_CONVERGENCE)
+            parquet_files += 1
+            check_fig2_convergence(r.path, rows("clusters", "clusters.parquet", study="fig2"))
         elif ext == ".parquet":
             check_schema(r.path, CONVERGENCE)
             df = pd.read_parquet(r.path)
@@ -250,9 +295,9 @@ def main(data_dir, profile):
         elif ext == ".npy":
             a = np.load(r.path)
             check(a.ndim == 2 and a.size > 0, f"{r.path}: shape {a.shape}")
-    expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig3", "fig4a", "fig4b",
-                "fig5a", "fig5b", "fig6", "figB1", "figB2", "figB1_convergence",
-                "figB2_convergence"]
+    expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig2_convergence",
+                "fig3", "fig4a", "fig4b", "fig5a", "fig5b", "fig6", "figB1", "figB2",
+                "figB1_convergence", "figB2_convergence"]
     drawn = {os.path.splitext(f)[0] for f in rows("figures")["file"] if f.endswith(".png")}
     check(set(expected) <= drawn, f"missing figures: {sorted(set(expected) - drawn)}")
 
