@@ -24,6 +24,10 @@ pub struct ElasticOperator {
     /// Response to a unit pressure on node (0, 0): `kernel[|dy| * (n/2+1) + |dx|]` with
     /// the periodic distances `|dx|, |dy| ∈ 0..=n/2` (the response is even in both).
     kernel: Vec<f64>,
+    /// The same response by periodic row offset: `kernel_rows[|dy| * n + dx]` for
+    /// `dx ∈ 0..n` (`(n/2+1) · n` values), so that a point load adds two ascending runs to
+    /// a row.
+    kernel_rows: Vec<f64>,
 }
 
 /// Working memory of [`ElasticOperator::apply`]; allocate once with
@@ -61,6 +65,7 @@ impl ElasticOperator {
             fft,
             multiplier,
             kernel: Vec::new(),
+            kernel_rows: Vec::new(),
         };
         let mut ws = op.make_workspace();
         let mut unit = vec![0.0; n * n];
@@ -68,6 +73,12 @@ impl ElasticOperator {
         let mut response = vec![0.0; n * n];
         op.apply(&unit, &mut response, &mut ws);
         op.kernel = (0..h * h).map(|i| response[(i / h) * n + i % h]).collect();
+        op.kernel_rows = (0..h * n)
+            .map(|i| {
+                let (dy, dx) = (i / n, i % n);
+                op.kernel[dy * h + dx.min(n - dx)]
+            })
+            .collect();
         op
     }
 
@@ -175,24 +186,33 @@ impl ElasticOperator {
     /// the order given, so the result does not depend on the thread count.
     pub fn add_point_loads(&self, loads: &[(usize, f64)], output: &mut [f64]) {
         let n = self.grid.n();
-        let h = self.grid.half_len();
-        output.par_chunks_mut(n).enumerate().for_each(|(iy, row)| {
-            for &(node, dp) in loads {
-                let (jy, jx) = (node / n, node % n);
-                let d = (iy + n - jy) % n;
-                let k = &self.kernel[d.min(n - d) * h..(d.min(n - d) + 1) * h];
-                // Periodic distance d = (ix − jx) mod n without a division: the row splits
-                // into ix ≥ jx (d = ix − jx) and ix < jx (d = ix + n − jx).
-                let (before, after) = row.split_at_mut(jx);
-                for (d, v) in after.iter_mut().enumerate() {
-                    *v += dp * k[d.min(n - d)];
-                }
-                for (i, v) in before.iter_mut().enumerate() {
-                    let d = i + n - jx;
-                    *v += dp * k[d.min(n - d)];
-                }
+        output
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(iy, row)| self.add_point_loads_row(iy, loads, row));
+    }
+
+    /// Row `iy` of [`Self::add_point_loads`]: each load adds `Δp · K(ix − jx, iy − jy)` to
+    /// every value of the row, loads in the order given, as two ascending runs of the
+    /// kernel row (vectorised).
+    #[inline(always)]
+    pub fn add_point_loads_row(&self, iy: usize, loads: &[(usize, f64)], row: &mut [f64]) {
+        let n = self.grid.n();
+        debug_assert_eq!(row.len(), n);
+        for &(node, dp) in loads {
+            let (jy, jx) = (node / n, node % n);
+            let d = (iy + n - jy) % n;
+            let k = &self.kernel_rows[d.min(n - d) * n..(d.min(n - d) + 1) * n];
+            // Column ix is at periodic offset (ix − jx) mod n: k[0 … n − jx) for ix ≥ jx,
+            // k[n − jx … n) for ix < jx.
+            let (before, after) = row.split_at_mut(jx);
+            for (v, kv) in after.iter_mut().zip(k) {
+                *v += dp * kv;
             }
-        });
+            for (v, kv) in before.iter_mut().zip(&k[n - jx..]) {
+                *v += dp * kv;
+            }
+        }
     }
 }
 

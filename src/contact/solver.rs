@@ -130,9 +130,12 @@ impl GradientLanes {
         ]
     }
 }
+
 /// When at most this many nodes leave or re-enter the contact set in an iteration, the
-/// deflection is corrected by direct summation (one field pass per node) instead of a
-/// new convolution.
+/// deflection is corrected by direct summation (all nodes' kernel rows added row by row, in
+/// the same pass as the next gradient statistics) instead of a new convolution. Limits of
+/// 32–128 save 10–20 % of the convolutions but cost as much in summation
+/// (docs/BENCHMARKS.md).
 pub const MAX_SPARSE: usize = 6;
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub const RESYNC: usize = 32;
@@ -226,14 +229,6 @@ pub struct Solver<'a> {
     changes: Vec<[(usize, f64); MAX_SPARSE]>,
     sparse: Vec<(usize, f64)>,
     has_solution: bool,
-}
-
-#[derive(Clone, Copy)]
-enum Pending {
-    /// `u` is exactly `K p`.
-    Exact,
-    /// `p ← s p`, `u ← s u` (after an exact convolution of the unscaled `p`).
-    Scale(f64),
 }
 
 impl<'a> Solver<'a> {
@@ -348,10 +343,11 @@ impl<'a> Solver<'a> {
             self.pressure.fill(target);
         }
         self.has_solution = false;
-        let mut next_stats: Option<[f64; 6]> = Some(self.exact_deflection(1.0, 0.0));
+        // Gradient statistics of the current state (every update below computes them in the
+        // pass that makes the state).
+        let mut stats = self.exact_deflection(1.0, 0.0);
         report.convolutions += 1;
 
-        let mut pending = Pending::Exact;
         let mut exact = true;
         let mut linear_steps = 0usize;
         let mut shift = 0.0f64;
@@ -363,13 +359,8 @@ impl<'a> Solver<'a> {
         let self_influence = self.op.self_influence();
 
         loop {
-            // Pass 1: apply the pending update; gradient statistics on the contact set.
-            let s1 = match next_stats.take() {
-                Some(stats) => stats,
-                None => self.pass_gradient(pending, shift),
-            };
-            pending = Pending::Exact;
-            let [n_s, sum_g, sum_g2, sum_pg, sum_p, min_g] = s1;
+            // Gradient statistics on the contact set.
+            let [n_s, sum_g, sum_g2, sum_pg, sum_p, min_g] = stats;
             let mean_g = sum_g / n_s;
             let g_norm = (sum_g2 - n_s * mean_g * mean_g).max(0.0);
             let error = (sum_pg - min_g * sum_p) / (sum_p * self.height_std);
@@ -377,7 +368,7 @@ impl<'a> Solver<'a> {
             if error <= cfg.tolerance && !exact {
                 // Confirm with an exact deflection (and the exact load) before declaring
                 // convergence.
-                next_stats = Some(self.exact_deflection(target * len as f64 / sum_p, shift));
+                stats = self.exact_deflection(target * len as f64 / sum_p, shift);
                 report.convolutions += 1;
                 exact = true;
                 linear_steps = 0;
@@ -429,14 +420,14 @@ impl<'a> Solver<'a> {
             // nodes; speculatively update the deflection linearly (u − τ K t) and gather the
             // next gradient statistics.
             let new_shift = level;
-            let ([total, kept_t, kept_n, readmitted, changed, _], stats) =
+            let ([total, kept_t, kept_n, readmitted, changed, _], linear_stats) =
                 self.update_from_transform(tau, level, new_shift);
             direction_mean = if kept_n > 0.0 { kept_t / kept_n } else { 0.0 };
             restart = readmitted > 0.0;
             shift = new_shift;
             if total <= 0.0 {
                 self.pressure.fill(target);
-                next_stats = Some(self.exact_deflection(1.0, shift));
+                stats = self.exact_deflection(1.0, shift);
                 report.convolutions += 1;
                 exact = true;
                 restart = true;
@@ -447,19 +438,18 @@ impl<'a> Solver<'a> {
                 // Nothing left or entered the set: p and u are both exact linear updates and
                 // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next
                 // exact step.
-                next_stats = Some(stats);
+                stats = linear_stats;
                 exact = false;
                 linear_steps += 1;
             } else if changed as usize <= MAX_SPARSE
                 && linear_steps + 1 < RESYNC
                 && self.gather_changes()
             {
-                self.op.add_point_loads(&self.sparse, &mut self.deflection);
-                pending = Pending::Scale(scale);
+                stats = self.sparse_update(scale, shift);
                 exact = false;
                 linear_steps += 1;
             } else {
-                next_stats = Some(self.exact_deflection(scale, shift));
+                stats = self.exact_deflection(scale, shift);
                 report.convolutions += 1;
                 exact = true;
                 linear_steps = 0;
@@ -480,27 +470,36 @@ impl<'a> Solver<'a> {
         self.partials.iter().map(|p| p[0]).sum()
     }
 
-    /// Apply `pending`, then over all nodes: `min(g)`, and over the contact set `S = {p > 0}`:
-    /// `|S|, Σg, Σg², Σpg, Σp`, with `g = u − h − shift`.
-    fn pass_gradient(&mut self, pending: Pending, shift: f64) -> [f64; 6] {
+    /// `u ← s (u + K Δ)` for the changed nodes gathered in `self.sparse` (direct summation,
+    /// row by row), `p ← s p`, and the gradient statistics ([`gradient_row`]) in the same pass.
+    fn sparse_update(&mut self, scale: f64, shift: f64) -> [f64; 6] {
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
-        let scale = match pending {
-            Pending::Exact => None,
-            Pending::Scale(s) => Some(s),
-        };
+        let (op, loads) = (self.op, &self.sparse);
         self.pressure
             .par_chunks_mut(chunk)
             .zip(self.deflection.par_chunks_mut(chunk))
             .zip(h.par_chunks(chunk))
             .zip(self.partials.par_iter_mut())
-            .for_each(|(((pc, uc), hc), part)| {
+            .enumerate()
+            .for_each(|(b, (((pc, uc), hc), part))| {
                 let mut acc = GradientLanes::new();
-                for ((p, u), h) in pc
+                for (r, ((p, u), h)) in pc
                     .chunks_exact_mut(n)
                     .zip(uc.chunks_exact_mut(n))
                     .zip(hc.chunks_exact(n))
+                    .enumerate()
                 {
-                    dispatch_gradient(shift, scale, p, u, h, &mut acc);
+                    dispatch_sparse(
+                        op,
+                        b * (chunk / n) + r,
+                        loads,
+                        shift,
+                        scale,
+                        p,
+                        u,
+                        h,
+                        &mut acc,
+                    );
                 }
                 *part = acc.finish();
             });
@@ -508,9 +507,8 @@ impl<'a> Solver<'a> {
     }
 
     /// `u ← s K p`, `p ← s p` (an exact deflection, then the load correction), with the
-    /// statistics of [`Self::pass_gradient`] gathered as the rows of `K p` come out of the
-    /// inverse FFT: the same values as `apply` followed by `pass_gradient(Scale(s))`,
-    /// one pass over the fields fewer.
+    /// statistics ([`gradient_row`]) gathered as the rows of `K p` come out of the
+    /// inverse FFT (one pass over the fields fewer than applying `K` and then scanning).
     fn exact_deflection(&mut self, scale: f64, shift: f64) -> [f64; 6] {
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         self.op.start_rows(
@@ -617,7 +615,7 @@ impl<'a> Solver<'a> {
     /// `p ← max(p − τ t, 0)` on S; nodes with `p = 0` and `g − level < 0` are re-admitted
     /// with `p = −τ (g − level)`. Records the nodes where the result departs from the
     /// linear step. Also `u ← u − τ K t` and the gradient statistics of
-    /// [`Self::pass_gradient`] for the new state with `g = u − h − next_shift` (exact if no
+    /// [`gradient_row`] for the new state with `g = u − h − next_shift` (exact if no
     /// node changed). Returns `[Σp, Σ t over the new S, |new S|, #re-admitted, #changed, 0]`
     /// and those statistics.
     fn update_from_transform(
@@ -685,7 +683,7 @@ impl<'a> Solver<'a> {
         self.sparse.clear();
         for (slots, acc) in self.changes.iter().zip(&self.update_acc) {
             let count = acc.changed;
-            if count > MAX_SPARSE || self.sparse.len() + count > MAX_SPARSE {
+            if self.sparse.len() + count > MAX_SPARSE {
                 return false;
             }
             self.sparse.extend_from_slice(&slots[..count]);
@@ -777,8 +775,42 @@ avx2_dispatch! {
     );
 }
 
-/// One row of [`Solver::pass_gradient`]: `p ← s p`, `u ← s u` if a scale is given, then the
-/// gradient statistics of the row with `g = u − h − shift` added to `acc`.
+avx2_dispatch! {
+    /// [`sparse_row`] with AVX2 where available.
+    fn dispatch_sparse = sparse_row(
+        op: &ElasticOperator,
+        iy: usize,
+        loads: &[(usize, f64)],
+        shift: f64,
+        scale: f64,
+        p: &mut [f64],
+        u: &mut [f64],
+        h: &[f64],
+        acc: &mut GradientLanes,
+    );
+}
+
+/// One row of [`Solver::sparse_update`]: the point loads, then [`gradient_row`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn sparse_row(
+    op: &ElasticOperator,
+    iy: usize,
+    loads: &[(usize, f64)],
+    shift: f64,
+    scale: f64,
+    p: &mut [f64],
+    u: &mut [f64],
+    h: &[f64],
+    acc: &mut GradientLanes,
+) {
+    op.add_point_loads_row(iy, loads, u);
+    gradient_row(shift, Some(scale), p, u, h, acc);
+}
+
+/// One row of the gradient statistics: `p ← s p`, `u ← s u` if a scale is given, then, with
+/// `g = u − h − shift`, `min g` over all nodes and `|S|, Σg, Σg², Σpg, Σp` over the contact
+/// set `S = {p > 0}`, added to `acc`.
 #[inline(always)]
 fn gradient_row(
     shift: f64,
