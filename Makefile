@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-labelling speed-accuracy clean
+.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-labelling speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -29,13 +29,17 @@ test-client: build
 fmt:
 	cargo fmt
 
-bench: bench-fft bench-solver bench-peers bench-labelling speed-accuracy
+bench: bench-fft bench-solver bench-peers bench-iteration bench-labelling speed-accuracy
 
 bench-fft:
 	bash benches/fft_compare.sh
 
 bench-solver:
 	cargo bench --bench solver -- --noplot
+
+# One solver iteration in units of one FFT pair of our own (issue 3), drift-cancelling.
+bench-iteration:
+	cargo bench --bench iteration_cost
 
 # Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
 bench-labelling:

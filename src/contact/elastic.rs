@@ -21,12 +21,10 @@ pub struct ElasticOperator {
     /// `2/(E*|q|) / n²` for kx ∈ 0..=n/2 and |ky| ∈ 0..=n/2 (the multiplier depends on
     /// |ky| only), row-major by kx; 0 at q = 0. Includes the `1/n²` of the FFT pair.
     multiplier: Vec<f64>,
-    /// Response to a unit pressure on node (0, 0): `kernel[|dy| * (n/2+1) + |dx|]` with
-    /// the periodic distances `|dx|, |dy| ∈ 0..=n/2` (the response is even in both).
-    kernel: Vec<f64>,
-    /// The same response by periodic row offset: `kernel_rows[|dy| * n + dx]` for
-    /// `dx ∈ 0..n` (`(n/2+1) · n` values), so that a point load adds two ascending runs to
-    /// a row.
+    /// Response to a unit pressure on node (0, 0), by periodic row distance and column
+    /// offset: `kernel_rows[|dy| * n + dx]` for `|dy| ∈ 0..=n/2`, `dx ∈ 0..n` (`(n/2+1) · n`
+    /// values; the response is even in both directions, `K(dx) = K(n − dx)`, symmetrised
+    /// exactly), so that a point load adds two ascending runs to a row.
     kernel_rows: Vec<f64>,
 }
 
@@ -64,7 +62,6 @@ impl ElasticOperator {
             e_star,
             fft,
             multiplier,
-            kernel: Vec::new(),
             kernel_rows: Vec::new(),
         };
         let mut ws = op.make_workspace();
@@ -72,11 +69,10 @@ impl ElasticOperator {
         unit[0] = 1.0;
         let mut response = vec![0.0; n * n];
         op.apply(&unit, &mut response, &mut ws);
-        op.kernel = (0..h * h).map(|i| response[(i / h) * n + i % h]).collect();
         op.kernel_rows = (0..h * n)
             .map(|i| {
                 let (dy, dx) = (i / n, i % n);
-                op.kernel[dy * h + dx.min(n - dx)]
+                response[dy * n + dx.min(n - dx)]
             })
             .collect();
         op
@@ -92,7 +88,7 @@ impl ElasticOperator {
 
     /// Deflection at a node per unit pressure applied on that node alone (`K_ii`).
     pub fn self_influence(&self) -> f64 {
-        self.kernel[0]
+        self.kernel_rows[0]
     }
 
     pub fn make_workspace(&self) -> OperatorWorkspace {

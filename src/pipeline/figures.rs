@@ -1336,11 +1336,16 @@ fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(String, Dra
     let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
         let mut p = LinePlot::new(title, "W / W0", y, true, y_axis);
         p.series = series;
-        p.legend = if y_axis == YAxis::Log {
-            LegendAt::LowerRight
-        } else {
-            LegendAt::MiddleLeft
-        };
+        match y_axis {
+            YAxis::Log => p.legend = LegendAt::LowerRight,
+            YAxis::LinLog { .. } => p.legend = LegendAt::MiddleLeft,
+            YAxis::Linear => {
+                // Fig. 5a: the curves fill the width between 0 and 1, so the legend gets
+                // its own band above them.
+                p.legend = LegendAt::UpperLeft;
+                p.y_headroom = 0.45;
+            }
+        }
         Drawn::Line(p)
     };
     Ok(vec![

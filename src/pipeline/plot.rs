@@ -128,6 +128,9 @@ pub struct LinePlot {
     pub x_marks: Vec<f64>,
     /// Where the legend goes.
     pub legend: LegendAt,
+    /// On a linear y axis, room left empty above the data for the legend, as a fraction of
+    /// the data's range (0: none).
+    pub y_headroom: f64,
 }
 
 impl LinePlot {
@@ -148,6 +151,7 @@ impl LinePlot {
             series: Vec::new(),
             x_marks: Vec::new(),
             legend: LegendAt::UpperRight,
+            y_headroom: 0.0,
         }
     }
 }
@@ -156,6 +160,7 @@ impl LinePlot {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LegendAt {
     MiddleLeft,
+    UpperLeft,
     UpperRight,
     LowerLeft,
     LowerRight,
@@ -165,6 +170,7 @@ impl LegendAt {
     fn position(self) -> SeriesLabelPosition {
         match self {
             LegendAt::MiddleLeft => SeriesLabelPosition::MiddleLeft,
+            LegendAt::UpperLeft => SeriesLabelPosition::UpperLeft,
             LegendAt::UpperRight => SeriesLabelPosition::UpperRight,
             LegendAt::LowerLeft => SeriesLabelPosition::LowerLeft,
             LegendAt::LowerRight => SeriesLabelPosition::LowerRight,
@@ -407,7 +413,7 @@ impl LinePlot {
                 }
             }
             YAxis::Linear => {
-                let (y0, y1) = padded(y0, y1, false);
+                let (y0, y1) = padded(y0, y1 + self.y_headroom.max(0.0) * (y1 - y0), false);
                 if self.x_log {
                     finish!(
                         builder
