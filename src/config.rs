@@ -391,14 +391,8 @@ impl Pipeline {
                     format!("must lie within the loads of profile '{profile}', [{lo}, {hi}] ({loads_field})"),
                 ));
             }
-            let nearest = (0..loads.len())
-                .min_by(|&a, &b| {
-                    let da = (loads[a] / w).ln().abs();
-                    let db = (loads[b] / w).ln().abs();
-                    da.total_cmp(&db)
-                })
-                .expect("at least one load");
-            keep_pressure.push(nearest);
+            keep_pressure
+                .push(crate::statistics::nearest_in_log(&loads, w).expect("loads are positive"));
         }
         keep_pressure.sort_unstable();
         keep_pressure.dedup();

@@ -81,6 +81,22 @@ pub fn log_edges(lo: f64, hi: f64, count: usize) -> Vec<f64> {
     edges
 }
 
+/// Index of the positive value of `values` nearest to `target` (> 0) in log scale,
+/// i.e. minimising `|ln(v / target)|` (the first on a tie); `None` if no value is positive.
+/// Used wherever a requested load is matched to a sweep's loads.
+pub fn nearest_in_log(values: &[f64], target: f64) -> Option<usize> {
+    values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v > 0.0)
+        .min_by(|a, b| {
+            let da = (a.1 / target).ln().abs();
+            let db = (b.1 / target).ln().abs();
+            da.total_cmp(&db)
+        })
+        .map(|(i, _)| i)
+}
+
 /// One bin of the area PDF.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PdfBin {
@@ -239,6 +255,18 @@ pub fn ks_critical_95(n: usize, m: usize) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn nearest_in_log_is_nearest_by_ratio_not_by_difference() {
+        let loads = [0.001, 0.01, 0.1];
+        // 0.004 is nearer to 0.001 by difference but to 0.01 by ratio (2.5 < 4).
+        assert_eq!(nearest_in_log(&loads, 0.004), Some(1));
+        assert_eq!(nearest_in_log(&loads, 0.002), Some(0));
+        assert_eq!(nearest_in_log(&loads, 5.0), Some(2));
+        // Non-positive values are never chosen; none left gives None.
+        assert_eq!(nearest_in_log(&[0.0, -1.0, 0.5], 1e-3), Some(2));
+        assert_eq!(nearest_in_log(&[0.0, -1.0], 1.0), None);
+    }
+
     use super::*;
 
     #[test]

@@ -44,20 +44,6 @@ fn str_column(df: &DataFrame, name: &str) -> anyhow::Result<Vec<String>> {
         .collect())
 }
 
-/// Index of the value of `values` nearest to `target` in log scale.
-fn nearest(values: &[f64], target: f64) -> Option<usize> {
-    values
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| **v > 0.0)
-        .min_by(|a, b| {
-            let da = (a.1.ln() - target.ln()).abs();
-            let db = (b.1.ln() - target.ln()).abs();
-            da.total_cmp(&db)
-        })
-        .map(|(i, _)| i)
-}
-
 /// Distinct loads `(load_index, W/W0)` of a statistics table, in order.
 fn loads_of(df: &DataFrame) -> anyhow::Result<Vec<(u32, f64)>> {
     let idx = u32_column(df, "load_index")?;
@@ -77,7 +63,7 @@ fn pick_loads(loads: &[(u32, f64)], targets: &[f64]) -> Vec<(u32, f64)> {
     let w: Vec<f64> = loads.iter().map(|l| l.1).collect();
     let mut out: Vec<(u32, f64)> = targets
         .iter()
-        .filter_map(|&t| nearest(&w, t).map(|i| loads[i]))
+        .filter_map(|&t| crate::statistics::nearest_in_log(&w, t).map(|i| loads[i]))
         .collect();
     out.sort_by(|a, b| a.1.total_cmp(&b.1));
     out.dedup_by_key(|l| l.0);
