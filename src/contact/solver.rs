@@ -711,16 +711,19 @@ impl<'a> Solver<'a> {
 /// Define `$name`, which runs `$body` compiled with AVX2 where the processor has it and as
 /// is elsewhere. IEEE arithmetic without fused multiply-add gives the same bits either way.
 macro_rules! avx2_dispatch {
-    ($(#[$attr:meta])* fn $name:ident = $body:ident($($arg:ident: $ty:ty),* $(,)?);) => {
+    ($(#[$attr:meta])* fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
         $(#[$attr])*
         #[allow(clippy::too_many_arguments)]
         fn $name($($arg: $ty),*) {
+            #[inline(always)]
+            #[allow(clippy::too_many_arguments)]
+            fn body($($arg: $ty),*) $body
             #[cfg(target_arch = "x86_64")]
             {
                 #[target_feature(enable = "avx2")]
                 #[allow(clippy::too_many_arguments)]
                 unsafe fn avx2($($arg: $ty),*) {
-                    $body($($arg),*)
+                    body($($arg),*)
                 }
                 if std::is_x86_feature_detected!("avx2") {
                     // SAFETY: the processor supports AVX2 (checked just above).
@@ -728,7 +731,14 @@ macro_rules! avx2_dispatch {
                     return;
                 }
             }
-            $body($($arg),*)
+            body($($arg),*)
+        }
+    };
+    // A named generic body (`#[inline(always)]`), compiled once more with AVX2.
+    ($(#[$attr:meta])* fn $name:ident = $body:ident($($arg:ident: $ty:ty),* $(,)?);) => {
+        avx2_dispatch! {
+            $(#[$attr])*
+            fn $name($($arg: $ty),*) { $body($($arg),*) }
         }
     };
 }
@@ -776,8 +786,9 @@ avx2_dispatch! {
 }
 
 avx2_dispatch! {
-    /// [`sparse_row`] with AVX2 where available.
-    fn dispatch_sparse = sparse_row(
+    /// One row of [`Solver::sparse_update`], with AVX2 where available: the point loads,
+    /// then [`gradient_row`].
+    fn dispatch_sparse(
         op: &ElasticOperator,
         iy: usize,
         loads: &[(usize, f64)],
@@ -787,25 +798,10 @@ avx2_dispatch! {
         u: &mut [f64],
         h: &[f64],
         acc: &mut GradientLanes,
-    );
-}
-
-/// One row of [`Solver::sparse_update`]: the point loads, then [`gradient_row`].
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn sparse_row(
-    op: &ElasticOperator,
-    iy: usize,
-    loads: &[(usize, f64)],
-    shift: f64,
-    scale: f64,
-    p: &mut [f64],
-    u: &mut [f64],
-    h: &[f64],
-    acc: &mut GradientLanes,
-) {
-    op.add_point_loads_row(iy, loads, u);
-    gradient_row(shift, Some(scale), p, u, h, acc);
+    ) {
+        op.add_point_loads_row(iy, loads, u);
+        gradient_row(shift, Some(scale), p, u, h, acc);
+    }
 }
 
 /// One row of the gradient statistics: `p ← s p`, `u ← s u` if a scale is given, then, with
