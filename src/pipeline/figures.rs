@@ -188,6 +188,7 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
         )?,
         FigureJob::Fig34a { ratios, hurst } => fig34a(store, ratios, hurst)?,
         FigureJob::Appendix { figure, settings } => appendix(store, figure, settings)?,
+        FigureJob::Convergence128 { settings } => fig128_convergence(store, settings)?,
     };
     let mut names = Vec::new();
     let mut sizes = serde_json::Map::new();
@@ -1258,6 +1259,181 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
         plots: vec![ks, da, real],
         layout: Layout::Grid { columns: 3 },
     }
+}
+
+/// The λ_l/λ_s = 128 convergence figure: KS distance and exponent difference of each
+/// setting's pooled cluster areas to the reference's (the last setting, the sizes the
+/// Appendix B rule asks for) against W/W0; the ensemble CCDFs at the largest load; the KS
+/// distance of the first r realizations of each setting to all of them. Also the table and,
+/// per setting, the largest KS distance over loads and whether it is within
+/// [`CONVERGENCE_KS_TOLERANCE`].
+fn fig128_convergence(
+    store: &Store,
+    settings: &[StudyRef],
+) -> anyhow::Result<Vec<(String, Drawn)>> {
+    anyhow::ensure!(
+        settings.len() >= 2,
+        "fig128_convergence: needs a setting and a reference"
+    );
+    let table = convergence_table(store, settings)?;
+    let reference = settings.last().expect("two settings or more");
+    let candidates = &settings[..settings.len() - 1];
+    let setting_rows = |label: &str| -> Vec<&ConvergenceRow> {
+        let mut rows: Vec<&ConvergenceRow> = table
+            .rows
+            .iter()
+            .filter(|r| r.kind == "setting" && r.study == label)
+            .collect();
+        rows.sort_by(|a, b| a.w_over_w0.total_cmp(&b.w_over_w0));
+        rows
+    };
+    let title = "λ_l/λ_s = 128";
+    let mut ks = LinePlot::new(
+        format!("{title}: KS distance to {}", reference.label),
+        "W/W0",
+        "KS distance (pooled A/λ_s²)",
+        true,
+        YAxis::Linear,
+    );
+    let mut da = LinePlot::new(
+        format!("{title}: α − α(reference)"),
+        "W/W0",
+        "α − α(reference), plateau + power-law MLE",
+        true,
+        YAxis::Linear,
+    );
+    let mut summary = Vec::new();
+    for (c, s) in candidates.iter().enumerate() {
+        let rows = setting_rows(&s.label);
+        ks.series.push(Series {
+            markers: true,
+            ..Series::line(
+                s.label.clone(),
+                rows.iter().map(|r| (r.w_over_w0, r.ks)).collect(),
+                c,
+            )
+        });
+        ks.series.push(Series {
+            dashed: true,
+            width: 1,
+            ..Series::line(
+                if c == 0 { "95 % critical values" } else { "" },
+                rows.iter().map(|r| (r.w_over_w0, r.critical)).collect(),
+                c,
+            )
+        });
+        da.series.push(Series {
+            markers: true,
+            ..Series::line(
+                s.label.clone(),
+                rows.iter()
+                    .filter_map(|r| Some((r.w_over_w0, r.alpha? - r.alpha_reference?)))
+                    .collect(),
+                c,
+            )
+        });
+        let max_ks = rows.iter().map(|r| r.ks).fold(0.0, f64::max);
+        let realizations = rows.first().map(|r| r.realizations).unwrap_or(0);
+        summary.push(json!({
+            "setting": s.label,
+            "n": s.value,
+            "realizations": realizations,
+            "max_ks_over_loads": max_ks,
+            "ks_by_load": rows.iter().map(|r| (r.w_over_w0, r.ks)).collect::<Vec<_>>(),
+            "ks_critical_95_by_load": rows.iter().map(|r| (r.w_over_w0, r.critical)).collect::<Vec<_>>(),
+            "within_tolerance": !rows.is_empty() && max_ks <= CONVERGENCE_KS_TOLERANCE,
+        }));
+    }
+    let loads: Vec<f64> = setting_rows(&candidates[0].label)
+        .iter()
+        .map(|r| r.w_over_w0)
+        .collect();
+    if let (Some(&lo), Some(&hi)) = (loads.first(), loads.last()) {
+        ks.series.push(Series {
+            rgb: Some((0, 0, 0)),
+            dashed: true,
+            ..Series::line(
+                format!("tolerance {CONVERGENCE_KS_TOLERANCE}"),
+                vec![
+                    (lo, CONVERGENCE_KS_TOLERANCE),
+                    (hi, CONVERGENCE_KS_TOLERANCE),
+                ],
+                0,
+            )
+        });
+    }
+    // Ensemble-mean CCDFs at the largest load, reference in black.
+    let tables = settings
+        .iter()
+        .map(|s| CcdfTable::read(store, &s.statistics_key))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut ccdf = LinePlot::new(
+        format!("{title}: ensemble CCDF at the largest load"),
+        "A / λ_s²",
+        "P(A > a), ensemble mean",
+        true,
+        YAxis::Log,
+    );
+    ccdf.legend = LegendAt::LowerLeft;
+    for (c, (s, t)) in settings.iter().zip(&tables).enumerate() {
+        let Some(&(load_index, w)) = t.loads().last() else {
+            continue;
+        };
+        let is_reference = c + 1 == settings.len();
+        ccdf.series.push(Series {
+            rgb: is_reference.then_some((0, 0, 0)),
+            ..Series::line(
+                format!("{}, W/W0 = {w:.3}", s.label),
+                t.curve(load_index, None, true),
+                c,
+            )
+        });
+    }
+    let mut real = LinePlot::new(
+        format!("{title}: first r realizations vs all"),
+        "realizations r",
+        "max KS distance over loads",
+        false,
+        YAxis::Linear,
+    );
+    for (c, s) in settings.iter().enumerate() {
+        let mut by_r: Vec<(f64, f64)> = Vec::new();
+        for r in table
+            .rows
+            .iter()
+            .filter(|r| r.kind == "realizations" && r.study == s.label)
+        {
+            let x = r.realizations as f64;
+            match by_r.iter_mut().find(|e| e.0 == x) {
+                Some(e) => e.1 = e.1.max(r.ks),
+                None => by_r.push((x, r.ks)),
+            }
+        }
+        by_r.sort_by(|a, b| a.0.total_cmp(&b.0));
+        real.series.push(Series {
+            markers: true,
+            ..Series::line(s.label.clone(), by_r, c)
+        });
+    }
+    Ok(vec![
+        (
+            "fig128_convergence".into(),
+            Drawn::Panels(Panels {
+                plots: vec![ks, da, ccdf, real],
+                layout: Layout::Grid { columns: 2 },
+            }),
+        ),
+        ("fig128_convergence".into(), Drawn::Table(table.frame()?)),
+        (
+            "convergence".into(),
+            Drawn::Result(json!({
+                "tolerance": CONVERGENCE_KS_TOLERANCE,
+                "alpha_estimator": CONVERGENCE_ESTIMATOR.name(),
+                "reference": reference.label,
+                "settings": summary,
+            })),
+        ),
+    ])
 }
 
 /// Thresholds A*/λ_s² drawn in Figs. 4b and 5.

@@ -86,6 +86,10 @@ pub enum FigureJob {
         figure: &'static str,
         settings: Vec<StudyRef>,
     },
+    /// Convergence of the λ_l/λ_s = 128 sizes (`fig128_convergence`, studies `c128_*`):
+    /// each setting against the last one, the reference (largest grid). `value` is the grid
+    /// side n.
+    Convergence128 { settings: Vec<StudyRef> },
 }
 
 /// Paper Fig. 6: the exponent, and the thresholds `A*/A_s` of the model curves, whose cut-off
@@ -442,7 +446,8 @@ fn figure_instance(
 
 /// The figures instances of the paper figures whose studies are in the profile: Fig. 2 from
 /// `fig2`, Figs. 3–4a from `fig3_ll*` (inset `fig3_h*` and `fig3_ll128`), Figs. 4b–5 from
-/// `fig3_ll128`, Fig. B.1 from `b1_*` and B.2 from `b2_*`.
+/// `fig3_ll128`, Fig. B.1 from `b1_*`, B.2 from `b2_*` and the λ_l/λ_s = 128 convergence
+/// figure from `c128_*`.
 fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
     let mut out = Vec::new();
     let find = |name: &str| keys.iter().find(|k| k.plan.name == name);
@@ -567,6 +572,51 @@ fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
                 figure,
                 settings: refs,
             },
+        ));
+    }
+    let mut c128: Vec<&StudyKeys> = keys
+        .iter()
+        .filter(|k| k.plan.name.starts_with("c128_"))
+        .collect();
+    // Reference last: the largest grid, and of equal grids the finer discretisation.
+    c128.sort_by(|a, b| {
+        let (sa, sb) = (&a.plan.surface, &b.plan.surface);
+        (sa.n, sa.lambda_s_px)
+            .partial_cmp(&(sb.n, sb.lambda_s_px))
+            .expect("finite sizes")
+    });
+    if c128.len() >= 2 {
+        let refs: Vec<StudyRef> = c128
+            .iter()
+            .map(|k| {
+                let s = &k.plan.surface;
+                StudyRef {
+                    label: format!(
+                        "L/λ_l = {}, λ_s/Δl = {} (n = {})",
+                        s.n as f64 / s.lambda_l_px,
+                        s.lambda_s_px,
+                        s.n
+                    ),
+                    value: s.n as f64,
+                    statistics_key: k.statistics_key.clone(),
+                    lambda_s_px: s.lambda_s_px,
+                }
+            })
+            .collect();
+        // Two studies with the same sizes would share a label (the figure's key for a
+        // setting): tell them apart by study name.
+        let mut refs = refs;
+        for i in 0..refs.len() {
+            if refs.iter().filter(|r| r.label == refs[i].label).count() > 1 {
+                refs[i].label = format!("{} [{}]", refs[i].label, c128[i].plan.name);
+            }
+        }
+        out.push(figure_instance(
+            json!({ "figure": "fig128_convergence",
+                    "settings": refs.iter().map(|r| r.label.clone()).collect::<Vec<_>>() }),
+            refs.iter().map(|r| r.statistics_key.clone()).collect(),
+            names(&c128),
+            FigureJob::Convergence128 { settings: refs },
         ));
     }
     out

@@ -142,6 +142,43 @@ def check_fig2_convergence(path, clusters_rows):
               f"{path}: r={r} peak at {row['count_peak_load_index']}")
 
 
+def ks_two_sample(a, b):
+    """Largest distance between the two empirical CDFs (right-continuous)."""
+    a, b = np.sort(a), np.sort(b)
+    x = np.concatenate([a, b])
+    return float(np.max(np.abs(np.searchsorted(a, x, side="right") / len(a)
+                               - np.searchsorted(b, x, side="right") / len(b)), initial=0.0))
+
+
+def check_convergence_ks(path, clusters_rows):
+    """Recompute each setting's KS distance to the reference from the studies' clusters
+    tables (areas A/λ_s² pooled over realizations, percolating clusters left out). The table
+    names settings by label, so the pair of studies is found by the cluster counts it
+    states; some pair with those counts must give the stated distance."""
+    pooled = {}
+    for _, c in clusters_rows.iterrows():
+        df = pd.read_parquet(c.path)
+        df = df[~df["percolating"]]
+        for w, g in df.groupby("w_over_w0"):
+            pooled.setdefault(c.study, {}).setdefault(w, []).append(g["area_over_ls2"].to_numpy())
+    samples = {s: {w: np.concatenate(v) for w, v in by_w.items()} for s, by_w in pooled.items()}
+    table = pd.read_parquet(path)
+    checked = 0
+    for _, row in table[table["kind"] == "setting"].iterrows():
+        w = row["w_over_w0"]
+        at = [v[w] for v in samples.values() if w in v]
+        cands = [a for a in at if len(a) == row["n_clusters"]]
+        refs = [a for a in at if len(a) == row["n_clusters_reference"]]
+        ks = [ks_two_sample(a, b) for a in cands for b in refs]
+        if check(ks, f"{path}: no studies with {row['n_clusters']} and "
+                     f"{row['n_clusters_reference']} clusters at W/W0 = {w}"):
+            check(min(abs(k - row["ks_distance"]) for k in ks) <= 1e-12,
+                  f"{path}: {row['study']} at W/W0 = {w}: KS {row['ks_distance']}, "
+                  f"recomputed {ks}")
+            checked += 1
+    check(checked > 0, f"{path}: no setting row checked")
+
+
 def main(data_dir, profile):
     catalog_path = os.path.join(data_dir, profile, "index.parquet")
     schema = pq.read_schema(catalog_path)
@@ -292,12 +329,17 @@ def main(data_dir, profile):
                   f"{r.path}: {len(df)} rows, kinds {set(df['kind'])}")
             finest = df[(df["kind"] == "setting") & (df["setting"] == df["setting"].max())]
             check((finest["ks_distance"] == 0).all(), f"{r.path}: finest setting not at 0")
+            prefix = {"figB1_convergence.parquet": "b1_", "figB2_convergence.parquet": "b2_",
+                      "fig128_convergence.parquet": "c128_"}.get(r.file)
+            if check(prefix is not None, f"{r.path}: an unknown convergence table"):
+                cl = rows("clusters", "clusters.parquet")
+                check_convergence_ks(r.path, cl[cl["study"].str.startswith(prefix)])
         elif ext == ".npy":
             a = np.load(r.path)
             check(a.ndim == 2 and a.size > 0, f"{r.path}: shape {a.shape}")
     expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig2_convergence",
                 "fig3", "fig4a", "fig4b", "fig5a", "fig5b", "fig6", "figB1", "figB2",
-                "figB1_convergence", "figB2_convergence"]
+                "figB1_convergence", "figB2_convergence", "fig128_convergence"]
     drawn = {os.path.splitext(f)[0] for f in rows("figures")["file"] if f.endswith(".png")}
     check(set(expected) <= drawn, f"missing figures: {sorted(set(expected) - drawn)}")
 
