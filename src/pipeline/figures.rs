@@ -1397,19 +1397,9 @@ fn fig128_convergence(
         YAxis::Linear,
     );
     for (c, s) in settings.iter().enumerate() {
-        let mut by_r: Vec<(f64, f64)> = Vec::new();
-        for r in table
-            .rows
-            .iter()
-            .filter(|r| r.kind == "realizations" && r.study == s.label)
-        {
-            let x = r.realizations as f64;
-            match by_r.iter_mut().find(|e| e.0 == x) {
-                Some(e) => e.1 = e.1.max(r.ks),
-                None => by_r.push((x, r.ks)),
-            }
-        }
-        by_r.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let by_r = table.max_ks("realizations", &|r| {
+            (r.study == s.label).then_some(r.realizations as f64)
+        });
         real.series.push(Series {
             markers: true,
             ..Series::line(s.label.clone(), by_r, c)
