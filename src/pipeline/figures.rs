@@ -1141,6 +1141,42 @@ fn convergence_table(store: &Store, settings: &[StudyRef]) -> anyhow::Result<Con
     Ok(ConvergenceTable { rows })
 }
 
+/// One curve of a convergence figure: KS distance (markers) and its 95 % critical value
+/// (dashed, labelled `critical_label`) on `ks`, exponent difference on `da`, against `x(row)`.
+fn push_convergence_curves(
+    ks: &mut LinePlot,
+    da: &mut LinePlot,
+    label: &str,
+    critical_label: &str,
+    rows: &[&ConvergenceRow],
+    x: impl Fn(&ConvergenceRow) -> f64,
+    color: usize,
+) {
+    ks.series.push(Series {
+        markers: true,
+        ..Series::line(label, rows.iter().map(|r| (x(r), r.ks)).collect(), color)
+    });
+    ks.series.push(Series {
+        dashed: true,
+        width: 1,
+        ..Series::line(
+            critical_label,
+            rows.iter().map(|r| (x(r), r.critical)).collect(),
+            color,
+        )
+    });
+    da.series.push(Series {
+        markers: true,
+        ..Series::line(
+            label,
+            rows.iter()
+                .filter_map(|r| Some((x(r), r.alpha? - r.alpha_reference?)))
+                .collect(),
+            color,
+        )
+    });
+}
+
 /// The convergence figure: KS distance and exponent difference to the finest setting against
 /// the setting (one curve per load), and KS distance of `r` realizations to all of them.
 fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTable) -> Panels {
@@ -1184,33 +1220,9 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
             .iter()
             .filter(|r| r.kind == "setting" && r.w_over_w0 == w)
             .collect();
-        ks.series.push(Series {
-            markers: true,
-            ..Series::line(
-                format!("W/W0 = {w:.3}"),
-                rows.iter().map(|r| (r.setting, r.ks)).collect(),
-                c,
-            )
-        });
-        ks.series.push(Series {
-            dashed: true,
-            width: 1,
-            ..Series::line(
-                if c == 0 { "95 % critical value" } else { "" },
-                rows.iter().map(|r| (r.setting, r.critical)).collect(),
-                c,
-            )
-        });
-        da.series.push(Series {
-            markers: true,
-            ..Series::line(
-                format!("W/W0 = {w:.3}"),
-                rows.iter()
-                    .filter_map(|r| Some((r.setting, r.alpha? - r.alpha_reference?)))
-                    .collect(),
-                c,
-            )
-        });
+        let critical = if c == 0 { "95 % critical value" } else { "" };
+        let label = format!("W/W0 = {w:.3}");
+        push_convergence_curves(&mut ks, &mut da, &label, critical, &rows, |r| r.setting, c);
     }
     let xs: Vec<f64> = settings.iter().map(|s| s.value).collect();
     if let (Some(&lo), Some(&hi)) = (xs.first(), xs.last()) {
@@ -1305,33 +1317,16 @@ fn fig128_convergence(
     let mut summary = Vec::new();
     for (c, s) in candidates.iter().enumerate() {
         let rows = setting_rows(&s.label);
-        ks.series.push(Series {
-            markers: true,
-            ..Series::line(
-                s.label.clone(),
-                rows.iter().map(|r| (r.w_over_w0, r.ks)).collect(),
-                c,
-            )
-        });
-        ks.series.push(Series {
-            dashed: true,
-            width: 1,
-            ..Series::line(
-                if c == 0 { "95 % critical values" } else { "" },
-                rows.iter().map(|r| (r.w_over_w0, r.critical)).collect(),
-                c,
-            )
-        });
-        da.series.push(Series {
-            markers: true,
-            ..Series::line(
-                s.label.clone(),
-                rows.iter()
-                    .filter_map(|r| Some((r.w_over_w0, r.alpha? - r.alpha_reference?)))
-                    .collect(),
-                c,
-            )
-        });
+        let critical = if c == 0 { "95 % critical values" } else { "" };
+        push_convergence_curves(
+            &mut ks,
+            &mut da,
+            &s.label,
+            critical,
+            &rows,
+            |r| r.w_over_w0,
+            c,
+        );
         let max_ks = rows.iter().map(|r| r.ks).fold(0.0, f64::max);
         let realizations = rows.first().map(|r| r.realizations).unwrap_or(0);
         summary.push(json!({
