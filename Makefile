@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-labelling speed-accuracy clean
+.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -29,7 +29,7 @@ test-client: build
 fmt:
 	cargo fmt
 
-bench: bench-fft bench-solver bench-peers bench-iteration bench-labelling speed-accuracy
+bench: bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy
 
 bench-fft:
 	bash benches/fft_compare.sh
@@ -40,6 +40,10 @@ bench-solver:
 # One solver iteration in units of one FFT pair of our own (issue 3), drift-cancelling.
 bench-iteration:
 	cargo bench --bench iteration_cost
+
+# Warm starts of a load sweep compared: scaled (the default), cold, extrapolated (issue 3).
+bench-warm-start:
+	cargo bench --bench warm_start -- 2 256 512 1024
 
 # Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
 bench-labelling:

@@ -199,6 +199,8 @@ pub enum ContactError {
     BadLength { expected: usize, got: usize },
     #[error("height at row {row}, column {col} is {value}: heights must be finite")]
     NonFinite { row: usize, col: usize, value: f64 },
+    #[error("start pressure at row {row}, column {col} is {value}: it must be finite and ≥ 0")]
+    BadStart { row: usize, col: usize, value: f64 },
     #[error("mean pressure {0} is invalid: it must be finite and ≥ 0")]
     BadLoad(f64),
     #[error("solver settings invalid: {0}")]
@@ -296,6 +298,39 @@ impl<'a> Solver<'a> {
     /// Number of nodes in contact (`p > 0`) in the last solve.
     pub fn contact_count(&self) -> usize {
         self.pressure.iter().filter(|&&p| p > 0.0).count()
+    }
+
+    /// Start the next [`Self::solve`] from `pressure` (row-major, finite, ≥ 0, not all
+    /// zero) instead of the previous solution; like the previous solution, it is scaled to
+    /// the new load first. For warm starts other than the sweep's own (e.g. extrapolation
+    /// over loads, compared in `cargo bench --bench warm_start`).
+    pub fn set_start(&mut self, pressure: &[f64]) -> Result<(), ContactError> {
+        let n = self.op.grid().n();
+        if pressure.len() != self.pressure.len() {
+            return Err(ContactError::BadLength {
+                expected: self.pressure.len(),
+                got: pressure.len(),
+            });
+        }
+        if let Some((i, v)) = pressure
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(ContactError::BadStart {
+                row: i / n,
+                col: i % n,
+                value: *v,
+            });
+        }
+        if pressure.iter().all(|&p| p == 0.0) {
+            return Err(ContactError::BadConfig(
+                "a start pressure must not be zero everywhere".into(),
+            ));
+        }
+        self.pressure.copy_from_slice(pressure);
+        self.has_solution = true;
+        Ok(())
     }
 
     /// Solve for the mean pressure `mean_pressure` (≥ 0), warm-starting from the previous

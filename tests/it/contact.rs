@@ -324,6 +324,56 @@ fn warm_started_sweep_matches_cold_solves() {
     );
 }
 
+/// `Solver::set_start`: a start at the discrete solution is accepted as it is (the first
+/// exact check converges, 0 iterations, same contact set); a start that is not a pressure
+/// field is an error and leaves the solver usable.
+#[test]
+fn a_given_start_pressure_is_checked_and_used() {
+    let n = 64;
+    let h = rough_surface(n, 16.0, 4.0, 3);
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let mut reference = Solver::new(&op, &h).unwrap();
+    assert!(reference.solve(0.02, &cfg(1e-11)).unwrap().converged());
+    let solution = reference.pressure().to_vec();
+
+    let mut solver = Solver::new(&op, &h).unwrap();
+    solver.set_start(&solution).unwrap();
+    let report = solver.solve(0.02, &cfg(1e-11)).unwrap();
+    assert!(report.converged());
+    assert_eq!(
+        report.iterations, 0,
+        "a start at the solution needs no step"
+    );
+    assert_eq!(solver.contact_count(), reference.contact_count());
+
+    let mut bad = solution.clone();
+    bad[3 * n + 5] = -1e-3;
+    assert_eq!(
+        solver.set_start(&bad),
+        Err(ContactError::BadStart {
+            row: 3,
+            col: 5,
+            value: -1e-3
+        })
+    );
+    bad[3 * n + 5] = f64::NAN;
+    assert!(matches!(
+        solver.set_start(&bad),
+        Err(ContactError::BadStart { row: 3, col: 5, .. })
+    ));
+    assert!(matches!(
+        solver.set_start(&solution[1..]),
+        Err(ContactError::BadLength { .. })
+    ));
+    assert!(matches!(
+        solver.set_start(&vec![0.0; n * n]),
+        Err(ContactError::BadConfig(_))
+    ));
+    // The rejected starts changed nothing: the next solve starts from the solution.
+    let report = solver.solve(0.02, &cfg(1e-11)).unwrap();
+    assert!(report.converged() && report.iterations == 0);
+}
+
 #[test]
 fn zero_load_gives_no_contact_and_no_nan() {
     let h = rough_surface(64, 32.0, 4.0, 1);
