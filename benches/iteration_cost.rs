@@ -11,6 +11,9 @@
 
 use std::time::Instant;
 
+mod common;
+use wearcoef::surface;
+
 /// FFT pairs timed after each load's solve.
 const PAIRS_PER_LOAD: usize = 8;
 
@@ -18,8 +21,6 @@ use wearcoef::contact::elastic::ElasticOperator;
 use wearcoef::contact::solver::{Solver, SolverConfig};
 use wearcoef::grid::Grid;
 use wearcoef::spectral::Fft2;
-use wearcoef::statistics::log_edges;
-use wearcoef::surface::{self, Method, SurfaceParams};
 
 fn main() {
     let args: Vec<usize> = std::env::args()
@@ -37,22 +38,11 @@ fn main() {
     for &n in &sizes {
         let fft = Fft2::new(n);
         let mut scratch = fft.make_scratch();
-        let params = SurfaceParams {
-            n,
-            hurst: 0.8,
-            lambda_l_px: n as f64 / 4.0,
-            lambda_s_px: 8.0,
-            rolloff_lambda_px: None,
-            method: Method::Filter,
-            seed: 1,
-        };
-        let heights = surface::generate(&params, &fft, &mut scratch)
-            .expect("valid surface parameters")
-            .heights;
+        let heights = common::peers_surface(n);
         let grid = Grid::unit(n).expect("n is even");
         let op = ElasticOperator::new(grid, 1.0);
         let slope = surface::rms_slope(&grid, &heights);
-        let loads = log_edges(0.001, 0.06, 29);
+        let loads = common::peers_loads();
         let cfg = SolverConfig {
             tolerance: 1e-8,
             ..SolverConfig::default()

@@ -6,9 +6,9 @@
 //! `make bench-labelling` can time scipy.ndimage.label on the very same maps.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+
+mod common;
 use wearcoef::clusters::{label, Connectivity};
-use wearcoef::spectral::Fft2;
-use wearcoef::surface::{self, Method, SurfaceParams};
 
 /// Pixels of the `fraction` highest heights (exactly ⌊fraction · n²⌋ of them).
 fn top_fraction(heights: &[f64], fraction: f64) -> Vec<bool> {
@@ -29,20 +29,7 @@ fn labelling(c: &mut Criterion) {
     let mut group = c.benchmark_group("label8");
     group.sample_size(10);
     for n in [1024usize, 4096] {
-        let fft = Fft2::new(n);
-        let mut scratch = fft.make_scratch();
-        let params = SurfaceParams {
-            n,
-            hurst: 0.8,
-            lambda_l_px: n as f64 / 4.0,
-            lambda_s_px: 8.0,
-            rolloff_lambda_px: None,
-            method: Method::Filter,
-            seed: 1,
-        };
-        let h = surface::generate(&params, &fft, &mut scratch)
-            .unwrap()
-            .heights;
+        let h = common::peers_surface(n);
         for percent in [1u32, 20] {
             let map = top_fraction(&h, percent as f64 / 100.0);
             let array = ndarray::Array2::from_shape_vec((n, n), map.clone()).unwrap();

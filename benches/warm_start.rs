@@ -17,12 +17,12 @@
 
 use std::time::Instant;
 
+mod common;
+use wearcoef::surface;
+
 use wearcoef::contact::elastic::ElasticOperator;
 use wearcoef::contact::solver::{Solver, SolverConfig};
 use wearcoef::grid::Grid;
-use wearcoef::spectral::Fft2;
-use wearcoef::statistics::log_edges;
-use wearcoef::surface::{self, Method, SurfaceParams};
 
 #[derive(Clone, Copy, PartialEq)]
 enum Start {
@@ -134,27 +134,11 @@ fn main() {
     println!("| N | start | iterations / load | convolutions / load | sweep time / scaled (median) | same pixel counts as scaled |");
     println!("|---|---|---|---|---|---|");
     for &n in &sizes {
-        let fft = Fft2::new(n);
-        let mut scratch = fft.make_scratch();
-        let params = SurfaceParams {
-            n,
-            hurst: 0.8,
-            lambda_l_px: n as f64 / 4.0,
-            lambda_s_px: 8.0,
-            rolloff_lambda_px: None,
-            method: Method::Filter,
-            seed: 1,
-        };
-        let heights = surface::generate(&params, &fft, &mut scratch)
-            .expect("valid surface parameters")
-            .heights;
+        let heights = common::peers_surface(n);
         let grid = Grid::unit(n).expect("n is even");
         let op = ElasticOperator::new(grid, 1.0);
         let slope = surface::rms_slope(&grid, &heights);
-        let means: Vec<f64> = log_edges(0.001, 0.06, 29)
-            .iter()
-            .map(|w| w * slope)
-            .collect();
+        let means: Vec<f64> = common::peers_loads().iter().map(|w| w * slope).collect();
         let mut ratios: Vec<Vec<f64>> = vec![Vec::new(); Start::ALL.len()];
         let mut last: Vec<Option<Sweep>> = Start::ALL.iter().map(|_| None).collect();
         for _ in 0..rounds {
