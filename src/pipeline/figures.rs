@@ -188,7 +188,11 @@ pub(super) fn compute_figure(job: &FigureJob, dir: &Path, store: &Store) -> anyh
         )?,
         FigureJob::Fig34a { ratios, hurst } => fig34a(store, ratios, hurst)?,
         FigureJob::Appendix { figure, settings } => appendix(store, figure, settings)?,
-        FigureJob::Convergence128 { settings } => fig128_convergence(store, settings)?,
+        FigureJob::Convergence128 {
+            name,
+            hurst,
+            settings,
+        } => fig128_convergence(store, name, *hurst, settings)?,
     };
     let mut names = Vec::new();
     let mut sizes = serde_json::Map::new();
@@ -1281,11 +1285,13 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
 /// [`CONVERGENCE_KS_TOLERANCE`].
 fn fig128_convergence(
     store: &Store,
+    name: &str,
+    hurst: f64,
     settings: &[StudyRef],
 ) -> anyhow::Result<Vec<(String, Drawn)>> {
     anyhow::ensure!(
         settings.len() >= 2,
-        "fig128_convergence: needs a setting and a reference"
+        "{name}: needs a setting and a reference"
     );
     let table = convergence_table(store, settings)?;
     let reference = settings.last().expect("two settings or more");
@@ -1299,7 +1305,7 @@ fn fig128_convergence(
         rows.sort_by(|a, b| a.w_over_w0.total_cmp(&b.w_over_w0));
         rows
     };
-    let title = "λ_l/λ_s = 128";
+    let title = format!("λ_l/λ_s = 128, H = {hurst}");
     let mut ks = LinePlot::new(
         format!("{title}: KS distance to {}", reference.label),
         "W/W0",
@@ -1402,13 +1408,13 @@ fn fig128_convergence(
     }
     Ok(vec![
         (
-            "fig128_convergence".into(),
+            name.into(),
             Drawn::Panels(Panels {
                 plots: vec![ks, da, ccdf, real],
                 layout: Layout::Grid { columns: 2 },
             }),
         ),
-        ("fig128_convergence".into(), Drawn::Table(table.frame()?)),
+        (name.into(), Drawn::Table(table.frame()?)),
         (
             "convergence".into(),
             Drawn::Result(json!({

@@ -86,10 +86,15 @@ pub enum FigureJob {
         figure: &'static str,
         settings: Vec<StudyRef>,
     },
-    /// Convergence of the λ_l/λ_s = 128 sizes (`fig128_convergence`, studies `c128_*`):
-    /// each setting against the last one, the reference (largest grid). `value` is the grid
-    /// side n.
-    Convergence128 { settings: Vec<StudyRef> },
+    /// Convergence of the λ_l/λ_s = 128 sizes (`fig128_convergence`, studies `c128_*` of
+    /// one Hurst exponent; `fig128_convergence_h<H>` per exponent when a profile has
+    /// several): each setting against the last one, the reference (largest grid). `value`
+    /// is the grid side n.
+    Convergence128 {
+        name: String,
+        hurst: f64,
+        settings: Vec<StudyRef>,
+    },
 }
 
 /// Paper Fig. 6: the exponent, and the thresholds `A*/A_s` of the model curves, whose cut-off
@@ -574,19 +579,31 @@ fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
             },
         ));
     }
-    let mut c128: Vec<&StudyKeys> = keys
+    // The λ_l/λ_s = 128 convergence studies, one figure per Hurst exponent (the sizes are
+    // compared on one surface family).
+    let mut exponents: Vec<f64> = keys
         .iter()
         .filter(|k| k.plan.name.starts_with("c128_"))
+        .map(|k| k.plan.surface.hurst)
         .collect();
-    // Reference last: the largest grid, and of equal grids the finer discretisation.
-    c128.sort_by(|a, b| {
-        let (sa, sb) = (&a.plan.surface, &b.plan.surface);
-        (sa.n, sa.lambda_s_px)
-            .partial_cmp(&(sb.n, sb.lambda_s_px))
-            .expect("finite sizes")
-    });
-    if c128.len() >= 2 {
-        let refs: Vec<StudyRef> = c128
+    exponents.sort_by(f64::total_cmp);
+    exponents.dedup();
+    for &hurst in &exponents {
+        let mut c128: Vec<&StudyKeys> = keys
+            .iter()
+            .filter(|k| k.plan.name.starts_with("c128_") && k.plan.surface.hurst == hurst)
+            .collect();
+        // Reference last: the largest grid, and of equal grids the finer discretisation.
+        c128.sort_by(|a, b| {
+            let (sa, sb) = (&a.plan.surface, &b.plan.surface);
+            (sa.n, sa.lambda_s_px)
+                .partial_cmp(&(sb.n, sb.lambda_s_px))
+                .expect("finite sizes")
+        });
+        if c128.len() < 2 {
+            continue;
+        }
+        let mut refs: Vec<StudyRef> = c128
             .iter()
             .map(|k| {
                 let s = &k.plan.surface;
@@ -605,18 +622,26 @@ fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
             .collect();
         // Two studies with the same sizes would share a label (the figure's key for a
         // setting): tell them apart by study name.
-        let mut refs = refs;
         for i in 0..refs.len() {
             if refs.iter().filter(|r| r.label == refs[i].label).count() > 1 {
                 refs[i].label = format!("{} [{}]", refs[i].label, c128[i].plan.name);
             }
         }
+        let name = if exponents.len() == 1 {
+            "fig128_convergence".to_string()
+        } else {
+            format!("fig128_convergence_h{hurst}")
+        };
         out.push(figure_instance(
-            json!({ "figure": "fig128_convergence",
+            json!({ "figure": name, "hurst": hurst,
                     "settings": refs.iter().map(|r| r.label.clone()).collect::<Vec<_>>() }),
             refs.iter().map(|r| r.statistics_key.clone()).collect(),
             names(&c128),
-            FigureJob::Convergence128 { settings: refs },
+            FigureJob::Convergence128 {
+                name,
+                hurst,
+                settings: refs,
+            },
         ));
     }
     out

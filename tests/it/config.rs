@@ -162,30 +162,43 @@ fn unknown_profile_is_an_error_listing_the_known_ones() {
 fn the_shipped_pipeline_is_valid_for_every_profile() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
     let p = Pipeline::load(&path).unwrap();
-    for profile in ["quick", "default", "paper", "convergence128"] {
+    for profile in [
+        "quick",
+        "default",
+        "paper",
+        "convergence128",
+        "convergence128_h06",
+    ] {
         let plans = p.plan(profile, "pipeline.yaml").unwrap();
         assert!(!plans.is_empty(), "{profile} has studies");
     }
-    // The λ_l/λ_s = 128 convergence profile: the default's fig3_ll128 sizes among the
-    // candidates, and the rule's sizes (L/λ_l ≥ 4, λ_s/Δl ≥ 8) as the largest grid, which the
-    // figure takes as its reference.
-    let conv = p.plan("convergence128", "pipeline.yaml").unwrap();
+    // The λ_l/λ_s = 128 convergence profiles: one Hurst exponent each (that of the default
+    // study they check), the default's sizes among the candidates, and the rule's sizes
+    // (L/λ_l ≥ 4, λ_s/Δl ≥ 8) as the largest grid, which the figure takes as its reference.
     let default = p.plan("default", "pipeline.yaml").unwrap();
-    let ll128 = default.iter().find(|s| s.name == "fig3_ll128").unwrap();
     let sizes = |s: &wearcoef::config::StudyPlan| {
         let f = &s.surface;
         (f.n, f.n as f64 / f.lambda_l_px, f.lambda_s_px)
     };
-    assert!(conv
-        .iter()
-        .all(|s| s.name.starts_with("c128_")
-            && s.surface.lambda_l_px / s.surface.lambda_s_px == 128.0));
-    assert!(conv.iter().any(|s| sizes(s) == sizes(ll128)));
-    let reference = conv.iter().max_by_key(|s| s.surface.n).unwrap();
-    let (n, l, r) = sizes(reference);
-    assert!(
-        l >= 4.0 && r >= 8.0,
-        "reference n = {n}: L/λ_l = {l}, λ_s/Δl = {r}"
-    );
-    assert_eq!(conv.iter().filter(|s| s.surface.n == n).count(), 1);
+    for (profile, checked) in [
+        ("convergence128", "fig3_ll128"),
+        ("convergence128_h06", "fig3_h06"),
+    ] {
+        let conv = p.plan(profile, "pipeline.yaml").unwrap();
+        let study = default.iter().find(|s| s.name == checked).unwrap();
+        assert!(
+            conv.iter().all(|s| s.name.starts_with("c128_")
+                && s.surface.lambda_l_px / s.surface.lambda_s_px == 128.0
+                && s.surface.hurst == study.surface.hurst),
+            "{profile}"
+        );
+        assert!(conv.iter().any(|s| sizes(s) == sizes(study)), "{profile}");
+        let reference = conv.iter().max_by_key(|s| s.surface.n).unwrap();
+        let (n, l, r) = sizes(reference);
+        assert!(
+            l >= 4.0 && r >= 8.0,
+            "{profile}: reference n = {n}: L/λ_l = {l}, λ_s/Δl = {r}"
+        );
+        assert_eq!(conv.iter().filter(|s| s.surface.n == n).count(), 1);
+    }
 }
