@@ -329,8 +329,10 @@ def main(data_dir, profile):
                   f"{r.path}: {len(df)} rows, kinds {set(df['kind'])}")
             finest = df[(df["kind"] == "setting") & (df["setting"] == df["setting"].max())]
             check((finest["ks_distance"] == 0).all(), f"{r.path}: finest setting not at 0")
-            prefix = {"figB1_convergence.parquet": "b1_", "figB2_convergence.parquet": "b2_",
-                      "fig128_convergence.parquet": "c128_"}.get(r.file)
+            # fig128_convergence.parquet, or fig128_convergence_h<H>.parquet per Hurst
+            # exponent when a profile holds several (the KS check matches studies by counts).
+            prefix = "c128_" if r.file.startswith("fig128_convergence") else {
+                "figB1_convergence.parquet": "b1_", "figB2_convergence.parquet": "b2_"}.get(r.file)
             if check(prefix is not None, f"{r.path}: an unknown convergence table"):
                 cl = rows("clusters", "clusters.parquet")
                 check_convergence_ks(r.path, cl[cl["study"].str.startswith(prefix)])
