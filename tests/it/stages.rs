@@ -323,3 +323,78 @@ fn figures_are_valid_images_with_their_data_copied_beside_the_data_directory() {
         assert!((0.0..=1.0).contains(&y));
     }
 }
+
+/// The λ_l/λ_s = 128 convergence figure compares the `c128_*` studies of one Hurst exponent:
+/// a profile of one exponent gets `fig128_convergence`, a profile of several one
+/// `fig128_convergence_h<H>` per exponent, each with only its own exponent's studies (the
+/// same sizes at two exponents would otherwise share labels, which get the study name).
+#[test]
+#[ignore = "four 256²/512² sweeps, slow in debug builds: run by `make test` in release"]
+fn c128_convergence_figures_are_made_per_hurst_exponent() {
+    let entry = |name: &str, hurst: f64, l: u32, seed: u32, both: bool| {
+        let size = format!("{{l_over_lambda_l: {l}, lambda_s_over_dl: 2, realizations: 1}}");
+        let mut profiles = format!("      two: {size}\n");
+        if both {
+            profiles.push_str(&format!("      one: {size}\n"));
+        }
+        format!(
+            "  {name}:\n    hurst: {hurst}\n    lambda_l_over_lambda_s: 128\n    seed: {seed}\n    \
+             loads: {{values: [0.06]}}\n    profiles:\n{profiles}"
+        )
+    };
+    let text = format!(
+        "schema_version: 1\nmaterial: {{e_star: 1.0}}\nsolver: {{tolerance: 1.0e-10, max_iterations: 2000}}\n\
+         profiles: {{one: \"H = 0.8\", two: \"H = 0.6 and 0.8\"}}\nstudies:\n{}{}{}{}",
+        entry("c128_a8", 0.8, 1, 1, true),
+        entry("c128_b8", 0.8, 2, 2, true),
+        entry("c128_a6", 0.6, 1, 3, false),
+        entry("c128_b6", 0.6, 2, 4, false),
+    );
+    let (_t, dir) = workdir(&text);
+    for profile in ["one", "two"] {
+        let out = run_in(&dir, &["run", "--profile", profile, "--quiet"]);
+        assert!(
+            out.status.success(),
+            "{profile}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let drawn = |profile: &str| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir.join("figures").join(profile))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|f| f.starts_with("fig128") && f.ends_with(".parquet"))
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(drawn("one"), ["fig128_convergence.parquet"]);
+    assert_eq!(
+        drawn("two"),
+        [
+            "fig128_convergence_h0.6.parquet",
+            "fig128_convergence_h0.8.parquet"
+        ]
+    );
+    let table = |profile: &str, file: &str| read(&dir.join("figures").join(profile).join(file));
+    let one = table("one", "fig128_convergence.parquet");
+    let h08 = table("two", "fig128_convergence_h0.8.parquet");
+    let h06 = table("two", "fig128_convergence_h0.6.parquet");
+    // The H = 0.8 figure of the mixed profile is the single-exponent one.
+    // (bitwise: α is NaN where a box holds too few clusters to fit it).
+    for column in ["ks_distance", "ks_critical_95", "alpha_difference"] {
+        let bits =
+            |df: &DataFrame| -> Vec<u64> { f64s(df, column).iter().map(|v| v.to_bits()).collect() };
+        assert_eq!(bits(&one), bits(&h08), "{column}");
+    }
+    assert_eq!(u64s(&one, "n_clusters"), u64s(&h08, "n_clusters"));
+    for df in [&h08, &h06] {
+        let labels = df.column("study").unwrap().str().unwrap();
+        assert!(labels.iter().all(|l| !l.unwrap().contains('[')));
+    }
+    assert_ne!(
+        u64s(&h06, "n_clusters_reference"),
+        u64s(&h08, "n_clusters_reference"),
+        "the H = 0.6 figure compares the H = 0.6 studies"
+    );
+}
