@@ -497,17 +497,8 @@ fn fig2_convergence(store: &Store, statistics_key: &str) -> anyhow::Result<Vec<(
         ));
     }
     plot.series.push(Series {
-        rgb: Some((0, 0, 0)),
-        dashed: true,
         width: 1,
-        ..Series::line(
-            format!("tolerance {FIG2_CURVE_TOLERANCE}"),
-            vec![
-                (2.0, FIG2_CURVE_TOLERANCE),
-                (total as f64, FIG2_CURVE_TOLERANCE),
-            ],
-            0,
-        )
+        ..tolerance_line(FIG2_CURVE_TOLERANCE, 2.0, total as f64)
     });
     let last = rows.last().expect("at least one row");
     let result = json!({
@@ -1147,6 +1138,19 @@ fn convergence_table(store: &Store, settings: &[StudyRef]) -> anyhow::Result<Con
 
 /// One curve of a convergence figure: KS distance (markers) and its 95 % critical value
 /// (dashed, labelled `critical_label`) on `ks`, exponent difference on `da`, against `x(row)`.
+/// The black dashed horizontal line of a tolerance, from `x0` to `x1`, labelled with its value.
+fn tolerance_line(tolerance: f64, x0: f64, x1: f64) -> Series {
+    Series {
+        rgb: Some((0, 0, 0)),
+        dashed: true,
+        ..Series::line(
+            format!("tolerance {tolerance}"),
+            vec![(x0, tolerance), (x1, tolerance)],
+            0,
+        )
+    }
+}
+
 fn push_convergence_curves(
     ks: &mut LinePlot,
     da: &mut LinePlot,
@@ -1230,18 +1234,8 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
     }
     let xs: Vec<f64> = settings.iter().map(|s| s.value).collect();
     if let (Some(&lo), Some(&hi)) = (xs.first(), xs.last()) {
-        ks.series.push(Series {
-            rgb: Some((0, 0, 0)),
-            dashed: true,
-            ..Series::line(
-                format!("tolerance {CONVERGENCE_KS_TOLERANCE}"),
-                vec![
-                    (lo, CONVERGENCE_KS_TOLERANCE),
-                    (hi, CONVERGENCE_KS_TOLERANCE),
-                ],
-                0,
-            )
-        });
+        ks.series
+            .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo, hi));
     }
     for (c, s) in settings.iter().enumerate() {
         let by_r = table.max_ks_by_realizations(s.value);
@@ -1250,27 +1244,16 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
             ..Series::line(s.label.clone(), by_r, c + 4)
         });
     }
-    real.series.push(Series {
-        rgb: Some((0, 0, 0)),
-        dashed: true,
-        ..Series::line(
-            format!("tolerance {CONVERGENCE_KS_TOLERANCE}"),
-            vec![
-                (1.0, CONVERGENCE_KS_TOLERANCE),
-                (
-                    20.0_f64.min(
-                        table
-                            .rows
-                            .iter()
-                            .map(|r| r.realizations as f64)
-                            .fold(1.0, f64::max),
-                    ),
-                    CONVERGENCE_KS_TOLERANCE,
-                ),
-            ],
-            0,
-        )
-    });
+    let most_realizations = table
+        .rows
+        .iter()
+        .map(|r| r.realizations as f64)
+        .fold(1.0, f64::max);
+    real.series.push(tolerance_line(
+        CONVERGENCE_KS_TOLERANCE,
+        1.0,
+        20.0_f64.min(most_realizations),
+    ));
     Panels {
         plots: vec![ks, da, real],
         layout: Layout::Grid { columns: 3 },
@@ -1350,18 +1333,8 @@ fn fig128_convergence(
         .map(|r| r.w_over_w0)
         .collect();
     if let (Some(&lo), Some(&hi)) = (loads.first(), loads.last()) {
-        ks.series.push(Series {
-            rgb: Some((0, 0, 0)),
-            dashed: true,
-            ..Series::line(
-                format!("tolerance {CONVERGENCE_KS_TOLERANCE}"),
-                vec![
-                    (lo, CONVERGENCE_KS_TOLERANCE),
-                    (hi, CONVERGENCE_KS_TOLERANCE),
-                ],
-                0,
-            )
-        });
+        ks.series
+            .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo, hi));
     }
     // Ensemble-mean CCDFs at the largest load, reference in black.
     let tables = settings
