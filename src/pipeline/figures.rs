@@ -1136,8 +1136,6 @@ fn convergence_table(store: &Store, settings: &[StudyRef]) -> anyhow::Result<Con
     Ok(ConvergenceTable { rows })
 }
 
-/// One curve of a convergence figure: KS distance (markers) and its 95 % critical value
-/// (dashed, labelled `critical_label`) on `ks`, exponent difference on `da`, against `x(row)`.
 /// The black dashed horizontal line of a tolerance, from `x0` to `x1`, labelled with its value.
 fn tolerance_line(tolerance: f64, x0: f64, x1: f64) -> Series {
     Series {
@@ -1151,6 +1149,8 @@ fn tolerance_line(tolerance: f64, x0: f64, x1: f64) -> Series {
     }
 }
 
+/// One curve of a convergence figure: KS distance (markers) and its 95 % critical value
+/// (dashed, labelled `critical_label`) on `ks`, exponent difference on `da`, against `x(row)`.
 fn push_convergence_curves(
     ks: &mut LinePlot,
     da: &mut LinePlot,
