@@ -12,9 +12,12 @@
 //!
 //! **Cost.** One convolution (`K t`) per iteration. The deflection is updated by linearity,
 //! `u ← s (u − τ K t + K Δ)`, where `Δ` is the departure of the projected pressure from the
-//! linear step at the few nodes that left or re-entered the contact set (summed directly
-//! when there are at most [`MAX_SPARSE`] of them, otherwise `u = K p` is recomputed by FFT),
-//! and recomputed exactly every [`RESYNC`] steps and before convergence is declared. The
+//! linear step at the nodes that left or re-entered the contact set: `K Δ` is summed
+//! directly when there are at most [`MAX_SPARSE`] of them, otherwise convolved by FFT (the
+//! rows of `Δ` without a change skip the forward row transform, as do the empty rows of every
+//! transformed field), and `u = K p` is recomputed exactly every [`RESYNC`] steps, before
+//! convergence is declared, and when more than one node in [`CHANGES_PER_NODE`] of a block
+//! changed. The
 //! curvature `⟨t, K t⟩` comes from Parseval's identity inside the convolution. The search
 //! direction is kept centred on the contact set (the projected conjugate gradient), so the
 //! step preserves the load. The direction pass is fused with the forward FFT (each row of
@@ -140,6 +143,10 @@ pub const MAX_SPARSE: usize = 6;
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub const RESYNC: usize = 32;
 
+/// The change lists hold up to one node in `CHANGES_PER_NODE` of each block; an update that
+/// changes more recomputes `u = K p` instead of correcting it.
+pub const CHANGES_PER_NODE: usize = 16;
+
 /// Solver settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverConfig {
@@ -227,15 +234,18 @@ pub struct Solver<'a> {
     partials: Vec<[f64; 6]>,
     /// Per block: accumulators of the update pass fused with the inverse FFT.
     update_acc: Vec<UpdateAcc>,
-    /// Per block: up to [`MAX_SPARSE`] nodes whose projection departed from the linear step.
-    changes: Vec<[(usize, f64); MAX_SPARSE]>,
+    /// Per block: the nodes whose projection departed from the linear step, `(node, Δ)` in
+    /// node order, up to the list's capacity (one node in [`CHANGES_PER_NODE`] of the
+    /// block; never reallocated).
+    changes: Vec<Vec<(usize, f64)>>,
     sparse: Vec<(usize, f64)>,
     has_solution: bool,
 }
 
 impl<'a> Solver<'a> {
     /// Check the surface and allocate every buffer (about 5 n² doubles with the operator's
-    /// at n = 512, fewer per n² at larger n; besides the heights).
+    /// at n = 512, fewer per n² at larger n, plus n²/8 for the lists of changed nodes;
+    /// besides the heights).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
         let len = n * n;
@@ -274,7 +284,9 @@ impl<'a> Solver<'a> {
             chunk,
             partials: vec![[0.0; 6]; blocks],
             update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
-            changes: vec![[(0, 0.0); MAX_SPARSE]; blocks],
+            changes: (0..blocks)
+                .map(|_| Vec::with_capacity((chunk / CHANGES_PER_NODE).max(MAX_SPARSE)))
+                .collect(),
             sparse: Vec::with_capacity(MAX_SPARSE),
             has_solution: false,
         })
@@ -483,6 +495,11 @@ impl<'a> Solver<'a> {
                 stats = self.sparse_update(scale, shift);
                 exact = false;
                 linear_steps += 1;
+            } else if linear_steps + 1 < RESYNC && self.changes_listed() {
+                stats = self.fft_correction(scale, shift);
+                report.convolutions += 1;
+                exact = false;
+                linear_steps += 1;
             } else {
                 stats = self.exact_deflection(scale, shift);
                 report.convolutions += 1;
@@ -538,7 +555,7 @@ impl<'a> Solver<'a> {
                 }
                 *part = acc.finish();
             });
-        Self::sum_gradient(&self.partials)
+        Self::sum_gradient(self.partials.iter().copied())
     }
 
     /// `u ← s K p`, `p ← s p` (an exact deflection, then the load correction), with the
@@ -577,18 +594,16 @@ impl<'a> Solver<'a> {
             },
             &mut self.ws,
         );
-        let mut stats = [0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY];
-        for acc in &self.update_acc {
-            let part = acc.grad.finish();
-            for k in 0..5 {
-                stats[k] += part[k];
-            }
-            stats[5] = stats[5].min(part[5]);
-        }
-        stats
+        self.update_gradient()
     }
 
-    fn sum_gradient(partials: &[[f64; 6]]) -> [f64; 6] {
+    /// The gradient statistics gathered per block in `update_acc`.
+    fn update_gradient(&self) -> [f64; 6] {
+        Self::sum_gradient(self.update_acc.iter().map(|a| a.grad.finish()))
+    }
+
+    /// Block statistics summed in block order (the minimum for the last entry).
+    fn sum_gradient(partials: impl Iterator<Item = [f64; 6]>) -> [f64; 6] {
         let mut acc = [0.0, 0.0, 0.0, 0.0, 0.0, f64::INFINITY];
         for part in partials {
             for k in 0..5 {
@@ -679,6 +694,7 @@ impl<'a> Solver<'a> {
             |(block, (((((pc, uc), tc), hc), acc), changes)), r, kt| {
                 if r == 0 {
                     **acc = UpdateAcc::new();
+                    changes.clear();
                 }
                 let at = r * n..(r + 1) * n;
                 dispatch_update(
@@ -712,18 +728,83 @@ impl<'a> Solver<'a> {
         (totals, stats)
     }
 
-    /// Collect the changed nodes of the last update in index order; false if a chunk
-    /// overflowed its slots (then a full convolution is needed).
+    /// Collect the changed nodes of the last update in index order; false if there are
+    /// more than [`MAX_SPARSE`] (then an FFT is needed).
     fn gather_changes(&mut self) -> bool {
         self.sparse.clear();
-        for (slots, acc) in self.changes.iter().zip(&self.update_acc) {
+        for (list, acc) in self.changes.iter().zip(&self.update_acc) {
             let count = acc.changed;
             if self.sparse.len() + count > MAX_SPARSE {
                 return false;
             }
-            self.sparse.extend_from_slice(&slots[..count]);
+            self.sparse.extend_from_slice(&list[..count]);
         }
         true
+    }
+
+    /// Whether every block's list holds all of its changed nodes.
+    fn changes_listed(&self) -> bool {
+        self.changes
+            .iter()
+            .zip(&self.update_acc)
+            .all(|(list, acc)| list.len() == acc.changed)
+    }
+
+    /// `u ← s (u + K Δ)`, `p ← s p` for the changed nodes listed in `self.changes`, by one
+    /// FFT convolution of the sparse field `Δ` (its rows without a change skip the forward
+    /// row transform), with the gradient statistics ([`gradient_row`]) gathered as the rows
+    /// of `K Δ` come out.
+    fn fft_correction(&mut self, scale: f64, shift: f64) -> [f64; 6] {
+        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let rows_per_block = chunk / n;
+        self.op.start_rows(
+            self.changes
+                .par_iter()
+                .enumerate()
+                .map(|(b, list)| (b * rows_per_block * n, list.as_slice())),
+            |(first, list): &mut (usize, &[(usize, f64)]), _r, row| {
+                // Rows come in order: the list's leading entries below the row's end are
+                // this row's.
+                row.fill(0.0);
+                let end = *first + n;
+                let k = list.partition_point(|&(i, _)| i < end);
+                for &(i, d) in &list[..k] {
+                    row[i - *first] = d;
+                }
+                *list = &list[k..];
+                *first = end;
+            },
+            &mut self.ws,
+        );
+        let blocks = self
+            .pressure
+            .par_chunks_mut(chunk)
+            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(h.par_chunks(chunk))
+            .zip(self.update_acc.par_iter_mut());
+        self.op.finish_rows(
+            blocks,
+            |(((pc, uc), hc), acc), r, kd| {
+                if r == 0 {
+                    acc.grad = GradientLanes::new();
+                }
+                let at = r * n..(r + 1) * n;
+                let u = &mut uc[at.clone()];
+                for (u, k) in u.iter_mut().zip(kd) {
+                    *u += k;
+                }
+                dispatch_gradient(
+                    shift,
+                    Some(scale),
+                    &mut pc[at.clone()],
+                    u,
+                    &hc[at],
+                    &mut acc.grad,
+                );
+            },
+            &mut self.ws,
+        );
+        self.update_gradient()
     }
 
     /// `direction ← (u − h) − min(u − h)` (the gap; `u` must be exact).
@@ -816,7 +897,7 @@ avx2_dispatch! {
         rc: &[f64],
         hc: &[f64],
         acc: &mut UpdateAcc,
-        changes: &mut [(usize, f64); MAX_SPARSE],
+        changes: &mut Vec<(usize, f64)>,
     );
 }
 
@@ -1013,12 +1094,13 @@ fn record_changes(
     first: usize,
     valid: usize,
     acc: &mut UpdateAcc,
-    changes: &mut [(usize, f64); MAX_SPARSE],
+    changes: &mut Vec<(usize, f64)>,
 ) {
     for l in 0..valid {
         if delta[l] != 0.0 {
-            if acc.changed < MAX_SPARSE {
-                changes[acc.changed] = (first + l, delta[l]);
+            // Within the capacity reserved up front: no allocation.
+            if changes.len() < changes.capacity() {
+                changes.push((first + l, delta[l]));
             }
             acc.changed += 1;
             // Re-admitted: positive now although the linear step left it at ≤ 0.
@@ -1042,7 +1124,7 @@ fn update_row(
     rc: &[f64],
     hc: &[f64],
     acc: &mut UpdateAcc,
-    changes: &mut [(usize, f64); MAX_SPARSE],
+    changes: &mut Vec<(usize, f64)>,
 ) {
     let whole = pc.len() / LANES * LANES;
     for (block, ((((p, u), t), r), h)) in pc[..whole]
@@ -1085,5 +1167,101 @@ fn update_row(
         for l in 0..k {
             acc.kept_t[l] += tail.kept_t[l];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Grid;
+
+    /// The FFT correction `u ← s (u + K Δ)` from the change lists equals an exact
+    /// recomputation `u = s K (p + Δ)`, with the same gradient statistics, when `Δ` sits on a
+    /// few rows (the others skip their forward row transform) or on many.
+    #[test]
+    fn fft_correction_equals_an_exact_recomputation() {
+        let n = 64;
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let heights: Vec<f64> = (0..n * n)
+            .map(|i| ((i * 7919 % 1009) as f64 / 1009.0 - 0.5) * 0.01)
+            .collect();
+        // A pressure on rows 10–29 only; changes on rows 3, 12 and 40, or on every row.
+        let start: Vec<f64> = (0..n * n)
+            .map(|i| {
+                let row = i / n;
+                if (10..30).contains(&row) {
+                    ((i * 31 % 97) as f64 / 97.0).max(0.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let few: Vec<(usize, f64)> = (0..40)
+            .map(|k| {
+                let row = [3, 12, 40][k % 3];
+                (row * n + (k * 13) % n, 0.01 * (k as f64 + 1.0))
+            })
+            .collect();
+        let many: Vec<(usize, f64)> = (0..n).map(|r| (r * n + (r * 5) % n, 0.02)).collect();
+        for changes in [few, many] {
+            let (scale, shift) = (0.9, 0.003);
+            let mut solver = Solver::new(&op, &heights).unwrap();
+            solver.pressure.copy_from_slice(&start);
+            solver.exact_deflection(1.0, 0.0);
+            let mut changed = start.clone();
+            let mut sorted = changes.clone();
+            sorted.sort_by_key(|c| c.0);
+            sorted.dedup_by_key(|c| c.0);
+            for list in &mut solver.changes {
+                list.clear();
+            }
+            for acc in &mut solver.update_acc {
+                acc.changed = 0;
+            }
+            for &(i, d) in &sorted {
+                changed[i] += d;
+                solver.pressure[i] += d;
+                let b = i / solver.chunk;
+                solver.changes[b].push((i, d));
+                solver.update_acc[b].changed += 1;
+            }
+            assert!(solver.changes_listed());
+            let stats = solver.fft_correction(scale, shift);
+
+            let mut exact = Solver::new(&op, &heights).unwrap();
+            exact.pressure.copy_from_slice(&changed);
+            let expected = exact.exact_deflection(scale, shift);
+            let u_max = exact.deflection.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, (a, b)) in solver.deflection.iter().zip(&exact.deflection).enumerate() {
+                assert!((a - b).abs() <= 1e-13 * u_max, "node {i}: {a} vs {b}");
+            }
+            assert_eq!(solver.pressure, exact.pressure);
+            for k in 0..6 {
+                let tol = 1e-11 * expected[k].abs().max(1e-300);
+                assert!(
+                    (stats[k] - expected[k]).abs() <= tol,
+                    "statistic {k}: {} vs {}",
+                    stats[k],
+                    expected[k]
+                );
+            }
+        }
+    }
+
+    /// A block that changed more nodes than its list holds forces an exact recomputation.
+    #[test]
+    fn overflowing_change_lists_are_detected() {
+        let n = 32;
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let heights: Vec<f64> = (0..n * n).map(|i| (i % 7) as f64).collect();
+        let mut solver = Solver::new(&op, &heights).unwrap();
+        let cap = solver.changes[0].capacity();
+        for k in 0..cap {
+            solver.changes[0].push((k, 1.0));
+        }
+        solver.update_acc[0].changed = cap;
+        assert!(solver.changes_listed());
+        solver.update_acc[0].changed = cap + 1;
+        assert!(!solver.changes_listed());
     }
 }
