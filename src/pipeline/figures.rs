@@ -481,6 +481,7 @@ fn fig2_convergence(store: &Store, statistics_key: &str) -> anyhow::Result<Vec<(
         YAxis::Log,
     );
     plot.legend = LegendAt::UpperRight;
+    plot.x_integer = true;
     let labels = [
         "A_c (Fig. 2e)",
         "largest cluster (Fig. 2e)",
@@ -688,7 +689,7 @@ fn fitted_power_law(
         return Ok(None);
     }
     let (k0, k1) = (k0 as u64, k1 as u64);
-    let z: f64 = (k0..=k1).map(|k| (k as f64).powf(-a)).sum();
+    let z = crate::powerlaw::discrete_normalisation(a, k0, k1);
     let weight = n_fit[i] as f64 / clusters as f64;
     let ls2 = lambda_s_px * lambda_s_px;
     let steps = 40;
@@ -1214,6 +1215,7 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
         false,
         YAxis::Linear,
     );
+    real.x_integer = true;
     let mut loads: Vec<(u32, f64)> = table
         .rows
         .iter()
@@ -1232,8 +1234,8 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
         let label = format!("W/W0 = {w:.3}");
         push_convergence_curves(&mut ks, &mut da, &label, critical, &rows, |r| r.setting, c);
     }
-    let xs: Vec<f64> = settings.iter().map(|s| s.value).collect();
-    if let (Some(&lo), Some(&hi)) = (xs.first(), xs.last()) {
+    if let (Some(lo), Some(hi)) = (settings.first(), settings.last()) {
+        let (lo, hi) = (lo.value, hi.value);
         ks.series
             .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo, hi));
     }

@@ -47,6 +47,15 @@ fn tick(v: &f64) -> String {
     }
 }
 
+/// [`tick`], or no label for a fractional value on an axis of whole numbers.
+fn axis_tick(v: &f64, integer: bool) -> String {
+    if integer && v.fract() != 0.0 {
+        String::new()
+    } else {
+        tick(v)
+    }
+}
+
 /// One curve.
 #[derive(Clone)]
 pub struct Series {
@@ -131,6 +140,8 @@ pub struct LinePlot {
     /// On a linear y axis, room left empty above the data for the legend, as a fraction of
     /// the data's range (0: none).
     pub y_headroom: f64,
+    /// The abscissa is a count (e.g. realizations): only whole-number ticks are labelled.
+    pub x_integer: bool,
 }
 
 impl LinePlot {
@@ -152,6 +163,7 @@ impl LinePlot {
             x_marks: Vec::new(),
             legend: LegendAt::UpperRight,
             y_headroom: 0.0,
+            x_integer: false,
         }
     }
 }
@@ -304,6 +316,7 @@ impl LinePlot {
             .y_label_area_size(px(90.0));
         let keep = finite_on(self.x_log, self.y_axis);
         let marker = ((3.0 * scale).round() as i32).max(2);
+        let x_tick = |v: &f64| axis_tick(v, self.x_integer);
         macro_rules! finish {
             ($chart:expr, $ylo:expr, $yhi:expr) => {{
                 let mut chart = $chart;
@@ -311,7 +324,7 @@ impl LinePlot {
                     .configure_mesh()
                     .x_labels(6)
                     .y_labels(10)
-                    .x_label_formatter(&tick)
+                    .x_label_formatter(&x_tick)
                     .y_label_formatter(&tick)
                     .x_desc(&self.x_label)
                     .y_desc(&self.y_label)
@@ -792,6 +805,15 @@ mod tests {
             c.key_points(10usize),
             vec![0.0, 5e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0]
         );
+    }
+
+    #[test]
+    fn count_axes_label_whole_numbers_only() {
+        assert_eq!(axis_tick(&2.0, true), "2");
+        assert_eq!(axis_tick(&20.0, true), "20");
+        assert_eq!(axis_tick(&1.5, true), "");
+        assert_eq!(axis_tick(&1.5, false), "1.5");
+        assert_eq!(axis_tick(&0.001, false), "0.001");
     }
 
     #[test]
