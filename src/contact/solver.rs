@@ -562,12 +562,21 @@ impl<'a> Solver<'a> {
     /// statistics ([`gradient_row`]) gathered as the rows of `K p` come out of the
     /// inverse FFT (one pass over the fields fewer than applying `K` and then scanning).
     fn exact_deflection(&mut self, scale: f64, shift: f64) -> [f64; 6] {
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
         self.op.start_rows(
             self.pressure.par_chunks(chunk),
             |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
             &mut self.ws,
         );
+        self.finish_deflection(false, scale, shift)
+    }
+
+    /// Second half of [`Self::exact_deflection`] (`add = false`: `u ← s K x`) and of
+    /// [`Self::fft_correction`] (`add = true`: `u ← s (u + K x)`), with `p ← s p` and the
+    /// gradient statistics ([`gradient_row`]) gathered as the rows of `K x` come out of the
+    /// inverse FFT started by `start_rows`.
+    fn finish_deflection(&mut self, add: bool, scale: f64, shift: f64) -> [f64; 6] {
+        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         let blocks = self
             .pressure
             .par_chunks_mut(chunk)
@@ -576,13 +585,19 @@ impl<'a> Solver<'a> {
             .zip(self.update_acc.par_iter_mut());
         self.op.finish_rows(
             blocks,
-            |(((pc, uc), hc), acc), r, kp| {
+            |(((pc, uc), hc), acc), r, kx| {
                 if r == 0 {
                     acc.grad = GradientLanes::new();
                 }
                 let at = r * n..(r + 1) * n;
                 let u = &mut uc[at.clone()];
-                u.copy_from_slice(kp);
+                if add {
+                    for (u, k) in u.iter_mut().zip(kx) {
+                        *u += k;
+                    }
+                } else {
+                    u.copy_from_slice(kx);
+                }
                 dispatch_gradient(
                     shift,
                     Some(scale),
@@ -755,7 +770,7 @@ impl<'a> Solver<'a> {
     /// row transform), with the gradient statistics ([`gradient_row`]) gathered as the rows
     /// of `K Δ` come out.
     fn fft_correction(&mut self, scale: f64, shift: f64) -> [f64; 6] {
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
         let rows_per_block = chunk / n;
         self.op.start_rows(
             self.changes
@@ -776,35 +791,7 @@ impl<'a> Solver<'a> {
             },
             &mut self.ws,
         );
-        let blocks = self
-            .pressure
-            .par_chunks_mut(chunk)
-            .zip(self.deflection.par_chunks_mut(chunk))
-            .zip(h.par_chunks(chunk))
-            .zip(self.update_acc.par_iter_mut());
-        self.op.finish_rows(
-            blocks,
-            |(((pc, uc), hc), acc), r, kd| {
-                if r == 0 {
-                    acc.grad = GradientLanes::new();
-                }
-                let at = r * n..(r + 1) * n;
-                let u = &mut uc[at.clone()];
-                for (u, k) in u.iter_mut().zip(kd) {
-                    *u += k;
-                }
-                dispatch_gradient(
-                    shift,
-                    Some(scale),
-                    &mut pc[at.clone()],
-                    u,
-                    &hc[at],
-                    &mut acc.grad,
-                );
-            },
-            &mut self.ws,
-        );
-        self.update_gradient()
+        self.finish_deflection(true, scale, shift)
     }
 
     /// `direction ← (u − h) − min(u − h)` (the gap; `u` must be exact).
