@@ -771,12 +771,11 @@ impl<'a> Solver<'a> {
     /// of `K Δ` come out.
     fn fft_correction(&mut self, scale: f64, shift: f64) -> [f64; 6] {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
-        let rows_per_block = chunk / n;
         self.op.start_rows(
             self.changes
                 .par_iter()
                 .enumerate()
-                .map(|(b, list)| (b * rows_per_block * n, list.as_slice())),
+                .map(|(b, list)| (b * chunk, list.as_slice())),
             |(first, list): &mut (usize, &[(usize, f64)]), _r, row| {
                 // Rows come in order: the list's leading entries below the row's end are
                 // this row's.
@@ -1177,7 +1176,7 @@ mod tests {
             .map(|i| {
                 let row = i / n;
                 if (10..30).contains(&row) {
-                    ((i * 31 % 97) as f64 / 97.0).max(0.0)
+                    (i * 31 % 97) as f64 / 97.0
                 } else {
                     0.0
                 }

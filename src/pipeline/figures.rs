@@ -1235,9 +1235,8 @@ fn convergence_plots(figure: &str, settings: &[StudyRef], table: &ConvergenceTab
         push_convergence_curves(&mut ks, &mut da, &label, critical, &rows, |r| r.setting, c);
     }
     if let (Some(lo), Some(hi)) = (settings.first(), settings.last()) {
-        let (lo, hi) = (lo.value, hi.value);
         ks.series
-            .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo, hi));
+            .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo.value, hi.value));
     }
     for (c, s) in settings.iter().enumerate() {
         let by_r = table.max_ks_by_realizations(s.value);
