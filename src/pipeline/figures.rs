@@ -628,6 +628,8 @@ fn fig2_maps(
 pub const MIN_FIT_DECADES: f64 = 1.0;
 /// Loads drawn in Figs. 3 and 4a (nearest in each sweep).
 const FIG3_LOADS: [f64; 3] = [0.005, 0.02, 0.06];
+/// Load drawn in the inset of Fig. 3 (nearest in each sweep).
+const FIG3_INSET_LOAD: f64 = 0.06;
 /// Tints of the loads of one family, lightest for the smallest load.
 const LOAD_TINTS: [f64; 3] = [0.6, 0.3, 0.0];
 
@@ -775,7 +777,8 @@ fn fig34a(
         let mut inset = LinePlot::new("λ_l/λ_s = 128", "A / λ_s²", "p(A / λ_s²)", true, YAxis::Log);
         for (c, study) in hurst.iter().enumerate() {
             let pdf = stats(&study.statistics_key, "pdf.parquet")?;
-            if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[0.06]).first() {
+            if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[FIG3_INSET_LOAD]).first()
+            {
                 let (points, _) = pdf_points(&pdf, load_index)?;
                 inset.series.push(Series {
                     markers: true,
@@ -1327,6 +1330,13 @@ fn fig128_convergence(
             "ks_by_load": rows.iter().map(|r| (r.w_over_w0, r.ks)).collect::<Vec<_>>(),
             "ks_critical_95_by_load": rows.iter().map(|r| (r.w_over_w0, r.critical)).collect::<Vec<_>>(),
             "within_tolerance": !rows.is_empty() && max_ks <= CONVERGENCE_KS_TOLERANCE,
+            "loads_within_tolerance": rows
+                .iter()
+                .filter(|r| r.ks <= CONVERGENCE_KS_TOLERANCE)
+                .map(|r| r.w_over_w0)
+                .collect::<Vec<_>>(),
+            "below_critical_at_every_load": !rows.is_empty()
+                && rows.iter().all(|r| r.ks <= r.critical),
         }));
     }
     let loads: Vec<f64> = setting_rows(&candidates[0].label)
@@ -1506,4 +1516,40 @@ fn fig45(wear: &DataFrame, model: &DataFrame) -> anyhow::Result<Vec<(String, Dra
             ),
         ),
     ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The studies drawn only in Figs. 3 and 4a compute exactly the loads those figures draw,
+    /// and the inset studies only the inset's load, in every profile but the toy one (model no
+    /// more than a scene needs); fig3_ll128 also feeds Figs. 4b and 5, so it keeps its sweep.
+    #[test]
+    fn figure_3_studies_compute_only_the_loads_figure_3_draws() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+        let pipeline = crate::config::Pipeline::load(&path).unwrap();
+        for profile in ["quick", "default", "paper"] {
+            let plans = pipeline.plan(profile, "pipeline.yaml").unwrap();
+            let loads = |name: &str| {
+                plans
+                    .iter()
+                    .find(|s| s.name == name)
+                    .unwrap_or_else(|| panic!("{profile}: no study {name}"))
+                    .loads
+                    .clone()
+            };
+            for name in ["fig3_ll8", "fig3_ll32"] {
+                assert_eq!(loads(name), FIG3_LOADS.to_vec(), "{profile}: {name}");
+            }
+            for name in ["fig3_h06", "fig3_h07"] {
+                assert_eq!(loads(name), vec![FIG3_INSET_LOAD], "{profile}: {name}");
+            }
+            let sweep = loads("fig3_ll128");
+            assert!(
+                sweep.len() > FIG3_LOADS.len(),
+                "{profile}: fig3_ll128 sweeps"
+            );
+        }
+    }
 }

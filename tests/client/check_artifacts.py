@@ -179,6 +179,25 @@ def check_convergence_ks(path, clusters_rows):
     check(checked > 0, f"{path}: no setting row checked")
 
 
+def check_fig128_summary(path, table, summary):
+    """The manifest's per-setting summary of a λ_l/λ_s = 128 convergence figure agrees with
+    its table: the loads with KS ≤ the tolerance, and KS below the 95 % critical value at
+    every load."""
+    tol = summary["tolerance"]
+    for s in summary["settings"]:
+        rows = table[(table["kind"] == "setting") & (table["study"] == s["setting"])]
+        if not check(len(rows) > 0, f"{path}: no rows for {s['setting']}"):
+            continue
+        within = sorted(rows.loc[rows["ks_distance"] <= tol, "w_over_w0"])
+        check(sorted(s["loads_within_tolerance"]) == within,
+              f"{path}: {s['setting']}: loads within {tol}: manifest "
+              f"{s['loads_within_tolerance']}, table {within}")
+        below = bool((rows["ks_distance"] <= rows["ks_critical_95"]).all())
+        check(s["below_critical_at_every_load"] == below,
+              f"{path}: {s['setting']}: below the critical value at every load: manifest "
+              f"{s['below_critical_at_every_load']}, table {below}")
+
+
 def main(data_dir, profile):
     catalog_path = os.path.join(data_dir, profile, "index.parquet")
     schema = pq.read_schema(catalog_path)
@@ -336,6 +355,8 @@ def main(data_dir, profile):
             if check(prefix is not None, f"{r.path}: an unknown convergence table"):
                 cl = rows("clusters", "clusters.parquet")
                 check_convergence_ks(r.path, cl[cl["study"].str.startswith(prefix)])
+            if r.file.startswith("fig128_convergence"):
+                check_fig128_summary(r.path, df, manifest_of(r.path)["results"]["convergence"])
         elif ext == ".npy":
             a = np.load(r.path)
             check(a.ndim == 2 and a.size > 0, f"{r.path}: shape {a.shape}")
