@@ -1171,6 +1171,8 @@ fn push_convergence_curves(
     ks.series.push(Series {
         dashed: true,
         width: 1,
+        // A single point of a dashed line would not show.
+        markers: rows.len() == 1,
         ..Series::line(
             critical_label,
             rows.iter().map(|r| (x(r), r.critical)).collect(),
@@ -1344,6 +1346,12 @@ fn fig128_convergence(
         .map(|r| r.w_over_w0)
         .collect();
     if let (Some(&lo), Some(&hi)) = (loads.first(), loads.last()) {
+        // One load (profile convergence128_low): a line of zero length would not show.
+        let (lo, hi) = if lo < hi {
+            (lo, hi)
+        } else {
+            (lo / 2.0, hi * 2.0)
+        };
         ks.series
             .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo, hi));
     }

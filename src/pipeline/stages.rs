@@ -40,7 +40,7 @@ pub const STATISTICS_VERSION: u32 = 1;
 /// Version of the analytic stage.
 pub const ANALYTIC_VERSION: u32 = 1;
 /// Version of the figures stage.
-pub const FIGURES_VERSION: u32 = 12;
+pub const FIGURES_VERSION: u32 = 13;
 
 /// One study's statistics as a figure reads them.
 #[derive(Debug, Clone)]

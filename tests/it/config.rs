@@ -168,6 +168,7 @@ fn the_shipped_pipeline_is_valid_for_every_profile() {
         "paper",
         "convergence128",
         "convergence128_h06",
+        "convergence128_low",
     ] {
         let plans = p.plan(profile, "pipeline.yaml").unwrap();
         assert!(!plans.is_empty(), "{profile} has studies");
@@ -183,6 +184,7 @@ fn the_shipped_pipeline_is_valid_for_every_profile() {
     for (profile, checked) in [
         ("convergence128", "fig3_ll128"),
         ("convergence128_h06", "fig3_h06"),
+        ("convergence128_low", "fig3_ll128"),
     ] {
         let conv = p.plan(profile, "pipeline.yaml").unwrap();
         let study = default.iter().find(|s| s.name == checked).unwrap();
