@@ -1531,8 +1531,8 @@ mod tests {
     use super::*;
 
     /// The studies drawn only in Figs. 3 and 4a compute exactly the loads those figures draw,
-    /// and the inset studies only the inset's load, in every profile but the toy one (model no
-    /// more than a scene needs); fig3_ll128 also feeds Figs. 4b and 5, so it keeps its sweep.
+    /// and the inset studies only the inset's load, in the quick, default and paper profiles
+    /// (model no more than a scene needs); fig3_ll128 also feeds Figs. 4b and 5, so it sweeps.
     #[test]
     fn figure_3_studies_compute_only_the_loads_figure_3_draws() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
