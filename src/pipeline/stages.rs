@@ -95,6 +95,13 @@ pub enum FigureJob {
         hurst: f64,
         settings: Vec<StudyRef>,
     },
+    /// Load resolution of Figs. 4b and 5 (`fig45_load_resolution`, studies `lr128_*`): the
+    /// curves of the sweep with fewer loads (`chosen`) interpolated at the loads of the other
+    /// (`fine`), against its values and their 95 % bands.
+    LoadResolution {
+        fine_statistics_key: String,
+        chosen_statistics_key: String,
+    },
 }
 
 /// Paper Fig. 6: the exponent, and the thresholds `A*/A_s` of the model curves, whose cut-off
@@ -641,6 +648,26 @@ fn figure_instances(keys: &[StudyKeys]) -> Vec<Instance> {
                 name,
                 hurst,
                 settings: refs,
+            },
+        ));
+    }
+    // The load resolution of Figs. 4b and 5: two sweeps of the same realizations, the one
+    // with more loads the reference.
+    let mut sweeps: Vec<&StudyKeys> = keys
+        .iter()
+        .filter(|k| k.plan.name.starts_with("lr128_"))
+        .collect();
+    if sweeps.len() == 2 {
+        sweeps.sort_by_key(|k| k.plan.loads.len());
+        let (chosen, fine) = (sweeps[0], sweeps[1]);
+        out.push(figure_instance(
+            json!({ "figure": "fig45_load_resolution",
+                    "fine": fine.plan.name, "chosen": chosen.plan.name }),
+            vec![fine.statistics_key.clone(), chosen.statistics_key.clone()],
+            names(&sweeps),
+            FigureJob::LoadResolution {
+                fine_statistics_key: fine.statistics_key.clone(),
+                chosen_statistics_key: chosen.statistics_key.clone(),
             },
         ));
     }

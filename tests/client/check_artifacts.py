@@ -198,6 +198,68 @@ def check_fig128_summary(path, table, summary):
               f"{s['below_critical_at_every_load']}, table {below}")
 
 
+LOAD_RESOLUTION = [
+    ("curve", STR), ("a_star_over_ls2", F64), ("w_over_w0", F64), ("value", F64),
+    ("ci95", F64), ("interpolated", F64), ("error_over_ci95", F64), ("at_transition", BOOL),
+    ("neighbours", F64), ("neighbour_error_over_ci95", F64), ("within_rule", BOOL)]
+# curve name in the table -> (value column, band column) of the statistics wear table.
+LOAD_RESOLUTION_CURVES = {
+    "k_archard": ("k_archard_pooled", "k_archard_ci95"),
+    "k_upscaled": ("k_upscaled_pooled", "k_upscaled_ci95"),
+    "wear_rate_over_l2": ("wear_rate_over_l2_mean", "wear_rate_over_l2_ci95"),
+}
+
+
+def check_load_resolution(path, wear_of):
+    """Recompute the load-resolution table of Figs. 4b and 5 independently (numpy.interp in
+    ln W/W0 of the chosen sweep's curves at the finer sweep's loads) from the two studies'
+    wear tables, and the manifest's rule from the table."""
+    m = manifest_of(path)
+    studies = m["params"]
+    fine, chosen = wear_of(studies["fine"]), wear_of(studies["chosen"])
+    if not check(fine is not None and chosen is not None, f"{path}: wear tables not found"):
+        return
+    table = pd.read_parquet(path)
+    check(len(table) > 0, f"{path}: empty")
+    for curve, (col, band) in LOAD_RESOLUTION_CURVES.items():
+        for a_star, rows in table[table["curve"] == curve].groupby("a_star_over_ls2"):
+            c = chosen[chosen["a_star_over_ls2"] == a_star].sort_values("w_over_w0")
+            f = fine[fine["a_star_over_ls2"] == a_star].set_index("w_over_w0")
+            x, y = np.log(c["w_over_w0"].values), c[col].values
+            interp = np.interp(np.log(rows["w_over_w0"].values), x, y)
+            check(np.allclose(interp, rows["interpolated"].values, rtol=1e-9, atol=1e-15),
+                  f"{path}: {curve} A* = {a_star}: interpolation differs from numpy's")
+            # The finer sweep's own neighbours, where both exist and are not one zero.
+            fw, fy = f.index.values, f[col].values
+            for w, got in zip(rows["w_over_w0"], rows["neighbours"]):
+                i = int(np.searchsorted(fw, w))
+                if 0 < i < len(fw) - 1 and (fy[i - 1] == 0) == (fy[i + 1] == 0):
+                    want = np.interp(np.log(w), np.log(fw[[i - 1, i + 1]]), fy[[i - 1, i + 1]])
+                    check(np.isclose(got, want, rtol=1e-9, atol=1e-15),
+                          f"{path}: {curve} A* = {a_star} W = {w}: neighbours {got} != {want}")
+                else:
+                    check(np.isnan(got), f"{path}: {curve} A* = {a_star} W = {w}: "
+                                         f"neighbours {got}, expected NaN")
+            check(np.array_equal(f.loc[rows["w_over_w0"], col].values, rows["value"].values)
+                  and np.array_equal(f.loc[rows["w_over_w0"], band].values, rows["ci95"].values,
+                                     equal_nan=True),
+                  f"{path}: {curve} A* = {a_star}: values or bands are not the finer sweep's")
+    err = (table["interpolated"] - table["value"]).abs()
+    ratio = np.where(err == 0, 0.0, err / table["ci95"])
+    check(np.allclose(ratio, table["error_over_ci95"], equal_nan=True),
+          f"{path}: error_over_ci95 is not |interpolated - value| / ci95")
+    judged = ~table["at_transition"]
+    result = m["results"]["load_resolution"]
+    within = judged & (table["error_over_ci95"] <= result["tolerance_error_over_ci95"])
+    check((within == table["within_rule"]).all(), f"{path}: within_rule disagrees with the table")
+    check(len(result["points_beyond_band"]) == int((judged & ~within).sum()),
+          f"{path}: points beyond the band disagree with the table")
+    met = bool(within[judged].all())
+    check(result["rule_met"] == met, f"{path}: rule_met {result['rule_met']}, table says {met}")
+    check(result["points_at_transition"] == int(table["at_transition"].sum()),
+          f"{path}: points at a transition disagree with the table")
+
+
 def main(data_dir, profile):
     catalog_path = os.path.join(data_dir, profile, "index.parquet")
     schema = pq.read_schema(catalog_path)
@@ -335,6 +397,15 @@ def main(data_dir, profile):
         elif ext == ".csv":
             df = pd.read_csv(r.path)
             check(len(df) > 0 and df.iloc[:, -1].notna().any(), f"{r.path}: no data")
+        elif r.file == "fig45_load_resolution.parquet":
+            check_schema(r.path, LOAD_RESOLUTION)
+            parquet_files += 1
+
+            def wear_of(study):
+                sel = rows("statistics", "wear.parquet", study=study)
+                return pd.read_parquet(sel["path"].iloc[0]) if len(sel) else None
+
+            check_load_resolution(r.path, wear_of)
         elif r.file == "fig2_convergence.parquet":
             check_schema(r.path, FIG2_CONVERGENCE)
             parquet_files += 1
@@ -362,7 +433,8 @@ def main(data_dir, profile):
             check(a.ndim == 2 and a.size > 0, f"{r.path}: shape {a.shape}")
     expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig2_convergence",
                 "fig3", "fig4a", "fig4b", "fig5a", "fig5b", "fig6", "figB1", "figB2",
-                "figB1_convergence", "figB2_convergence", "fig128_convergence"]
+                "figB1_convergence", "figB2_convergence", "fig128_convergence",
+                "fig45_load_resolution"]
     drawn = {os.path.splitext(f)[0] for f in rows("figures")["file"] if f.endswith(".png")}
     check(set(expected) <= drawn, f"missing figures: {sorted(set(expected) - drawn)}")
 

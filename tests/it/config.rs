@@ -169,6 +169,7 @@ fn the_shipped_pipeline_is_valid_for_every_profile() {
         "convergence128",
         "convergence128_h06",
         "convergence128_low",
+        "load_resolution128",
     ] {
         let plans = p.plan(profile, "pipeline.yaml").unwrap();
         assert!(!plans.is_empty(), "{profile} has studies");
