@@ -169,6 +169,10 @@ struct SolveArgs {
     /// Effective modulus E* (pressures are written in its unit).
     #[arg(long, default_value_t = 1.0)]
     e_star: f64,
+    /// Use the plain Polonsky–Keer conjugate gradient instead of the default preconditioned
+    /// one (same solution; more iterations on large grids, one convolution each).
+    #[arg(long)]
+    plain_cg: bool,
     /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.
     #[arg(long)]
     pressure_out: Option<PathBuf>,
@@ -458,6 +462,7 @@ fn solve(args: SolveArgs) -> anyhow::Result<()> {
     let cfg = SolverConfig {
         tolerance: args.tol,
         max_iterations: args.max_iter,
+        preconditioned: !args.plain_cg,
         ..SolverConfig::default()
     };
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();

@@ -144,6 +144,52 @@ impl ElasticOperator {
         I: IndexedParallelIterator<Item = S>,
         F: Fn(&mut S, usize, &mut [f64]) + Sync,
     {
+        self.start_rows_with(blocks, produce, ws, |m| m)
+    }
+
+    /// [`Self::start_rows`] for the inverse operator `K⁻¹` (multiplier `E*|q|/2`, 0 at
+    /// q = 0): the Fourier preconditioner of the solver. Returns `⟨t, K⁻¹ t⟩`.
+    pub fn start_rows_inverse<S, I, F>(
+        &self,
+        blocks: I,
+        produce: F,
+        ws: &mut OperatorWorkspace,
+    ) -> f64
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+    {
+        let n = self.grid.n() as f64;
+        // The stored multiplier carries the FFT pair's 1/n²: (E*|q|/2)/n² = n⁻⁴ / m.
+        let norm2 = 1.0 / (n * n * n * n);
+        self.start_rows_with(
+            blocks,
+            produce,
+            ws,
+            move |m| {
+                if m > 0.0 {
+                    norm2 / m
+                } else {
+                    0.0
+                }
+            },
+        )
+    }
+
+    /// The fused first half with the multiplier `gain(m)` of the stored `m`.
+    fn start_rows_with<S, I, F>(
+        &self,
+        blocks: I,
+        produce: F,
+        ws: &mut OperatorWorkspace,
+        gain: impl Fn(f64) -> f64 + Sync,
+    ) -> f64
+    where
+        S: Send,
+        I: IndexedParallelIterator<Item = S>,
+        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+    {
         let n = self.grid.n();
         let h = self.grid.half_len();
         self.fft.convolve_start(
@@ -153,7 +199,7 @@ impl ElasticOperator {
                 let m = &self.multiplier[jx * h..(jx + 1) * h];
                 let mut energy = 0.0;
                 for (iy, c) in col.iter_mut().enumerate() {
-                    let g = m[iy.min(n - iy)];
+                    let g = gain(m[iy.min(n - iy)]);
                     energy += g * c.norm_sqr();
                     *c *= g;
                 }

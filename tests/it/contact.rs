@@ -17,6 +17,18 @@ fn cfg(tol: f64) -> SolverConfig {
     }
 }
 
+/// Both solver variants: plain and preconditioned (`SolverConfig::preconditioned`). The
+/// analytic checks and the defined behaviour below hold for each.
+const VARIANTS: [bool; 2] = [false, true];
+
+fn cfgp(preconditioned: bool, tol: f64) -> SolverConfig {
+    SolverConfig {
+        tolerance: tol,
+        preconditioned,
+        ..SolverConfig::default()
+    }
+}
+
 /// Complementarity error recomputed independently of the solver from its pressure.
 fn independent_error(op: &ElasticOperator, h: &[f64], p: &[f64]) -> f64 {
     let n = op.grid().n();
@@ -62,51 +74,53 @@ fn paraboloid(n: usize, r_curv: f64) -> Vec<f64> {
 
 #[test]
 fn hertz_on_a_periodic_grid() {
-    // L/a = 10, a/Δ = 25.6 (VALIDATION §3a row N = 256).
-    let n = 256;
-    let (r_curv, e_star, a_target) = (1.0, 1.0, 0.1f64);
-    let load = 4.0 * a_target.powi(3) * e_star / (3.0 * r_curv);
-    let hertz = Hertz {
-        load,
-        r_curv,
-        e_star,
-    };
-    let h = paraboloid(n, r_curv);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), e_star);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    let report = solver.solve(load, &cfg(1e-12)).unwrap();
-    assert_eq!(report.status, Status::Converged, "{report:?}");
-    let p = solver.pressure();
-    let dx = 1.0 / n as f64;
-    let a = hertz.contact_radius();
-    let a_num = (solver.contact_count() as f64 * dx * dx / PI).sqrt();
-    assert!(
-        (a_num / a - 1.0).abs() <= 0.02,
-        "contact radius {a_num} vs {a}"
-    );
-    let p_max = p.iter().cloned().fold(0.0, f64::max);
-    assert!(
-        (p_max / hertz.peak_pressure() - 1.0).abs() <= 0.005,
-        "peak {p_max} vs {}",
-        hertz.peak_pressure()
-    );
-    let (mut num, mut den, mut inner) = (0.0, 0.0, 0.0f64);
-    for (i, pi) in p.iter().enumerate() {
-        let (y, x) = (
-            ((i / n) as f64 - (n / 2) as f64) * dx,
-            ((i % n) as f64 - (n / 2) as f64) * dx,
+    for pre in VARIANTS {
+        // L/a = 10, a/Δ = 25.6 (VALIDATION §3a row N = 256).
+        let n = 256;
+        let (r_curv, e_star, a_target) = (1.0, 1.0, 0.1f64);
+        let load = 4.0 * a_target.powi(3) * e_star / (3.0 * r_curv);
+        let hertz = Hertz {
+            load,
+            r_curv,
+            e_star,
+        };
+        let h = paraboloid(n, r_curv);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), e_star);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        let report = solver.solve(load, &cfgp(pre, 1e-12)).unwrap();
+        assert_eq!(report.status, Status::Converged, "{report:?}");
+        let p = solver.pressure();
+        let dx = 1.0 / n as f64;
+        let a = hertz.contact_radius();
+        let a_num = (solver.contact_count() as f64 * dx * dx / PI).sqrt();
+        assert!(
+            (a_num / a - 1.0).abs() <= 0.02,
+            "contact radius {a_num} vs {a}"
         );
-        let r = (x * x + y * y).sqrt();
-        let exact = hertz.pressure(r);
-        num += (pi - exact).powi(2);
-        den += exact * exact;
-        if r < 0.9 * a {
-            inner = inner.max((pi - exact).abs() / hertz.peak_pressure());
+        let p_max = p.iter().cloned().fold(0.0, f64::max);
+        assert!(
+            (p_max / hertz.peak_pressure() - 1.0).abs() <= 0.005,
+            "peak {p_max} vs {}",
+            hertz.peak_pressure()
+        );
+        let (mut num, mut den, mut inner) = (0.0, 0.0, 0.0f64);
+        for (i, pi) in p.iter().enumerate() {
+            let (y, x) = (
+                ((i / n) as f64 - (n / 2) as f64) * dx,
+                ((i % n) as f64 - (n / 2) as f64) * dx,
+            );
+            let r = (x * x + y * y).sqrt();
+            let exact = hertz.pressure(r);
+            num += (pi - exact).powi(2);
+            den += exact * exact;
+            if r < 0.9 * a {
+                inner = inner.max((pi - exact).abs() / hertz.peak_pressure());
+            }
         }
+        let l2 = (num / den).sqrt();
+        assert!(l2 <= 0.015, "relative L2 {l2}");
+        assert!(inner <= 0.005, "max |Δp|/p0 inside 0.9a: {inner}");
     }
-    let l2 = (num / den).sqrt();
-    assert!(l2 <= 0.015, "relative L2 {l2}");
-    assert!(inner <= 0.005, "max |Δp|/p0 inside 0.9a: {inner}");
 }
 
 fn westergaard_surface(n: usize, h0: f64) -> Vec<f64> {
@@ -117,136 +131,144 @@ fn westergaard_surface(n: usize, h0: f64) -> Vec<f64> {
 
 #[test]
 fn westergaard_partial_contact() {
-    for (n, ratio) in [(256usize, 0.1), (256, 0.5), (512, 0.3), (256, 0.8)] {
-        let w = Westergaard {
-            amplitude: 0.01,
-            wavelength: 1.0,
-            e_star: 1.0,
-        };
-        let mean = ratio * w.full_contact_pressure();
-        let h = westergaard_surface(n, w.amplitude);
-        let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
-        let mut solver = Solver::new(&op, &h).unwrap();
-        let report = solver.solve(mean, &cfg(1e-12)).unwrap();
-        assert!(report.converged(), "{report:?}");
-        let p = &solver.pressure()[..n]; // one row: the field is invariant along y
-        for row in 1..n {
-            assert_eq!(
-                &solver.pressure()[row * n..(row + 1) * n],
-                p,
-                "rows must agree"
+    for pre in VARIANTS {
+        for (n, ratio) in [(256usize, 0.1), (256, 0.5), (512, 0.3), (256, 0.8)] {
+            let w = Westergaard {
+                amplitude: 0.01,
+                wavelength: 1.0,
+                e_star: 1.0,
+            };
+            let mean = ratio * w.full_contact_pressure();
+            let h = westergaard_surface(n, w.amplitude);
+            let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
+            let mut solver = Solver::new(&op, &h).unwrap();
+            let report = solver.solve(mean, &cfgp(pre, 1e-12)).unwrap();
+            assert!(report.converged(), "{report:?}");
+            let p = &solver.pressure()[..n]; // one row: the field is invariant along y
+            for row in 1..n {
+                assert_eq!(
+                    &solver.pressure()[row * n..(row + 1) * n],
+                    p,
+                    "rows must agree"
+                );
+            }
+            let dx = 1.0 / n as f64;
+            let (mut num, mut den) = (0.0, 0.0);
+            for (j, pj) in p.iter().enumerate() {
+                let exact = w.pressure(j as f64 * dx, mean);
+                num += (pj - exact).powi(2);
+                den += exact * exact;
+            }
+            let l2 = (num / den).sqrt();
+            assert!(l2 <= 0.006, "N = {n}, p̄/p* = {ratio}: L2 {l2}");
+            let width = p.iter().filter(|&&v| v > 0.0).count() as f64 * dx;
+            let exact_width = 2.0 * w.half_width(mean);
+            assert!(
+                (width - exact_width).abs() <= 2.0 * dx,
+                "N = {n}: width {width} vs {exact_width}"
+            );
+            let p_max = p.iter().cloned().fold(0.0, f64::max);
+            let exact_max = w.pressure(0.0, mean);
+            assert!(
+                (p_max / exact_max - 1.0).abs() <= 1e-3,
+                "peak {p_max} vs {exact_max}"
             );
         }
-        let dx = 1.0 / n as f64;
-        let (mut num, mut den) = (0.0, 0.0);
-        for (j, pj) in p.iter().enumerate() {
-            let exact = w.pressure(j as f64 * dx, mean);
-            num += (pj - exact).powi(2);
-            den += exact * exact;
-        }
-        let l2 = (num / den).sqrt();
-        assert!(l2 <= 0.006, "N = {n}, p̄/p* = {ratio}: L2 {l2}");
-        let width = p.iter().filter(|&&v| v > 0.0).count() as f64 * dx;
-        let exact_width = 2.0 * w.half_width(mean);
-        assert!(
-            (width - exact_width).abs() <= 2.0 * dx,
-            "N = {n}: width {width} vs {exact_width}"
-        );
-        let p_max = p.iter().cloned().fold(0.0, f64::max);
-        let exact_max = w.pressure(0.0, mean);
-        assert!(
-            (p_max / exact_max - 1.0).abs() <= 1e-3,
-            "peak {p_max} vs {exact_max}"
-        );
     }
 }
 
 #[test]
 fn westergaard_full_contact_is_exact() {
-    let n = 128;
-    let w = Westergaard {
-        amplitude: 0.01,
-        wavelength: 1.0,
-        e_star: 2.0,
-    };
-    let mean = 1.2 * w.full_contact_pressure();
-    let h = westergaard_surface(n, w.amplitude);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    let report = solver.solve(mean, &cfg(1e-12)).unwrap();
-    assert!(report.converged());
-    for (i, p) in solver.pressure().iter().enumerate() {
-        let exact = w.pressure((i % n) as f64 / n as f64, mean);
-        assert!(
-            (p - exact).abs() <= 1e-12 * mean,
-            "node {i}: {p} vs {exact}"
-        );
+    for pre in VARIANTS {
+        let n = 128;
+        let w = Westergaard {
+            amplitude: 0.01,
+            wavelength: 1.0,
+            e_star: 2.0,
+        };
+        let mean = 1.2 * w.full_contact_pressure();
+        let h = westergaard_surface(n, w.amplitude);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        let report = solver.solve(mean, &cfgp(pre, 1e-12)).unwrap();
+        assert!(report.converged());
+        for (i, p) in solver.pressure().iter().enumerate() {
+            let exact = w.pressure((i % n) as f64 / n as f64, mean);
+            assert!(
+                (p - exact).abs() <= 1e-12 * mean,
+                "node {i}: {p} vs {exact}"
+            );
+        }
+        assert_eq!(solver.contact_count(), n * n);
     }
-    assert_eq!(solver.contact_count(), n * n);
 }
 
 #[test]
 fn westergaard_mean_gap() {
-    let n = 512;
-    let w = Westergaard {
-        amplitude: 0.01,
-        wavelength: 1.0,
-        e_star: 1.0,
-    };
-    let h = westergaard_surface(n, w.amplitude);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    for ratio in [0.2, 0.5] {
-        let mean = ratio * w.full_contact_pressure();
-        assert!(solver.solve(mean, &cfg(1e-12)).unwrap().converged());
-        let gap = solver.gap().iter().sum::<f64>() / (n * n) as f64;
-        let exact = w.mean_gap_over_2h0(mean) * 2.0 * w.amplitude;
-        // VALIDATION §1.3: 1e-6 of 2h0 at N = 1024; at N = 512 the discretisation error is
-        // about four times larger.
-        assert!(
-            (gap - exact).abs() <= 1e-5 * 2.0 * w.amplitude,
-            "p̄/p* = {ratio}: {gap} vs {exact}"
-        );
+    for pre in VARIANTS {
+        let n = 512;
+        let w = Westergaard {
+            amplitude: 0.01,
+            wavelength: 1.0,
+            e_star: 1.0,
+        };
+        let h = westergaard_surface(n, w.amplitude);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        for ratio in [0.2, 0.5] {
+            let mean = ratio * w.full_contact_pressure();
+            assert!(solver.solve(mean, &cfgp(pre, 1e-12)).unwrap().converged());
+            let gap = solver.gap().iter().sum::<f64>() / (n * n) as f64;
+            let exact = w.mean_gap_over_2h0(mean) * 2.0 * w.amplitude;
+            // VALIDATION §1.3: 1e-6 of 2h0 at N = 1024; at N = 512 the discretisation error is
+            // about four times larger.
+            assert!(
+                (gap - exact).abs() <= 1e-5 * 2.0 * w.amplitude,
+                "p̄/p* = {ratio}: {gap} vs {exact}"
+            );
+        }
     }
 }
 
 #[test]
 fn eggbox_full_contact_threshold() {
-    let n = 128;
-    let (d, e_star) = (0.01, 1.0);
-    let k = 2.0 * PI;
-    let h: Vec<f64> = (0..n * n)
-        .map(|i| {
+    for pre in VARIANTS {
+        let n = 128;
+        let (d, e_star) = (0.01, 1.0);
+        let k = 2.0 * PI;
+        let h: Vec<f64> = (0..n * n)
+            .map(|i| {
+                let (y, x) = ((i / n) as f64 / n as f64, (i % n) as f64 / n as f64);
+                d * (k * x).cos() * (k * y).cos()
+            })
+            .collect();
+        let p_star = 2f64.sqrt() * PI * e_star * d; // λ = L = 1
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), e_star);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        assert!(solver
+            .solve(1.02 * p_star, &cfgp(pre, 1e-12))
+            .unwrap()
+            .converged());
+        assert_eq!(
+            solver.contact_count(),
+            n * n,
+            "above p* the contact is complete"
+        );
+        for (i, p) in solver.pressure().iter().enumerate() {
             let (y, x) = ((i / n) as f64 / n as f64, (i % n) as f64 / n as f64);
-            d * (k * x).cos() * (k * y).cos()
-        })
-        .collect();
-    let p_star = 2f64.sqrt() * PI * e_star * d; // λ = L = 1
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), e_star);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    assert!(solver
-        .solve(1.02 * p_star, &cfg(1e-12))
-        .unwrap()
-        .converged());
-    assert_eq!(
-        solver.contact_count(),
-        n * n,
-        "above p* the contact is complete"
-    );
-    for (i, p) in solver.pressure().iter().enumerate() {
-        let (y, x) = ((i / n) as f64 / n as f64, (i % n) as f64 / n as f64);
-        let exact = 1.02 * p_star + p_star * (k * x).cos() * (k * y).cos();
-        assert!((p - exact).abs() <= 1e-12 * p_star, "{p} vs {exact}");
+            let exact = 1.02 * p_star + p_star * (k * x).cos() * (k * y).cos();
+            assert!((p - exact).abs() <= 1e-12 * p_star, "{p} vs {exact}");
+        }
+        assert!(solver
+            .solve(0.98 * p_star, &cfgp(pre, 1e-12))
+            .unwrap()
+            .converged());
+        let fraction = solver.contact_count() as f64 / (n * n) as f64;
+        assert!(
+            fraction < 1.0 && fraction > 0.95,
+            "below p* the contact is partial: {fraction}"
+        );
     }
-    assert!(solver
-        .solve(0.98 * p_star, &cfg(1e-12))
-        .unwrap()
-        .converged());
-    let fraction = solver.contact_count() as f64 / (n * n) as f64;
-    assert!(
-        fraction < 1.0 && fraction > 0.95,
-        "below p* the contact is partial: {fraction}"
-    );
 }
 
 #[test]
@@ -266,10 +288,14 @@ fn load_balance_and_complementarity_with_ragged_rows() {
 fn check_load_balance_and_complementarity(n: usize, lambda_l_px: f64) {
     let h = rough_surface(n, lambda_l_px, 4.0, 3);
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    for w in [0.001, 0.01, 0.05, 0.2] {
+    for (pre, w) in VARIANTS
+        .iter()
+        .flat_map(|&pre| [0.001, 0.01, 0.05, 0.2].map(|w| (pre, w)))
+    {
+        // A fresh solver per variant's sweep start (the first load of each).
+        let mut solver = Solver::new(&op, &h).unwrap();
         let mean = w; // rms slope 1, E* = 1: p̄ = W/W0
-        let report = solver.solve(mean, &cfg(1e-10)).unwrap();
+        let report = solver.solve(mean, &cfgp(pre, 1e-10)).unwrap();
         assert!(report.converged(), "{report:?}");
         let p = solver.pressure();
         let mean_p = p.iter().sum::<f64>() / p.len() as f64;
@@ -376,68 +402,76 @@ fn a_given_start_pressure_is_checked_and_used() {
 
 #[test]
 fn zero_load_gives_no_contact_and_no_nan() {
-    let h = rough_surface(64, 32.0, 4.0, 1);
-    let op = ElasticOperator::new(Grid::unit(64).unwrap(), 1.0);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    let r = solver.solve(0.0, &cfg(1e-12)).unwrap();
-    assert!(r.converged());
-    assert_eq!(solver.contact_count(), 0);
-    assert!(solver.pressure().iter().all(|&p| p == 0.0));
-    let max_h = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    for (g, hi) in solver.gap().iter().zip(&h) {
-        assert!(
-            (g - (max_h - hi)).abs() < 1e-15,
-            "gap is the distance to the highest point"
-        );
+    for pre in VARIANTS {
+        let h = rough_surface(64, 32.0, 4.0, 1);
+        let op = ElasticOperator::new(Grid::unit(64).unwrap(), 1.0);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        let r = solver.solve(0.0, &cfgp(pre, 1e-12)).unwrap();
+        assert!(r.converged());
+        assert_eq!(solver.contact_count(), 0);
+        assert!(solver.pressure().iter().all(|&p| p == 0.0));
+        let max_h = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        for (g, hi) in solver.gap().iter().zip(&h) {
+            assert!(
+                (g - (max_h - hi)).abs() < 1e-15,
+                "gap is the distance to the highest point"
+            );
+        }
     }
 }
 
 #[test]
 fn tiny_load_on_one_node_is_exact() {
-    // 64² paraboloid, p̄ = 1e-8 E*: the Hertz radius is far below Δ, the apex node carries it all.
-    let n = 64;
-    let h = paraboloid(n, 1.0);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    let mean = 1e-8;
-    let r = solver.solve(mean, &cfg(1e-12)).unwrap();
-    assert!(r.converged(), "{r:?}");
-    assert!(r.error_history.iter().all(|e| e.is_finite()));
-    assert_eq!(solver.contact_count(), 1);
-    let apex = (n / 2) * n + n / 2;
-    assert!((solver.pressure()[apex] / (mean * (n * n) as f64) - 1.0).abs() < 1e-12);
-    assert_eq!(
-        r.error, 0.0,
-        "the single-node state is the exact discrete solution"
-    );
+    for pre in VARIANTS {
+        // 64² paraboloid, p̄ = 1e-8 E*: the Hertz radius is far below Δ, the apex node carries it all.
+        let n = 64;
+        let h = paraboloid(n, 1.0);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        let mean = 1e-8;
+        let r = solver.solve(mean, &cfgp(pre, 1e-12)).unwrap();
+        assert!(r.converged(), "{r:?}");
+        assert!(r.error_history.iter().all(|e| e.is_finite()));
+        assert_eq!(solver.contact_count(), 1);
+        let apex = (n / 2) * n + n / 2;
+        assert!((solver.pressure()[apex] / (mean * (n * n) as f64) - 1.0).abs() < 1e-12);
+        assert_eq!(
+            r.error, 0.0,
+            "the single-node state is the exact discrete solution"
+        );
+    }
 }
 
 #[test]
 fn flat_surface_gives_uniform_pressure() {
-    let n = 32;
-    let h = vec![0.25; n * n];
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    let r = solver.solve(0.3, &cfg(1e-12)).unwrap();
-    assert!(r.converged());
-    assert!(solver.pressure().iter().all(|&p| p == 0.3));
-    assert_eq!(solver.contact_count(), n * n);
-    assert!(solver.gap().iter().all(|&g| g == 0.0));
+    for pre in VARIANTS {
+        let n = 32;
+        let h = vec![0.25; n * n];
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        let r = solver.solve(0.3, &cfgp(pre, 1e-12)).unwrap();
+        assert!(r.converged());
+        assert!(solver.pressure().iter().all(|&p| p == 0.3));
+        assert_eq!(solver.contact_count(), n * n);
+        assert!(solver.gap().iter().all(|&g| g == 0.0));
+    }
 }
 
 #[test]
 fn rough_surface_in_full_contact() {
-    let n = 64;
-    let h = rough_surface(n, 32.0, 4.0, 2);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-    let mut solver = Solver::new(&op, &h).unwrap();
-    let r = solver.solve(5.0, &cfg(1e-12)).unwrap();
-    assert!(r.converged(), "{r:?}");
-    assert_eq!(solver.contact_count(), n * n);
-    // In full contact the gap vanishes: u − h is constant.
-    let max_gap = solver.gap().iter().cloned().fold(0.0, f64::max);
-    let std_h = (h.iter().map(|v| v * v).sum::<f64>() / h.len() as f64).sqrt();
-    assert!(max_gap <= 1e-10 * std_h, "gap {max_gap}");
+    for pre in VARIANTS {
+        let n = 64;
+        let h = rough_surface(n, 32.0, 4.0, 2);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let mut solver = Solver::new(&op, &h).unwrap();
+        let r = solver.solve(5.0, &cfgp(pre, 1e-12)).unwrap();
+        assert!(r.converged(), "{r:?}");
+        assert_eq!(solver.contact_count(), n * n);
+        // In full contact the gap vanishes: u − h is constant.
+        let max_gap = solver.gap().iter().cloned().fold(0.0, f64::max);
+        let std_h = (h.iter().map(|v| v * v).sum::<f64>() / h.len() as f64).sqrt();
+        assert!(max_gap <= 1e-10 * std_h, "gap {max_gap}");
+    }
 }
 
 #[test]
@@ -487,6 +521,7 @@ fn non_convergence_is_reported_not_hidden() {
                 tolerance: 1e-14,
                 max_iterations: 3,
                 stall_window: 1000,
+                preconditioned: false,
             },
         )
         .unwrap();
@@ -499,26 +534,65 @@ fn non_convergence_is_reported_not_hidden() {
 fn identical_bits_for_one_and_two_threads() {
     let n = 256;
     let h = rough_surface(n, 64.0, 8.0, 9);
-    let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-                let mut solver = Solver::new(&op, &h).unwrap();
-                let r = solver.solve(0.02, &cfg(1e-10)).unwrap();
-                (
-                    r.iterations,
-                    solver
-                        .pressure()
-                        .iter()
-                        .map(|p| p.to_bits())
-                        .collect::<Vec<_>>(),
-                )
-            })
-    };
-    assert_eq!(run(1), run(2));
+    for pre in VARIANTS {
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+                    let mut solver = Solver::new(&op, &h).unwrap();
+                    let r = solver.solve(0.02, &cfgp(pre, 1e-10)).unwrap();
+                    (
+                        r.iterations,
+                        solver
+                            .pressure()
+                            .iter()
+                            .map(|p| p.to_bits())
+                            .collect::<Vec<_>>(),
+                    )
+                })
+        };
+        assert_eq!(run(1), run(2), "preconditioned: {pre}");
+    }
+}
+
+/// The preconditioned solver reaches the plain one's solution on a rough surface sweep
+/// (same contact set at every load, pressures within 1e-8 relative at tolerance 1e-11)
+/// in fewer iterations: at n = 256 and W/W0 = 0.06 the plain conjugate gradient needs
+/// about 2.2 times as many (measured 62 against 28 in the numpy prototype at tolerance
+/// 1e-8; the bound asserted is 1.5).
+#[test]
+fn preconditioned_solver_matches_the_plain_one_in_fewer_iterations() {
+    let n = 256;
+    let h = rough_surface(n, 64.0, 8.0, 7);
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let mut plain = Solver::new(&op, &h).unwrap();
+    let mut pre = Solver::new(&op, &h).unwrap();
+    for w in [0.001, 0.01, 0.06] {
+        let rp = plain.solve(w, &cfgp(false, 1e-11)).unwrap();
+        let rq = pre.solve(w, &cfgp(true, 1e-11)).unwrap();
+        assert!(rp.converged() && rq.converged(), "{rp:?} {rq:?}");
+        assert_eq!(plain.contact_count(), pre.contact_count(), "W/W0 = {w}");
+        let norm: f64 = plain.pressure().iter().map(|p| p * p).sum::<f64>().sqrt();
+        let diff: f64 = plain
+            .pressure()
+            .iter()
+            .zip(pre.pressure())
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(diff / norm < 1e-8, "W/W0 = {w}: {}", diff / norm);
+        if w == 0.06 {
+            assert!(
+                rq.iterations as f64 * 1.5 < rp.iterations as f64,
+                "W/W0 = {w}: {} preconditioned against {} plain iterations",
+                rq.iterations,
+                rp.iterations
+            );
+        }
+    }
 }
 
 /// Small-load area–load slope κ = (A/A0)/(W/W0) on 512² H = 0.8 surfaces with λ_s = 8Δ
