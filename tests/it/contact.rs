@@ -29,6 +29,18 @@ fn cfgp(preconditioned: bool, tol: f64) -> SolverConfig {
     }
 }
 
+/// ‖a − b‖ / ‖b‖ (Euclidean).
+fn relative_l2(a: &[f64], b: &[f64]) -> f64 {
+    let norm: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let diff: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    diff / norm
+}
+
 /// Complementarity error recomputed independently of the solver from its pressure.
 fn independent_error(op: &ElasticOperator, h: &[f64], p: &[f64]) -> f64 {
     let n = op.grid().n();
@@ -330,19 +342,8 @@ fn warm_started_sweep_matches_cold_solves() {
         warm_iters += rw.iterations;
         cold_iters += rc.iterations;
         assert_eq!(warm.contact_count(), cold.contact_count(), "W/W0 = {w}");
-        let norm: f64 = cold.pressure().iter().map(|p| p * p).sum::<f64>().sqrt();
-        let diff: f64 = warm
-            .pressure()
-            .iter()
-            .zip(cold.pressure())
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        assert!(
-            diff / norm < 1e-8,
-            "W/W0 = {w}: relative difference {}",
-            diff / norm
-        );
+        let diff = relative_l2(warm.pressure(), cold.pressure());
+        assert!(diff < 1e-8, "W/W0 = {w}: relative difference {diff}");
     }
     assert!(
         warm_iters < cold_iters,
@@ -575,15 +576,8 @@ fn preconditioned_solver_matches_the_plain_one_in_fewer_iterations() {
         let rq = pre.solve(w, &cfgp(true, 1e-11)).unwrap();
         assert!(rp.converged() && rq.converged(), "{rp:?} {rq:?}");
         assert_eq!(plain.contact_count(), pre.contact_count(), "W/W0 = {w}");
-        let norm: f64 = plain.pressure().iter().map(|p| p * p).sum::<f64>().sqrt();
-        let diff: f64 = plain
-            .pressure()
-            .iter()
-            .zip(pre.pressure())
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        assert!(diff / norm < 1e-8, "W/W0 = {w}: {}", diff / norm);
+        let diff = relative_l2(pre.pressure(), plain.pressure());
+        assert!(diff < 1e-8, "W/W0 = {w}: relative difference {diff}");
         if w == 0.06 {
             assert!(
                 rq.iterations as f64 * 1.5 < rp.iterations as f64,
