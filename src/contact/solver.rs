@@ -18,7 +18,8 @@
 //! iteration count then grows slowly with n (a 16-load 2048² sweep: 1090 iterations against
 //! 5399), at one more convolution per iteration.
 //!
-//! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹` when preconditioned). The deflection is updated by linearity,
+//! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
+//! The deflection is updated by linearity,
 //! `u ← s (u − τ K t + K Δ)`, where `Δ` is the departure of the projected pressure from the
 //! linear step at the nodes that left or re-entered the contact set: `K Δ` is summed
 //! directly when there are at most [`MAX_SPARSE`] of them, otherwise convolved by FFT (the
@@ -468,24 +469,22 @@ impl<'a> Solver<'a> {
             // Pass 2, fused with the forward FFT: conjugate direction on the contact set,
             // kept centred there; then K t and the curvature ⟨t, K t⟩ (Parseval).
             let level = shift + mean_g;
-            let (denominator, numerator) = if cfg.preconditioned {
-                // ⟨g, z⟩ replaces ⟨g, g⟩ in β (preconditioned conjugate gradient).
-                let g_z = self.precondition(level);
+            // ⟨g, z⟩ replaces ⟨g, g⟩ in β when preconditioned.
+            let g_dot = if cfg.preconditioned {
                 report.convolutions += 1;
-                let beta = if restart || g_norm_old <= 0.0 {
-                    0.0
-                } else {
-                    g_z / g_norm_old
-                };
-                g_norm_old = g_z;
+                self.precondition(level)
+            } else {
+                g_norm
+            };
+            let beta = if restart || g_norm_old <= 0.0 {
+                0.0
+            } else {
+                g_dot / g_norm_old
+            };
+            g_norm_old = g_dot;
+            let (denominator, numerator) = if cfg.preconditioned {
                 self.preconditioned_direction_and_transform(level, beta, direction_mean)
             } else {
-                let beta = if restart || g_norm_old <= 0.0 {
-                    0.0
-                } else {
-                    g_norm / g_norm_old
-                };
-                g_norm_old = g_norm;
                 self.direction_and_transform(level, beta, direction_mean)
             };
             report.convolutions += 1;
@@ -735,26 +734,28 @@ impl<'a> Solver<'a> {
             },
             &mut self.ws,
         );
+        // Each row of K⁻¹ P g is stored as it comes out and summed over S (in node order
+        // per block) for the mean.
         self.op.finish_rows(
-            self.preconditioned.par_chunks_mut(chunk),
-            |zc, r, row| zc[r * n..(r + 1) * n].copy_from_slice(row),
-            &mut self.ws,
-        );
-        // Mean of z over S.
-        self.preconditioned
-            .par_chunks(chunk)
-            .zip(self.pressure.par_chunks(chunk))
-            .zip(self.partials.par_iter_mut())
-            .for_each(|((zc, pc), part)| {
-                let (mut sum, mut count) = (0.0, 0.0);
-                for (&z, &p) in zc.iter().zip(pc) {
+            self.preconditioned
+                .par_chunks_mut(chunk)
+                .zip(self.pressure.par_chunks(chunk))
+                .zip(self.partials.par_iter_mut()),
+            |((zc, pc), part), r, row| {
+                if r == 0 {
+                    **part = [0.0; 6];
+                }
+                let at = r * n..(r + 1) * n;
+                zc[at.clone()].copy_from_slice(row);
+                for (&z, &p) in row.iter().zip(&pc[at]) {
                     if p > 0.0 {
-                        sum += z;
-                        count += 1.0;
+                        part[0] += z;
+                        part[1] += 1.0;
                     }
                 }
-                *part = [sum, count, 0.0, 0.0, 0.0, 0.0];
-            });
+            },
+            &mut self.ws,
+        );
         let (sum, count) = self
             .partials
             .iter()

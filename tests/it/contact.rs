@@ -561,9 +561,9 @@ fn identical_bits_for_one_and_two_threads() {
 
 /// The preconditioned solver reaches the plain one's solution on a rough surface sweep
 /// (same contact set at every load, pressures within 1e-8 relative at tolerance 1e-11)
-/// in fewer iterations: at n = 256 and W/W0 = 0.06 the plain conjugate gradient needs
-/// about 2.2 times as many (measured 62 against 28 in the numpy prototype at tolerance
-/// 1e-8; the bound asserted is 1.5).
+/// in fewer iterations: on this warm-started sweep the plain conjugate gradient needs 46 / 59
+/// / 93 iterations and the preconditioned one 28 / 29 / 34 (measured 2026-11-23); the test
+/// asserts a factor of at least 2 at W/W0 = 0.06, where it is 2.7.
 #[test]
 fn preconditioned_solver_matches_the_plain_one_in_fewer_iterations() {
     let n = 256;
@@ -580,7 +580,7 @@ fn preconditioned_solver_matches_the_plain_one_in_fewer_iterations() {
         assert!(diff < 1e-8, "W/W0 = {w}: relative difference {diff}");
         if w == 0.06 {
             assert!(
-                rq.iterations as f64 * 1.5 < rp.iterations as f64,
+                rq.iterations as f64 * 2.0 < rp.iterations as f64,
                 "W/W0 = {w}: {} preconditioned against {} plain iterations",
                 rq.iterations,
                 rp.iterations
