@@ -250,6 +250,8 @@ pub struct Solver<'a> {
     partials: Vec<[f64; 6]>,
     /// Per block: accumulators of the update pass fused with the inverse FFT.
     update_acc: Vec<UpdateAcc>,
+    /// Per-block lane sums of [`Solver::precondition`].
+    precondition_acc: Vec<[[f64; LANES]; 5]>,
     /// Per block: the nodes whose projection departed from the linear step, `(node, Δ)` in
     /// node order, up to the list's capacity (one node in [`CHANGES_PER_NODE`] of the
     /// block; never reallocated).
@@ -302,6 +304,7 @@ impl<'a> Solver<'a> {
             chunk,
             partials: vec![[0.0; 6]; blocks],
             update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
+            precondition_acc: vec![[[0.0; LANES]; 5]; blocks],
             changes: (0..blocks)
                 .map(|_| Vec::with_capacity((chunk / CHANGES_PER_NODE).max(MAX_SPARSE)))
                 .collect(),
@@ -470,22 +473,27 @@ impl<'a> Solver<'a> {
             // kept centred there; then K t and the curvature ⟨t, K t⟩ (Parseval).
             let level = shift + mean_g;
             // ⟨g, z⟩ replaces ⟨g, g⟩ in β when preconditioned.
-            let g_dot = if cfg.preconditioned {
+            let preconditioned = if cfg.preconditioned {
                 report.convolutions += 1;
-                self.precondition(level)
+                Some(self.precondition(level))
             } else {
-                g_norm
+                None
             };
+            let g_dot = preconditioned.map_or(g_norm, |(_, g_dot, _, _)| g_dot);
             let beta = if restart || g_norm_old <= 0.0 {
                 0.0
             } else {
                 g_dot / g_norm_old
             };
             g_norm_old = g_dot;
-            let (denominator, numerator) = if cfg.preconditioned {
-                self.preconditioned_direction_and_transform(level, beta, direction_mean)
-            } else {
-                self.direction_and_transform(level, beta, direction_mean)
+            let (denominator, numerator) = match preconditioned {
+                // Σ_S g t = ⟨g, z − z̄⟩ + β (Σ_S g t_old − t̄ Σ_S g), from the sums of
+                // `precondition`, so the direction pass reads t, p and z only.
+                Some((z_mean, g_dot, g_t_old, g_sum)) => (
+                    self.preconditioned_direction_and_transform(z_mean, beta, direction_mean),
+                    g_dot + beta * (g_t_old - direction_mean * g_sum),
+                ),
+                None => self.direction_and_transform(level, beta, direction_mean),
             };
             report.convolutions += 1;
             // Exact line search.
@@ -708,11 +716,14 @@ impl<'a> Solver<'a> {
         (energy, numerator)
     }
 
-    /// The preconditioned gradient `z = P K⁻¹ P (g − ḡ_S)` into `self.preconditioned`
-    /// (`P`: zero off the contact set S, centred on S; `g − ḡ_S = u − h − level`). Returns
-    /// `⟨g − ḡ_S, z⟩` over S. Sums over the fixed blocks, so bit-identical whatever the
-    /// number of threads.
-    fn precondition(&mut self, level: f64) -> f64 {
+    /// The preconditioned gradient `z = P K⁻¹ P (g − ḡ_S)` (`P`: zero off the contact set
+    /// S, centred on S; `g − ḡ_S = u − h − level`). Each row of `K⁻¹ P (g − ḡ_S)` is
+    /// stored raw in `self.preconditioned` as it leaves the inverse FFT, and summed over S
+    /// in the same pass: `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t_old` (`g` centred). The
+    /// centring is left to the direction pass, which subtracts the mean. Returns
+    /// `(mean of z over S, ⟨g − ḡ_S, z − z̄_S⟩_S, Σ_S g t_old, Σ_S g)`. Sums over the fixed
+    /// blocks in node order, so bit-identical whatever the number of threads.
+    fn precondition(&mut self, level: f64) -> (f64, f64, f64, f64) {
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         let produce = self
             .pressure
@@ -723,109 +734,80 @@ impl<'a> Solver<'a> {
             produce,
             |((pc, uc), hc), r, row| {
                 let at = r * n..(r + 1) * n;
-                for (((o, &p), &u), &hh) in row
-                    .iter_mut()
-                    .zip(&pc[at.clone()])
-                    .zip(&uc[at.clone()])
-                    .zip(&hc[at])
-                {
-                    *o = if p > 0.0 { u - hh - level } else { 0.0 };
-                }
+                dispatch_precondition_input(level, row, &pc[at.clone()], &uc[at.clone()], &hc[at]);
             },
             &mut self.ws,
         );
-        // Each row of K⁻¹ P g is stored as it comes out and summed over S (in node order
-        // per block) for the mean.
         self.op.finish_rows(
             self.preconditioned
                 .par_chunks_mut(chunk)
                 .zip(self.pressure.par_chunks(chunk))
-                .zip(self.partials.par_iter_mut()),
-            |((zc, pc), part), r, row| {
+                .zip(self.deflection.par_chunks(chunk))
+                .zip(h.par_chunks(chunk))
+                .zip(self.direction.par_chunks(chunk))
+                .zip(self.precondition_acc.par_iter_mut()),
+            |(((((zc, pc), uc), hc), tc), acc), r, row| {
                 if r == 0 {
-                    **part = [0.0; 6];
+                    **acc = [[0.0; LANES]; 5];
                 }
                 let at = r * n..(r + 1) * n;
-                zc[at.clone()].copy_from_slice(row);
-                for (&z, &p) in row.iter().zip(&pc[at]) {
-                    if p > 0.0 {
-                        part[0] += z;
-                        part[1] += 1.0;
-                    }
-                }
+                dispatch_precondition_output(
+                    level,
+                    row,
+                    &mut zc[at.clone()],
+                    &pc[at.clone()],
+                    &uc[at.clone()],
+                    &hc[at.clone()],
+                    &tc[at],
+                    acc,
+                );
             },
             &mut self.ws,
         );
-        let (sum, count) = self
-            .partials
-            .iter()
-            .fold((0.0, 0.0), |(s, c), p| (s + p[0], c + p[1]));
-        let mean = if count > 0.0 { sum / count } else { 0.0 };
-        // Centre on S, zero elsewhere; ⟨g − ḡ_S, z⟩.
-        self.preconditioned
-            .par_chunks_mut(chunk)
-            .zip(self.pressure.par_chunks(chunk))
-            .zip(self.deflection.par_chunks(chunk))
-            .zip(h.par_chunks(chunk))
-            .zip(self.partials.par_iter_mut())
-            .for_each(|((((zc, pc), uc), hc), part)| {
-                let mut dot = 0.0;
-                for (((z, &p), &u), &hh) in zc.iter_mut().zip(pc).zip(uc).zip(hc) {
-                    *z = if p > 0.0 { *z - mean } else { 0.0 };
-                    dot += (u - hh - level) * *z;
-                }
-                *part = [dot, 0.0, 0.0, 0.0, 0.0, 0.0];
-            });
-        self.partials.iter().map(|p| p[0]).sum()
+        let mut sums = [0.0; 5];
+        for acc in &self.precondition_acc {
+            for (s, lanes) in sums.iter_mut().zip(acc) {
+                *s += lanes.iter().sum::<f64>();
+            }
+        }
+        let [sz, count, sgz, sg, sgt] = sums;
+        let mean = if count > 0.0 { sz / count } else { 0.0 };
+        // Σ_S g (z − z̄) = Σ_S g z − z̄ Σ_S g (Σ_S g is zero up to rounding).
+        (mean, sgz - mean * sg, sgt, sg)
     }
 
     /// [`Self::direction_and_transform`] with the preconditioned gradient:
-    /// `t ← z + β (t − t̄_S)` on S, 0 elsewhere. Returns `(⟨t, K t⟩, Σ_S (g − ḡ_S) t)`.
+    /// `t ← (z − z̄_S) + β (t − t̄_S)` on S, 0 elsewhere (`z` raw from
+    /// [`Self::precondition`], `z̄_S = z_mean`), each row handed to the forward FFT as it is
+    /// made. Returns `⟨t, K t⟩`.
     fn preconditioned_direction_and_transform(
         &mut self,
-        level: f64,
+        z_mean: f64,
         beta: f64,
         direction_mean: f64,
-    ) -> (f64, f64) {
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+    ) -> f64 {
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
         let blocks = self
             .direction
             .par_chunks_mut(chunk)
             .zip(self.pressure.par_chunks(chunk))
-            .zip(self.deflection.par_chunks(chunk))
-            .zip(h.par_chunks(chunk))
-            .zip(self.preconditioned.par_chunks(chunk))
-            .zip(self.partials.par_iter_mut());
-        let energy = self.op.start_rows(
+            .zip(self.preconditioned.par_chunks(chunk));
+        self.op.start_rows(
             blocks,
-            |(((((tc, pc), uc), hc), zc), part), r, row| {
-                if r == 0 {
-                    **part = [0.0; 6];
-                }
+            |((tc, pc), zc), r, row| {
                 let at = r * n..(r + 1) * n;
-                let mut num = 0.0;
-                for (((((t, o), &p), &u), &hh), &z) in tc[at.clone()]
-                    .iter_mut()
-                    .zip(row.iter_mut())
-                    .zip(&pc[at.clone()])
-                    .zip(&uc[at.clone()])
-                    .zip(&hc[at.clone()])
-                    .zip(&zc[at])
-                {
-                    *t = if p > 0.0 {
-                        z + beta * (*t - direction_mean)
-                    } else {
-                        0.0
-                    };
-                    *o = *t;
-                    num += (u - hh - level) * *t;
-                }
-                part[0] += num;
+                dispatch_preconditioned_direction(
+                    z_mean,
+                    beta,
+                    direction_mean,
+                    &mut tc[at.clone()],
+                    row,
+                    &pc[at.clone()],
+                    &zc[at],
+                );
             },
             &mut self.ws,
-        );
-        let numerator = self.partials.iter().map(|p| p[0]).sum();
-        (energy, numerator)
+        )
     }
 
     /// Pass 3 fused with the second half of `K t` (whose rows arrive from the inverse FFT):
@@ -1055,6 +1037,107 @@ avx2_dispatch! {
     ) {
         op.add_point_loads_row(iy, loads, u);
         gradient_row(shift, Some(scale), p, u, h, acc);
+    }
+}
+
+avx2_dispatch! {
+    /// One row of the preconditioner's input, with AVX2 where available:
+    /// `o = u − h − level` on S = {p > 0}, 0 elsewhere.
+    fn dispatch_precondition_input(level: f64, o: &mut [f64], p: &[f64], u: &[f64], h: &[f64]) {
+        for (((o, &p), &u), &h) in o.iter_mut().zip(p).zip(u).zip(h) {
+            *o = if p > 0.0 { u - h - level } else { 0.0 };
+        }
+    }
+}
+
+avx2_dispatch! {
+    /// One row of `K⁻¹ P g` as it leaves the inverse FFT, with AVX2 where available: stored
+    /// in `z`, and with `g = u − h − level`, `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t` over
+    /// S = {p > 0} added to `acc` (lane `k mod LANES` takes node `k`).
+    fn dispatch_precondition_output(
+        level: f64,
+        row: &[f64],
+        z: &mut [f64],
+        p: &[f64],
+        u: &[f64],
+        h: &[f64],
+        t: &[f64],
+        acc: &mut [[f64; LANES]; 5],
+    ) {
+        z.copy_from_slice(row);
+        let n = row.len();
+        let whole = n - n % LANES;
+        for i in (0..whole).step_by(LANES) {
+            let at = i..i + LANES;
+            precondition_sums(
+                level,
+                &lanes(&row[at.clone()]),
+                &lanes(&p[at.clone()]),
+                &lanes(&u[at.clone()]),
+                &lanes(&h[at.clone()]),
+                &lanes(&t[at]),
+                acc,
+            );
+        }
+        if whole < n {
+            // Padding: p = 0 puts the extra lanes off S.
+            let at = whole..n;
+            precondition_sums(
+                level,
+                &padded(&row[at.clone()], 0.0),
+                &padded(&p[at.clone()], 0.0),
+                &padded(&u[at.clone()], 0.0),
+                &padded(&h[at.clone()], 0.0),
+                &padded(&t[at], 0.0),
+                acc,
+            );
+        }
+    }
+}
+
+/// [`dispatch_precondition_output`]'s sums for one block of [`LANES`] nodes.
+#[inline(always)]
+fn precondition_sums(
+    level: f64,
+    z: &[f64; LANES],
+    p: &[f64; LANES],
+    u: &[f64; LANES],
+    h: &[f64; LANES],
+    t: &[f64; LANES],
+    acc: &mut [[f64; LANES]; 5],
+) {
+    for k in 0..LANES {
+        let on = p[k] > 0.0;
+        let g = if on { u[k] - h[k] - level } else { 0.0 };
+        let zk = if on { z[k] } else { 0.0 };
+        acc[0][k] += zk;
+        acc[1][k] += if on { 1.0 } else { 0.0 };
+        acc[2][k] += g * zk;
+        acc[3][k] += g;
+        acc[4][k] += if on { g * t[k] } else { 0.0 };
+    }
+}
+
+avx2_dispatch! {
+    /// One row of the preconditioned direction, with AVX2 where available:
+    /// `t ← (z − z̄) + β (t − t̄)` on S = {p > 0}, 0 elsewhere, copied into `row`.
+    fn dispatch_preconditioned_direction(
+        z_mean: f64,
+        beta: f64,
+        direction_mean: f64,
+        t: &mut [f64],
+        row: &mut [f64],
+        p: &[f64],
+        z: &[f64],
+    ) {
+        for (((t, o), &p), &z) in t.iter_mut().zip(row.iter_mut()).zip(p).zip(z) {
+            *t = if p > 0.0 {
+                (z - z_mean) + beta * (*t - direction_mean)
+            } else {
+                0.0
+            };
+            *o = *t;
+        }
     }
 }
 
