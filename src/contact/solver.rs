@@ -724,8 +724,9 @@ impl<'a> Solver<'a> {
     /// stored raw in `self.preconditioned` as it leaves the inverse FFT, and summed over S
     /// in the same pass: `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t_old` (`g` centred). The
     /// centring is left to the direction pass, which subtracts the mean. Returns
-    /// `(mean of z over S, ⟨g − ḡ_S, z − z̄_S⟩_S, Σ_S g t_old, Σ_S g)`. Sums over the fixed
-    /// blocks in node order, so bit-identical whatever the number of threads.
+    /// `(mean of z over S, ⟨g − ḡ_S, z − z̄_S⟩_S, Σ_S g t_old, Σ_S g)`. Summed in a fixed order
+    /// (four lanes per block, then the blocks in order), so bit-identical whatever the number
+    /// of threads.
     fn precondition(&mut self, level: f64) -> (f64, f64, f64, f64) {
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         let produce = self
