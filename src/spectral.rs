@@ -352,7 +352,7 @@ impl Fft2 {
                     let width = values.len();
                     let cols = &mut block.columns[..width * n];
                     for r in 0..n {
-                        // Rows are h·16 bytes apart (more than a page from 256² on), which
+                        // Rows are h·16 bytes apart (more than a 4 KiB page from 512² on), which
                         // the hardware prefetchers do not follow: ask for a later row's
                         // line(s) now.
                         if r + PREFETCH_ROWS < n {
