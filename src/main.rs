@@ -468,12 +468,18 @@ fn solve(args: SolveArgs) -> anyhow::Result<()> {
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
     let mut pressures = Vec::new();
     let mut contacts = Vec::new();
-    let results = sweep(&op, &heights, slope, &args.loads, &cfg, |_, solver, _| {
-        if keep_fields {
-            pressures.extend_from_slice(solver.pressure());
-            contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
-        }
-        Ok(())
+    // The sweep runs on a worker of its own pool (RAYON_NUM_THREADS threads), so that the
+    // solver's parallel loops start on a pool thread instead of being injected from the
+    // main thread and waited for (a wake-up and a sleep per loop, several per iteration).
+    let pool = rayon::ThreadPoolBuilder::new().build()?;
+    let results = pool.install(|| {
+        sweep(&op, &heights, slope, &args.loads, &cfg, |_, solver, _| {
+            if keep_fields {
+                pressures.extend_from_slice(solver.pressure());
+                contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
+            }
+            Ok(())
+        })
     })?;
     let shape: Vec<usize> = if args.loads.len() == 1 {
         vec![n, n]

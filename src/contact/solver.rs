@@ -22,8 +22,11 @@
 //! sums.
 //!
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
+//! A sweep's warm start scales the previous converged state, `p` and `K p` alike
+//! (`K (s p) = s K p`), in one pass without a convolution.
 //! The deflection is updated by linearity,
-//! `u ← s (u − τ K t + K Δ)`, where `Δ` is the departure of the projected pressure from the
+//! `u ← s (u − τ K t + K Δ)` (stored as `w = u − h`, so that the passes of an iteration
+//! read the heights only when the load is rescaled), where `Δ` is the departure of the projected pressure from the
 //! linear step at the nodes that left or re-entered the contact set: `K Δ` is summed
 //! directly when there are at most [`MAX_SPARSE`] of them, otherwise convolved by FFT (the
 //! rows of `Δ` without a change skip the forward row transform, as do the empty rows of every
@@ -243,7 +246,9 @@ pub struct Solver<'a> {
     flat: bool,
     ws: OperatorWorkspace,
     pressure: Vec<f64>,
-    deflection: Vec<f64>,
+    /// `w = u − h`, the deflection minus the heights (the gap up to the rigid-body shift),
+    /// stored instead of `u` so that the passes of an iteration need not read `h`.
+    separation: Vec<f64>,
     /// The search direction `t` during iterations; the gap after a solve.
     direction: Vec<f64>,
     /// Values per work block: the operator's fixed row blocks (`rows_per_block · n`), so
@@ -263,6 +268,9 @@ pub struct Solver<'a> {
     /// The preconditioned gradient `z` (allocated at the first preconditioned solve).
     preconditioned: Vec<f64>,
     has_solution: bool,
+    /// Whether `separation` is `K p − h` for the current `pressure`, computed exactly (after
+    /// a converged solve; not after [`Self::set_start`]).
+    separation_exact: bool,
 }
 
 impl<'a> Solver<'a> {
@@ -302,7 +310,7 @@ impl<'a> Solver<'a> {
             flat: lo == hi,
             ws: op.make_workspace(),
             pressure: vec![0.0; len],
-            deflection: vec![0.0; len],
+            separation: vec![0.0; len],
             direction: vec![0.0; len],
             chunk,
             partials: vec![[0.0; 6]; blocks],
@@ -314,6 +322,7 @@ impl<'a> Solver<'a> {
             sparse: Vec::with_capacity(MAX_SPARSE),
             preconditioned: Vec::new(),
             has_solution: false,
+            separation_exact: false,
         })
     }
 
@@ -367,6 +376,7 @@ impl<'a> Solver<'a> {
         }
         self.pressure.copy_from_slice(pressure);
         self.has_solution = true;
+        self.separation_exact = false;
         Ok(())
     }
 
@@ -402,26 +412,44 @@ impl<'a> Solver<'a> {
 
         if target == 0.0 || self.flat {
             self.pressure.fill(target);
-            self.deflection.fill(0.0);
+            // u = 0: w = −h.
+            let h = self.heights;
+            self.separation
+                .par_iter_mut()
+                .zip(h.par_iter())
+                .for_each(|(w, &h)| *w = -h);
             self.finish_gap();
             self.has_solution = target > 0.0;
+            self.separation_exact = true;
             report.error_history.push(0.0);
             return Ok(report);
         }
 
-        // Start: the previous solution scaled to the new load, or uniform pressure.
+        // Start: the previous solution scaled to the new load, or uniform pressure, with the
+        // gradient statistics of that state (every update below computes them in the pass
+        // that makes the state). After a converged solve `w = K p − h` is exact, and
+        // `K (s p) = s K p`, so the scaled start needs a pass, not a convolution.
         let previous_total: f64 = self.chunked_sum(|p| p);
-        if self.has_solution && previous_total > 0.0 {
-            let s = target * len as f64 / previous_total;
-            self.pressure.par_iter_mut().for_each(|p| *p *= s);
+        let warm = self.has_solution && previous_total > 0.0;
+        let scale = if warm {
+            target * len as f64 / previous_total
         } else {
-            self.pressure.fill(target);
-        }
+            1.0
+        };
+        let mut stats = if warm && self.separation_exact {
+            self.sparse.clear();
+            self.sparse_update(scale, 0.0)
+        } else {
+            if warm {
+                self.pressure.par_iter_mut().for_each(|p| *p *= scale);
+            } else {
+                self.pressure.fill(target);
+            }
+            report.convolutions += 1;
+            self.exact_deflection(1.0, 0.0)
+        };
         self.has_solution = false;
-        // Gradient statistics of the current state (every update below computes them in the
-        // pass that makes the state).
-        let mut stats = self.exact_deflection(1.0, 0.0);
-        report.convolutions += 1;
+        self.separation_exact = false;
 
         let mut exact = true;
         let mut linear_steps = 0usize;
@@ -553,6 +581,9 @@ impl<'a> Solver<'a> {
 
         self.finish_gap();
         self.has_solution = report.status == Status::Converged;
+        // A converged state was confirmed by an exact deflection (or is the flat or zero
+        // solution, `w = −h`).
+        self.separation_exact = self.has_solution;
         Ok(report)
     }
 
@@ -572,15 +603,15 @@ impl<'a> Solver<'a> {
         let (op, loads) = (self.op, &self.sparse);
         self.pressure
             .par_chunks_mut(chunk)
-            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(self.separation.par_chunks_mut(chunk))
             .zip(h.par_chunks(chunk))
             .zip(self.partials.par_iter_mut())
             .enumerate()
-            .for_each(|(b, (((pc, uc), hc), part))| {
+            .for_each(|(b, (((pc, wc), hc), part))| {
                 let mut acc = GradientLanes::new();
-                for (r, ((p, u), h)) in pc
+                for (r, ((p, w), h)) in pc
                     .chunks_exact_mut(n)
-                    .zip(uc.chunks_exact_mut(n))
+                    .zip(wc.chunks_exact_mut(n))
                     .zip(hc.chunks_exact(n))
                     .enumerate()
                 {
@@ -591,7 +622,7 @@ impl<'a> Solver<'a> {
                         shift,
                         scale,
                         p,
-                        u,
+                        w,
                         h,
                         &mut acc,
                     );
@@ -623,32 +654,26 @@ impl<'a> Solver<'a> {
         let blocks = self
             .pressure
             .par_chunks_mut(chunk)
-            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(self.separation.par_chunks_mut(chunk))
             .zip(h.par_chunks(chunk))
             .zip(self.update_acc.par_iter_mut());
         self.op.finish_rows(
             blocks,
-            |(((pc, uc), hc), acc), r, kx| {
+            |(((pc, wc), hc), acc), r, kx| {
                 if r == 0 {
                     acc.grad = GradientLanes::new();
                 }
                 let at = r * n..(r + 1) * n;
-                let u = &mut uc[at.clone()];
+                let (p, w, h) = (&mut pc[at.clone()], &mut wc[at.clone()], &hc[at]);
                 if add {
-                    for (u, k) in u.iter_mut().zip(kx) {
-                        *u += k;
+                    for (w, k) in w.iter_mut().zip(kx) {
+                        *w += k;
                     }
+                    dispatch_gradient(shift, Some(scale), p, w, h, &mut acc.grad);
                 } else {
-                    u.copy_from_slice(kx);
+                    dispatch_exact(scale, p, w, kx, h);
+                    dispatch_gradient(shift, None, p, w, h, &mut acc.grad);
                 }
-                dispatch_gradient(
-                    shift,
-                    Some(scale),
-                    &mut pc[at.clone()],
-                    u,
-                    &hc[at],
-                    &mut acc.grad,
-                );
             },
             &mut self.ws,
         );
@@ -682,17 +707,16 @@ impl<'a> Solver<'a> {
         beta: f64,
         direction_mean: f64,
     ) -> (f64, f64) {
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
         let blocks = self
             .direction
             .par_chunks_mut(chunk)
             .zip(self.pressure.par_chunks(chunk))
-            .zip(self.deflection.par_chunks(chunk))
-            .zip(h.par_chunks(chunk))
+            .zip(self.separation.par_chunks(chunk))
             .zip(self.partials.par_iter_mut());
         let energy = self.op.start_rows(
             blocks,
-            |((((tc, pc), uc), hc), part), r, row| {
+            |(((tc, pc), wc), part), r, row| {
                 if r == 0 {
                     **part = [0.0; 6];
                 }
@@ -703,8 +727,7 @@ impl<'a> Solver<'a> {
                     direction_mean,
                     &mut tc[at.clone()],
                     &pc[at.clone()],
-                    &uc[at.clone()],
-                    &hc[at],
+                    &wc[at],
                     row,
                     part,
                 );
@@ -728,17 +751,16 @@ impl<'a> Solver<'a> {
     /// (four lanes per block, then the blocks in order), so bit-identical whatever the number
     /// of threads.
     fn precondition(&mut self, level: f64) -> (f64, f64, f64, f64) {
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
         let produce = self
             .pressure
             .par_chunks(chunk)
-            .zip(self.deflection.par_chunks(chunk))
-            .zip(h.par_chunks(chunk));
+            .zip(self.separation.par_chunks(chunk));
         self.op.start_rows_inverse(
             produce,
-            |((pc, uc), hc), r, row| {
+            |(pc, wc), r, row| {
                 let at = r * n..(r + 1) * n;
-                dispatch_precondition_input(level, row, &pc[at.clone()], &uc[at.clone()], &hc[at]);
+                dispatch_precondition_input(level, row, &pc[at.clone()], &wc[at]);
             },
             &mut self.ws,
         );
@@ -746,11 +768,10 @@ impl<'a> Solver<'a> {
             self.preconditioned
                 .par_chunks_mut(chunk)
                 .zip(self.pressure.par_chunks(chunk))
-                .zip(self.deflection.par_chunks(chunk))
-                .zip(h.par_chunks(chunk))
+                .zip(self.separation.par_chunks(chunk))
                 .zip(self.direction.par_chunks(chunk))
                 .zip(self.precondition_acc.par_iter_mut()),
-            |(((((zc, pc), uc), hc), tc), acc), r, row| {
+            |((((zc, pc), wc), tc), acc), r, row| {
                 if r == 0 {
                     **acc = [[0.0; LANES]; 5];
                 }
@@ -760,8 +781,7 @@ impl<'a> Solver<'a> {
                     row,
                     &mut zc[at.clone()],
                     &pc[at.clone()],
-                    &uc[at.clone()],
-                    &hc[at.clone()],
+                    &wc[at.clone()],
                     &tc[at],
                     acc,
                 );
@@ -827,7 +847,7 @@ impl<'a> Solver<'a> {
         level: f64,
         next_shift: f64,
     ) -> ([f64; 6], [f64; 6]) {
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
         let args = UpdateArgs {
             tau,
             level,
@@ -836,15 +856,14 @@ impl<'a> Solver<'a> {
         let blocks = self
             .pressure
             .par_chunks_mut(chunk)
-            .zip(self.deflection.par_chunks_mut(chunk))
+            .zip(self.separation.par_chunks_mut(chunk))
             .zip(self.direction.par_chunks(chunk))
-            .zip(h.par_chunks(chunk))
             .zip(self.update_acc.par_iter_mut())
             .zip(self.changes.par_iter_mut())
             .enumerate();
         self.op.finish_rows(
             blocks,
-            |(block, (((((pc, uc), tc), hc), acc), changes)), r, kt| {
+            |(block, ((((pc, wc), tc), acc), changes)), r, kt| {
                 if r == 0 {
                     **acc = UpdateAcc::new();
                     changes.clear();
@@ -854,10 +873,9 @@ impl<'a> Solver<'a> {
                     &args,
                     *block * chunk + r * n,
                     &mut pc[at.clone()],
-                    &mut uc[at.clone()],
-                    &tc[at.clone()],
+                    &mut wc[at.clone()],
+                    &tc[at],
                     kt,
-                    &hc[at],
                     acc,
                     changes,
                 );
@@ -931,20 +949,17 @@ impl<'a> Solver<'a> {
         self.finish_deflection(true, scale, shift)
     }
 
-    /// `direction ← (u − h) − min(u − h)` (the gap; `u` must be exact).
+    /// `direction ← w − min w` (the gap; `w = u − h` must be exact).
     fn finish_gap(&mut self) {
-        let h = self.heights;
         let min = self
-            .deflection
+            .separation
             .par_iter()
-            .zip(h.par_iter())
-            .map(|(u, h)| u - h)
+            .copied()
             .reduce(|| f64::INFINITY, f64::min);
         self.direction
             .par_iter_mut()
-            .zip(self.deflection.par_iter())
-            .zip(h.par_iter())
-            .for_each(|((g, u), h)| *g = (u - h) - min);
+            .zip(self.separation.par_iter())
+            .for_each(|(g, &w)| *g = w - min);
     }
 }
 
@@ -989,10 +1004,15 @@ avx2_dispatch! {
         shift: f64,
         scale: Option<f64>,
         p: &mut [f64],
-        u: &mut [f64],
+        w: &mut [f64],
         h: &[f64],
         acc: &mut GradientLanes,
     );
+}
+
+avx2_dispatch! {
+    /// [`exact_row`] with AVX2 where available.
+    fn dispatch_exact = exact_row(scale: f64, p: &mut [f64], w: &mut [f64], kx: &[f64], h: &[f64]);
 }
 
 avx2_dispatch! {
@@ -1003,8 +1023,7 @@ avx2_dispatch! {
         direction_mean: f64,
         t: &mut [f64],
         p: &[f64],
-        u: &[f64],
-        h: &[f64],
+        w: &[f64],
         row: &mut [f64],
         part: &mut [f64; 6],
     );
@@ -1016,10 +1035,9 @@ avx2_dispatch! {
         a: &UpdateArgs,
         base: usize,
         pc: &mut [f64],
-        uc: &mut [f64],
+        wc: &mut [f64],
         tc: &[f64],
         rc: &[f64],
-        hc: &[f64],
         acc: &mut UpdateAcc,
         changes: &mut Vec<(usize, f64)>,
     );
@@ -1035,36 +1053,35 @@ avx2_dispatch! {
         shift: f64,
         scale: f64,
         p: &mut [f64],
-        u: &mut [f64],
+        w: &mut [f64],
         h: &[f64],
         acc: &mut GradientLanes,
     ) {
-        op.add_point_loads_row(iy, loads, u);
-        gradient_row(shift, Some(scale), p, u, h, acc);
+        op.add_point_loads_row(iy, loads, w);
+        gradient_row(shift, Some(scale), p, w, h, acc);
     }
 }
 
 avx2_dispatch! {
     /// One row of the preconditioner's input, with AVX2 where available:
-    /// `o = u − h − level` on S = {p > 0}, 0 elsewhere.
-    fn dispatch_precondition_input(level: f64, o: &mut [f64], p: &[f64], u: &[f64], h: &[f64]) {
-        for (((o, &p), &u), &h) in o.iter_mut().zip(p).zip(u).zip(h) {
-            *o = if p > 0.0 { u - h - level } else { 0.0 };
+    /// `o = w − level` on S = {p > 0}, 0 elsewhere.
+    fn dispatch_precondition_input(level: f64, o: &mut [f64], p: &[f64], w: &[f64]) {
+        for ((o, &p), &w) in o.iter_mut().zip(p).zip(w) {
+            *o = if p > 0.0 { w - level } else { 0.0 };
         }
     }
 }
 
 avx2_dispatch! {
     /// One row of `K⁻¹ P g` as it leaves the inverse FFT, with AVX2 where available: stored
-    /// in `z`, and with `g = u − h − level`, `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t` over
+    /// in `z`, and with `g = w − level`, `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t` over
     /// S = {p > 0} added to `acc` (lane `k mod LANES` takes node `k`).
     fn dispatch_precondition_output(
         level: f64,
         row: &[f64],
         z: &mut [f64],
         p: &[f64],
-        u: &[f64],
-        h: &[f64],
+        w: &[f64],
         t: &[f64],
         acc: &mut [[f64; LANES]; 5],
     ) {
@@ -1077,8 +1094,7 @@ avx2_dispatch! {
                 level,
                 &lanes(&row[at.clone()]),
                 &lanes(&p[at.clone()]),
-                &lanes(&u[at.clone()]),
-                &lanes(&h[at.clone()]),
+                &lanes(&w[at.clone()]),
                 &lanes(&t[at]),
                 acc,
             );
@@ -1090,8 +1106,7 @@ avx2_dispatch! {
                 level,
                 &padded(&row[at.clone()], 0.0),
                 &padded(&p[at.clone()], 0.0),
-                &padded(&u[at.clone()], 0.0),
-                &padded(&h[at.clone()], 0.0),
+                &padded(&w[at.clone()], 0.0),
                 &padded(&t[at], 0.0),
                 acc,
             );
@@ -1105,14 +1120,13 @@ fn precondition_sums(
     level: f64,
     z: &[f64; LANES],
     p: &[f64; LANES],
-    u: &[f64; LANES],
-    h: &[f64; LANES],
+    w: &[f64; LANES],
     t: &[f64; LANES],
     acc: &mut [[f64; LANES]; 5],
 ) {
     for k in 0..LANES {
         let on = p[k] > 0.0;
-        let g = if on { u[k] - h[k] - level } else { 0.0 };
+        let g = if on { w[k] - level } else { 0.0 };
         let zk = if on { z[k] } else { 0.0 };
         acc[0][k] += zk;
         acc[1][k] += if on { 1.0 } else { 0.0 };
@@ -1145,47 +1159,53 @@ avx2_dispatch! {
     }
 }
 
-/// One row of the gradient statistics: `p ← s p`, `u ← s u` if a scale is given, then, with
-/// `g = u − h − shift`, `min g` over all nodes and `|S|, Σg, Σg², Σpg, Σp` over the contact
-/// set `S = {p > 0}`, added to `acc`.
+/// One row of the gradient statistics: if a scale `s ≠ 1` is given, `p ← s p` and
+/// `u ← s u` (so `w = u − h ← s (w + h) − h`); then, with `g = w − shift`, `min g` over all
+/// nodes and `|S|, Σg, Σg², Σpg, Σp` over the contact set `S = {p > 0}`, added to `acc`.
+/// `h` is read only to scale.
 #[inline(always)]
 fn gradient_row(
     shift: f64,
     scale: Option<f64>,
     p: &mut [f64],
-    u: &mut [f64],
+    w: &mut [f64],
     h: &[f64],
     acc: &mut GradientLanes,
 ) {
-    if let Some(s) = scale {
-        for (p, u) in p.iter_mut().zip(u.iter_mut()) {
+    if let Some(s) = scale.filter(|&s| s != 1.0) {
+        for ((p, w), &h) in p.iter_mut().zip(w.iter_mut()).zip(h) {
             *p *= s;
-            *u *= s;
+            *w = s * (*w + h) - h;
         }
     }
-    let gap = |u: &[f64; LANES], h: &[f64; LANES]| {
+    let gap = |w: &[f64; LANES]| {
         let mut g = [0.0; LANES];
         for l in 0..LANES {
-            g[l] = u[l] - h[l] - shift;
+            g[l] = w[l] - shift;
         }
         g
     };
     let whole = p.len() / LANES * LANES;
-    for ((p, u), h) in p[..whole]
-        .chunks_exact(LANES)
-        .zip(u.chunks_exact(LANES))
-        .zip(h.chunks_exact(LANES))
-    {
-        acc.add(&lanes(p), &gap(&lanes(u), &lanes(h)));
+    for (p, w) in p[..whole].chunks_exact(LANES).zip(w.chunks_exact(LANES)) {
+        acc.add(&lanes(p), &gap(&lanes(w)));
     }
     if whole < p.len() {
         // Tail of a row whose length is not a multiple of LANES: the padding (p = 0) is
         // off the contact set; only the valid lanes enter the minimum.
         let k = p.len() - whole;
         let mut tail = GradientLanes::new();
-        let g = gap(&padded(&u[whole..], 0.0), &padded(&h[whole..], 0.0));
+        let g = gap(&padded(&w[whole..], 0.0));
         tail.add(&padded(&p[whole..], 0.0), &g);
         acc.merge_lanes(&tail, k);
+    }
+}
+
+/// One row of an exact recomputation: `w ← s K p − h` from the row `kx` of `K p`, `p ← s p`.
+#[inline(always)]
+fn exact_row(scale: f64, p: &mut [f64], w: &mut [f64], kx: &[f64], h: &[f64]) {
+    for (((p, w), &k), &h) in p.iter_mut().zip(w.iter_mut()).zip(kx).zip(h) {
+        *p *= scale;
+        *w = scale * k - h;
     }
 }
 
@@ -1199,34 +1219,29 @@ fn direction_row(
     direction_mean: f64,
     t: &mut [f64],
     p: &[f64],
-    u: &[f64],
-    h: &[f64],
+    w: &[f64],
     row: &mut [f64],
     part: &mut [f64; 6],
 ) {
     let mut num = [0.0f64; LANES];
-    let body = |t: &mut [f64; LANES],
-                p: &[f64; LANES],
-                u: &[f64; LANES],
-                h: &[f64; LANES],
-                num: &mut [f64; LANES]| {
-        for l in 0..LANES {
-            let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
-            let gc = u[l] - h[l] - level;
-            t[l] = m * (gc + beta * (t[l] - direction_mean));
-            num[l] += gc * t[l];
-        }
-    };
+    let body =
+        |t: &mut [f64; LANES], p: &[f64; LANES], w: &[f64; LANES], num: &mut [f64; LANES]| {
+            for l in 0..LANES {
+                let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
+                let gc = w[l] - level;
+                t[l] = m * (gc + beta * (t[l] - direction_mean));
+                num[l] += gc * t[l];
+            }
+        };
     let whole = t.len() / LANES * LANES;
-    for ((((t, p), u), h), o) in t[..whole]
+    for (((t, p), w), o) in t[..whole]
         .chunks_exact_mut(LANES)
         .zip(p.chunks_exact(LANES))
-        .zip(u.chunks_exact(LANES))
-        .zip(h.chunks_exact(LANES))
+        .zip(w.chunks_exact(LANES))
         .zip(row.chunks_exact_mut(LANES))
     {
         let mut tn = lanes(t);
-        body(&mut tn, &lanes(p), &lanes(u), &lanes(h), &mut num);
+        body(&mut tn, &lanes(p), &lanes(w), &mut num);
         t.copy_from_slice(&tn);
         o.copy_from_slice(&tn);
     }
@@ -1238,8 +1253,7 @@ fn direction_row(
         body(
             &mut tn,
             &padded(&p[whole..], 0.0),
-            &padded(&u[whole..], 0.0),
-            &padded(&h[whole..], 0.0),
+            &padded(&w[whole..], 0.0),
             &mut num,
         );
         t[whole..].copy_from_slice(&tn[..k]);
@@ -1282,10 +1296,9 @@ impl UpdateAcc {
 fn update_lanes(
     a: &UpdateArgs,
     pn: &mut [f64; LANES],
-    un: &mut [f64; LANES],
+    wn: &mut [f64; LANES],
     t: &[f64; LANES],
     r: &[f64; LANES],
-    h: &[f64; LANES],
     acc: &mut UpdateAcc,
 ) -> [f64; LANES] {
     let (tau, level, next_shift) = (a.tau, a.level, a.next_shift);
@@ -1294,7 +1307,7 @@ fn update_lanes(
     for l in 0..LANES {
         let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
         let kept = if stepped > 0.0 { stepped } else { 0.0 };
-        let gc = un[l] - h[l] - level;
+        let gc = wn[l] - level;
         let new = if kept == 0.0 && gc < 0.0 {
             -tau * gc
         } else {
@@ -1304,8 +1317,8 @@ fn update_lanes(
         delta[l] = new - stepped;
         let m = if new > 0.0 { 1.0 } else { 0.0 };
         acc.kept_t[l] += m * t[l];
-        un[l] -= tau * r[l];
-        g[l] = un[l] - h[l] - next_shift;
+        wn[l] -= tau * r[l];
+        g[l] = wn[l] - next_shift;
     }
     acc.grad.add(pn, &g);
     delta
@@ -1344,49 +1357,48 @@ fn update_row(
     a: &UpdateArgs,
     base: usize,
     pc: &mut [f64],
-    uc: &mut [f64],
+    wc: &mut [f64],
     tc: &[f64],
     rc: &[f64],
-    hc: &[f64],
     acc: &mut UpdateAcc,
     changes: &mut Vec<(usize, f64)>,
 ) {
     let whole = pc.len() / LANES * LANES;
-    for (block, ((((p, u), t), r), h)) in pc[..whole]
+    for (block, (((p, w), t), r)) in pc[..whole]
         .chunks_exact_mut(LANES)
-        .zip(uc.chunks_exact_mut(LANES))
+        .zip(wc.chunks_exact_mut(LANES))
         .zip(tc.chunks_exact(LANES))
         .zip(rc.chunks_exact(LANES))
-        .zip(hc.chunks_exact(LANES))
         .enumerate()
     {
-        let (mut pn, mut un) = (lanes(p), lanes(u));
-        let delta = update_lanes(a, &mut pn, &mut un, &lanes(t), &lanes(r), &lanes(h), acc);
+        let (mut pn, mut wn) = (lanes(p), lanes(w));
+        let delta = update_lanes(a, &mut pn, &mut wn, &lanes(t), &lanes(r), acc);
         p.copy_from_slice(&pn);
-        u.copy_from_slice(&un);
+        w.copy_from_slice(&wn);
         // Rare path: a node left or (re-)entered the contact set.
-        if delta.iter().any(|&d| d != 0.0) {
+        // Non-short-circuiting, so that the test is one vector comparison, not a branch
+        // per lane.
+        if delta.iter().fold(false, |any, &d| any | (d != 0.0)) {
             record_changes(&delta, &pn, base + block * LANES, LANES, acc, changes);
         }
     }
     if whole < pc.len() {
         // Tail of a row whose length is not a multiple of LANES. The padding (p = t = 0,
-        // u − h − level = 0) stays off the contact set, is not re-admitted and has Δ = 0;
-        // its gap g = −next_shift enters only the minimum, so it is padded with +∞ there.
+        // w − level = 0) stays off the contact set, is not re-admitted and has Δ = 0; only
+        // the valid lanes are merged into the statistics.
         let k = pc.len() - whole;
-        let (mut pn, mut un) = (padded(&pc[whole..], 0.0), padded(&uc[whole..], a.level));
+        let (mut pn, mut wn) = (padded(&pc[whole..], 0.0), padded(&wc[whole..], a.level));
         let mut tail = UpdateAcc::new();
         let delta = update_lanes(
             a,
             &mut pn,
-            &mut un,
+            &mut wn,
             &padded(&tc[whole..], 0.0),
             &padded(&rc[whole..], 0.0),
-            &padded(&hc[whole..], 0.0),
             &mut tail,
         );
         pc[whole..].copy_from_slice(&pn[..k]);
-        uc[whole..].copy_from_slice(&un[..k]);
+        wc[whole..].copy_from_slice(&wn[..k]);
         record_changes(&delta, &pn, base + whole, k, acc, changes);
         acc.grad.merge_lanes(&tail.grad, k);
         for l in 0..k {
@@ -1456,8 +1468,8 @@ mod tests {
             let mut exact = Solver::new(&op, &heights).unwrap();
             exact.pressure.copy_from_slice(&changed);
             let expected = exact.exact_deflection(scale, shift);
-            let u_max = exact.deflection.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for (i, (a, b)) in solver.deflection.iter().zip(&exact.deflection).enumerate() {
+            let u_max = exact.separation.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, (a, b)) in solver.separation.iter().zip(&exact.separation).enumerate() {
                 assert!((a - b).abs() <= 1e-13 * u_max, "node {i}: {a} vs {b}");
             }
             assert_eq!(solver.pressure, exact.pressure);

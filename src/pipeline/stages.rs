@@ -32,7 +32,7 @@ pub const STAGES: &[&str] = &[
 /// Version of the surface stage; bump when its algorithm or outputs change.
 pub const SURFACE_VERSION: u32 = 1;
 /// Version of the contact stage.
-pub const CONTACT_VERSION: u32 = 4;
+pub const CONTACT_VERSION: u32 = 5;
 /// Version of the clusters stage.
 pub const CLUSTERS_VERSION: u32 = 1;
 /// Version of the statistics stage.

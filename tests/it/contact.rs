@@ -351,6 +351,45 @@ fn warm_started_sweep_matches_cold_solves() {
     );
 }
 
+/// The sweep's warm start scales the previous converged state, deflection included
+/// (`K (s p) = s K p`), instead of recomputing `K p`; a start given by `set_start` is
+/// recomputed. From the same pressure, both must see the same first state (the error of the
+/// start to rounding), take the same steps and reach the same pressures, the sweep with one
+/// convolution fewer.
+#[test]
+fn scaled_warm_start_equals_a_recomputed_start() {
+    for n in [66, 128] {
+        let h = rough_surface(n, n as f64 / 4.0, 4.0, 5);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        for preconditioned in VARIANTS {
+            let c = cfgp(preconditioned, 1e-11);
+            let mut sweep = Solver::new(&op, &h).unwrap();
+            assert!(sweep.solve(0.01, &c).unwrap().converged());
+            let mut given = Solver::new(&op, &h).unwrap();
+            given.set_start(sweep.pressure()).unwrap();
+            let rs = sweep.solve(0.03, &c).unwrap();
+            let rg = given.solve(0.03, &c).unwrap();
+            assert!(rs.converged() && rg.converged());
+            let (e0s, e0g) = (rs.error_history[0], rg.error_history[0]);
+            assert!(
+                (e0s - e0g).abs() <= 1e-12 * e0g,
+                "n = {n}, preconditioned {preconditioned}: start errors {e0s} and {e0g}"
+            );
+            assert_eq!(rs.iterations, rg.iterations, "n = {n}, {preconditioned}");
+            assert_eq!(
+                rs.convolutions + 1,
+                rg.convolutions,
+                "n = {n}, {preconditioned}"
+            );
+            let diff = relative_l2(sweep.pressure(), given.pressure());
+            assert!(
+                diff < 1e-12,
+                "n = {n}, {preconditioned}: pressures differ by {diff}"
+            );
+        }
+    }
+}
+
 /// `Solver::set_start`: a start at the discrete solution is accepted as it is (the first
 /// exact check converges, 0 iterations, same contact set); a start that is not a pressure
 /// field is an error and leaves the solver usable.
