@@ -420,7 +420,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `wearcoef solve`, run on a worker of its own rayon pool (RAYON_NUM_THREADS threads): the
+/// solver's parallel loops then start on a pool thread instead of being injected from the
+/// main thread and waited for (a wake-up and a sleep per loop, several per iteration), and
+/// every buffer is allocated by the same thread, so memory freed by one stage (the slope's
+/// transform, the operator's set-up) is reused by the next instead of sitting in another
+/// thread's allocator arena.
 fn solve(args: SolveArgs) -> anyhow::Result<()> {
+    rayon::ThreadPoolBuilder::new()
+        .build()?
+        .install(|| solve_on_pool(args))
+}
+
+fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if let Some((i, w)) = args
         .loads
         .iter()
@@ -468,18 +480,12 @@ fn solve(args: SolveArgs) -> anyhow::Result<()> {
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
     let mut pressures = Vec::new();
     let mut contacts = Vec::new();
-    // The sweep runs on a worker of its own pool (RAYON_NUM_THREADS threads), so that the
-    // solver's parallel loops start on a pool thread instead of being injected from the
-    // main thread and waited for (a wake-up and a sleep per loop, several per iteration).
-    let pool = rayon::ThreadPoolBuilder::new().build()?;
-    let results = pool.install(|| {
-        sweep(&op, &heights, slope, &args.loads, &cfg, |_, solver, _| {
-            if keep_fields {
-                pressures.extend_from_slice(solver.pressure());
-                contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
-            }
-            Ok(())
-        })
+    let results = sweep(&op, &heights, slope, &args.loads, &cfg, |_, solver, _| {
+        if keep_fields {
+            pressures.extend_from_slice(solver.pressure());
+            contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
+        }
+        Ok(())
     })?;
     let shape: Vec<usize> = if args.loads.len() == 1 {
         vec![n, n]

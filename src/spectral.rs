@@ -11,11 +11,14 @@
 //! - Real fields are row-major `n × n` (row = y index `iy`, column = x index `ix`), so the
 //!   r2c transform runs along x (contiguous) and kx is the half axis.
 //!
-//! Plans are built once per grid size ([`Fft2::new`]); all working memory lives in a
-//! caller-owned [`Fft2Scratch`], so repeated transforms allocate nothing. Work is spread
+//! Plans are built once per grid size ([`Fft2::new`]); the row-transformed data live in a
+//! caller-owned [`Fft2Scratch`], and the few rows of working memory each 1-D transform
+//! needs in per-thread buffers, allocated at a thread's first transform of that size and
+//! reused after, so repeated transforms allocate nothing. Work is spread
 //! over the current rayon pool by rows; the result does not depend on the thread count
 //! (each 1-D transform is computed identically whatever thread runs it).
 
+use std::cell::RefCell;
 use std::sync::Arc;
 
 use rayon::prelude::*;
@@ -55,8 +58,64 @@ fn all_zero(row: &[f64]) -> bool {
     groups.remainder().iter().all(|&v| v == 0.0)
 }
 
-/// Upper bound on the number of independent work blocks (each owns its scratch).
+/// Upper bound on the number of independent work blocks.
 const MAX_BLOCKS: usize = 64;
+
+/// Working rows of the 1-D transforms, one set per thread (not per work block: a block's
+/// task runs on one thread from start to end, and 64 blocks' worth of rows would cost
+/// 11·64·n doubles, more than 2 n² at n = 256).
+#[derive(Default)]
+struct Work {
+    real_row: Vec<f64>,
+    complex: Vec<Complex64>,
+    columns: Vec<Complex64>,
+}
+
+thread_local! {
+    static WORK: RefCell<Work> = RefCell::new(Work::default());
+}
+
+/// Run `f` with this thread's working buffers: a real row of `real` values, `complex` and
+/// `columns` complex values. They are grown (allocated) only when the thread first needs
+/// them at this size. Their contents on entry are unspecified; every user overwrites what it
+/// reads, so results do not depend on which thread ran. If they are already in use on this
+/// thread (a transform started from inside a `produce` or `consume` callback), this call
+/// gets buffers of its own.
+fn with_work<R>(
+    real: usize,
+    complex: usize,
+    columns: usize,
+    f: impl FnOnce(&mut [f64], &mut [Complex64], &mut [Complex64]) -> R,
+) -> R {
+    fn fit(w: &mut Work, real: usize, complex: usize, columns: usize) {
+        let zero = Complex64::new(0.0, 0.0);
+        if w.real_row.len() < real {
+            w.real_row.resize(real, 0.0);
+        }
+        if w.complex.len() < complex {
+            w.complex.resize(complex, zero);
+        }
+        if w.columns.len() < columns {
+            w.columns.resize(columns, zero);
+        }
+    }
+    WORK.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut w) => {
+            fit(&mut w, real, complex, columns);
+            let w = &mut *w;
+            f(
+                &mut w.real_row[..real],
+                &mut w.complex[..complex],
+                &mut w.columns[..columns],
+            )
+        }
+        Err(_) => {
+            let mut w = Work::default();
+            fit(&mut w, real, complex, columns);
+            f(&mut w.real_row, &mut w.complex, &mut w.columns)
+        }
+    })
+}
 
 /// Planned forward and inverse 2-D real FFTs for an `n × n` grid.
 pub struct Fft2 {
@@ -65,6 +124,8 @@ pub struct Fft2 {
     c2r: Arc<dyn ComplexToReal<f64>>,
     col_forward: Arc<dyn Fft<f64>>,
     col_inverse: Arc<dyn Fft<f64>>,
+    /// Scratch length of the 1-D transforms (the largest of the four plans').
+    complex_len: usize,
 }
 
 /// Working memory for one [`Fft2`]; reuse it across calls.
@@ -72,15 +133,9 @@ pub struct Fft2Scratch {
     n: usize,
     /// Row-transformed data, `n` rows of `n/2+1` (y-major), between the two passes.
     rows: Vec<Complex64>,
-    blocks: Vec<Block>,
+    /// Number of work blocks ([`Fft2::block_count`]).
+    blocks: usize,
     rows_per_block: usize,
-}
-
-struct Block {
-    real_row: Vec<f64>,
-    complex: Vec<Complex64>,
-    /// [`GATHER`] columns of length `n` for [`Fft2::convolve_start`].
-    columns: Vec<Complex64>,
 }
 
 impl Fft2 {
@@ -95,12 +150,28 @@ impl Fft2 {
         );
         let mut real_planner = RealFftPlanner::<f64>::new();
         let mut planner = FftPlanner::<f64>::new();
+        let (r2c, c2r) = (
+            real_planner.plan_fft_forward(n),
+            real_planner.plan_fft_inverse(n),
+        );
+        let (col_forward, col_inverse) = (planner.plan_fft_forward(n), planner.plan_fft_inverse(n));
+        let complex_len = [
+            r2c.get_scratch_len(),
+            c2r.get_scratch_len(),
+            col_forward.get_inplace_scratch_len(),
+            col_inverse.get_inplace_scratch_len(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+        .max(1);
         Self {
             n,
-            r2c: real_planner.plan_fft_forward(n),
-            c2r: real_planner.plan_fft_inverse(n),
-            col_forward: planner.plan_fft_forward(n),
-            col_inverse: planner.plan_fft_inverse(n),
+            r2c,
+            c2r,
+            col_forward,
+            col_inverse,
+            complex_len,
         }
     }
 
@@ -119,39 +190,16 @@ impl Fft2 {
         vec![Complex64::new(0.0, 0.0); self.spectrum_len()]
     }
 
-    /// Allocate the scratch these plans need (about `n²` doubles, plus `n` per work block
-    /// and [`GATHER`]·`n` complex values per block that takes columns in
-    /// [`Self::convolve_start`]).
+    /// Allocate the scratch these plans need: `(n/2 + 1)·n` complex values (about `n²`
+    /// doubles). Each thread that runs a transform also keeps a few rows of its own (about
+    /// `11 n` doubles, see [`with_work`]), whatever the number of work blocks.
     pub fn make_scratch(&self) -> Fft2Scratch {
         let n = self.n;
-        let rows_per_block = self.rows_per_block();
-        let n_blocks = self.block_count();
-        let complex_len = [
-            self.r2c.get_scratch_len(),
-            self.c2r.get_scratch_len(),
-            self.col_forward.get_inplace_scratch_len(),
-            self.col_inverse.get_inplace_scratch_len(),
-        ]
-        .into_iter()
-        .max()
-        .unwrap_or(0)
-        .max(1);
-        // Blocks that take column groups in `convolve_start` (the others take none).
-        let column_blocks = Self::column_groups(n).div_ceil(Self::groups_per_block(n, n_blocks));
         Fft2Scratch {
             n,
             rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
-            blocks: (0..n_blocks)
-                .map(|b| Block {
-                    real_row: vec![0.0; n],
-                    complex: vec![Complex64::new(0.0, 0.0); complex_len],
-                    columns: vec![
-                        Complex64::new(0.0, 0.0);
-                        if b < column_blocks { GATHER * n } else { 0 }
-                    ],
-                })
-                .collect(),
-            rows_per_block,
+            blocks: self.block_count(),
+            rows_per_block: self.rows_per_block(),
         }
     }
 
@@ -216,25 +264,19 @@ impl Fft2 {
         let n = self.n;
         let h = n / 2 + 1;
         self.check(n * n, output.len(), scratch);
-        assert_eq!(
-            blocks.len(),
-            scratch.blocks.len(),
-            "one state per work block"
-        );
+        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
         // 2. transpose (n × h) → (h × n).
         transpose(&scratch.rows, output, n, h);
         // 3. complex FFT along y for every kx.
-        let cpb = h.div_ceil(scratch.blocks.len());
-        output
-            .par_chunks_mut(cpb * n)
-            .zip(scratch.blocks.par_iter_mut())
-            .for_each(|(cols, block)| {
-                let len = self.col_forward.get_inplace_scratch_len();
-                self.col_forward
-                    .process_with_scratch(cols, &mut block.complex[..len]);
+        let cpb = h.div_ceil(scratch.blocks);
+        output.par_chunks_mut(cpb * n).for_each(|cols| {
+            let len = self.col_forward.get_inplace_scratch_len();
+            with_work(0, len, 0, |_, complex, _| {
+                self.col_forward.process_with_scratch(cols, complex)
             });
+        });
     }
 
     /// Inverse transform of the half spectrum `spectrum` into the real field `output`.
@@ -282,21 +324,15 @@ impl Fft2 {
         let n = self.n;
         let h = n / 2 + 1;
         self.check(n * n, spectrum.len(), scratch);
-        assert_eq!(
-            blocks.len(),
-            scratch.blocks.len(),
-            "one state per work block"
-        );
-        let cpb = h.div_ceil(scratch.blocks.len());
+        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
+        let cpb = h.div_ceil(scratch.blocks);
         // 1. inverse complex FFT along y for every kx.
-        spectrum
-            .par_chunks_mut(cpb * n)
-            .zip(scratch.blocks.par_iter_mut())
-            .for_each(|(cols, block)| {
-                let len = self.col_inverse.get_inplace_scratch_len();
-                self.col_inverse
-                    .process_with_scratch(cols, &mut block.complex[..len]);
+        spectrum.par_chunks_mut(cpb * n).for_each(|cols| {
+            let len = self.col_inverse.get_inplace_scratch_len();
+            with_work(0, len, 0, |_, complex, _| {
+                self.col_inverse.process_with_scratch(cols, complex)
             });
+        });
         // 2. transpose (h × n) → (n × h).
         transpose(spectrum, &mut scratch.rows, h, n);
         // 3. c2r along x for every row.
@@ -331,60 +367,56 @@ impl Fft2 {
         let h = n / 2 + 1;
         assert_eq!(scratch.n, n, "scratch was made for another grid size");
         assert_eq!(column_values.len(), h, "one value per column kx");
-        assert_eq!(
-            blocks.len(),
-            scratch.blocks.len(),
-            "one state per work block"
-        );
+        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
         // 2. columns, in place, GATHER at a time; block b takes groups b·gpb.. .
-        let gpb = Self::groups_per_block(n, scratch.blocks.len());
+        let gpb = Self::groups_per_block(n, scratch.blocks);
         let rows = SharedRows(scratch.rows.as_mut_ptr());
-        scratch
-            .blocks
-            .par_iter_mut()
-            .zip(column_values.par_chunks_mut(gpb * GATHER))
+        column_values
+            .par_chunks_mut(gpb * GATHER)
             .enumerate()
-            .for_each(|(b, (block, values))| {
-                for (g, values) in values.chunks_mut(GATHER).enumerate() {
-                    let kx0 = (b * gpb + g) * GATHER;
-                    let width = values.len();
-                    let cols = &mut block.columns[..width * n];
-                    for r in 0..n {
-                        // Rows are h·16 bytes apart (more than a 4 KiB page from 512² on), which
-                        // the hardware prefetchers do not follow: ask for a later row's
-                        // line(s) now.
-                        if r + PREFETCH_ROWS < n {
-                            prefetch(rows.get().wrapping_add((r + PREFETCH_ROWS) * h + kx0));
-                            prefetch(
-                                rows.get()
-                                    .wrapping_add((r + PREFETCH_ROWS) * h + kx0 + width - 1),
-                            );
+            .for_each(|(b, values)| {
+                with_work(0, self.complex_len, GATHER * n, |_, complex, columns| {
+                    for (g, values) in values.chunks_mut(GATHER).enumerate() {
+                        let kx0 = (b * gpb + g) * GATHER;
+                        let width = values.len();
+                        let cols = &mut columns[..width * n];
+                        for r in 0..n {
+                            // Rows are h·16 bytes apart (more than a 4 KiB page from 512² on), which
+                            // the hardware prefetchers do not follow: ask for a later row's
+                            // line(s) now.
+                            if r + PREFETCH_ROWS < n {
+                                prefetch(rows.get().wrapping_add((r + PREFETCH_ROWS) * h + kx0));
+                                prefetch(
+                                    rows.get()
+                                        .wrapping_add((r + PREFETCH_ROWS) * h + kx0 + width - 1),
+                                );
+                            }
+                            for j in 0..width {
+                                // SAFETY: `r·h + kx0 + j < n·h` (kx0 + j < h); columns
+                                // kx0..kx0 + width belong to this group alone, and nothing
+                                // else touches `scratch.rows` during this loop.
+                                cols[j * n + r] = unsafe { rows.get().add(r * h + kx0 + j).read() };
+                            }
                         }
-                        for j in 0..width {
-                            // SAFETY: `r·h + kx0 + j < n·h` (kx0 + j < h); columns
-                            // kx0..kx0 + width belong to this group alone, and nothing
-                            // else touches `scratch.rows` during this loop.
-                            cols[j * n + r] = unsafe { rows.get().add(r * h + kx0 + j).read() };
+                        for (j, col) in cols.chunks_exact_mut(n).enumerate() {
+                            let len = self.col_forward.get_inplace_scratch_len();
+                            self.col_forward
+                                .process_with_scratch(col, &mut complex[..len]);
+                            values[j] = column(kx0 + j, col);
+                            let len = self.col_inverse.get_inplace_scratch_len();
+                            self.col_inverse
+                                .process_with_scratch(col, &mut complex[..len]);
+                        }
+                        for r in 0..n {
+                            for j in 0..width {
+                                // SAFETY: as for the gather above.
+                                unsafe { rows.get().add(r * h + kx0 + j).write(cols[j * n + r]) };
+                            }
                         }
                     }
-                    for (j, col) in cols.chunks_exact_mut(n).enumerate() {
-                        let len = self.col_forward.get_inplace_scratch_len();
-                        self.col_forward
-                            .process_with_scratch(col, &mut block.complex[..len]);
-                        values[j] = column(kx0 + j, col);
-                        let len = self.col_inverse.get_inplace_scratch_len();
-                        self.col_inverse
-                            .process_with_scratch(col, &mut block.complex[..len]);
-                    }
-                    for r in 0..n {
-                        for j in 0..width {
-                            // SAFETY: as for the gather above.
-                            unsafe { rows.get().add(r * h + kx0 + j).write(cols[j * n + r]) };
-                        }
-                    }
-                }
+                });
             });
     }
 
@@ -398,11 +430,7 @@ impl Fft2 {
         F: Fn(&mut S, usize, &[f64]) + Sync,
     {
         assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
-        assert_eq!(
-            blocks.len(),
-            scratch.blocks.len(),
-            "one state per work block"
-        );
+        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
         self.c2r_rows(blocks, consume, scratch);
     }
 
@@ -415,24 +443,26 @@ impl Fft2 {
     {
         let h = self.n / 2 + 1;
         let rpb = scratch.rows_per_block;
+        let len = self.r2c.get_scratch_len();
         scratch
             .rows
             .par_chunks_mut(rpb * h)
             .zip(blocks)
-            .zip(scratch.blocks.par_iter_mut())
-            .for_each(|((rows_out, mut state), block)| {
-                for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
-                    produce(&mut state, r, &mut block.real_row);
-                    if all_zero(&block.real_row) {
-                        // A row of zeros (a row with no contact node, for the solver's
-                        // fields) transforms to zeros: its FFT is skipped.
-                        row_out.fill(Complex64::new(0.0, 0.0));
-                    } else {
-                        self.r2c
-                            .process_with_scratch(&mut block.real_row, row_out, &mut block.complex)
-                            .expect("r2c lengths are fixed by the plan");
+            .for_each(|(rows_out, mut state)| {
+                with_work(self.n, len, 0, |real_row, complex, _| {
+                    for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
+                        produce(&mut state, r, real_row);
+                        if all_zero(real_row) {
+                            // A row of zeros (a row with no contact node, for the solver's
+                            // fields) transforms to zeros: its FFT is skipped.
+                            row_out.fill(Complex64::new(0.0, 0.0));
+                        } else {
+                            self.r2c
+                                .process_with_scratch(real_row, row_out, complex)
+                                .expect("r2c lengths are fixed by the plan");
+                        }
                     }
-                }
+                });
             });
     }
 
@@ -445,20 +475,22 @@ impl Fft2 {
     {
         let h = self.n / 2 + 1;
         let rpb = scratch.rows_per_block;
+        let len = self.c2r.get_scratch_len();
         scratch
             .rows
             .par_chunks_mut(rpb * h)
             .zip(blocks)
-            .zip(scratch.blocks.par_iter_mut())
-            .for_each(|((rows_in, mut state), block)| {
-                for (r, row_in) in rows_in.chunks_exact_mut(h).enumerate() {
-                    row_in[0].im = 0.0;
-                    row_in[h - 1].im = 0.0;
-                    self.c2r
-                        .process_with_scratch(row_in, &mut block.real_row, &mut block.complex)
-                        .expect("c2r lengths are fixed and imaginary parts were cleared");
-                    consume(&mut state, r, &block.real_row);
-                }
+            .for_each(|(rows_in, mut state)| {
+                with_work(self.n, len, 0, |real_row, complex, _| {
+                    for (r, row_in) in rows_in.chunks_exact_mut(h).enumerate() {
+                        row_in[0].im = 0.0;
+                        row_in[h - 1].im = 0.0;
+                        self.c2r
+                            .process_with_scratch(row_in, real_row, complex)
+                            .expect("c2r lengths are fixed and imaginary parts were cleared");
+                        consume(&mut state, r, real_row);
+                    }
+                });
             });
     }
 
@@ -533,6 +565,52 @@ mod tests {
             }
         }
         out
+    }
+
+    /// The per-thread working rows are taken again by a transform started from inside a
+    /// `produce` callback (on a one-thread pool every nested task runs on the same thread):
+    /// the nested call gets buffers of its own, and both results equal the same transforms
+    /// run one after the other.
+    #[test]
+    fn a_transform_nested_in_a_callback_gets_its_own_working_rows() {
+        let n = 24;
+        let fft = Fft2::new(n);
+        let (a, b) = (
+            pseudo_random_field(n),
+            pseudo_random_field(n)
+                .iter()
+                .map(|v| v * v)
+                .collect::<Vec<_>>(),
+        );
+        let mut scratch = fft.make_scratch();
+        let (mut expected_a, mut expected_b) = (fft.make_spectrum(), fft.make_spectrum());
+        fft.forward(&a, &mut expected_a, &mut scratch);
+        fft.forward(&b, &mut expected_b, &mut scratch);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let nested = std::sync::Mutex::new((fft.make_scratch(), fft.make_spectrum(), 0usize));
+        let mut got_a = fft.make_spectrum();
+        pool.install(|| {
+            let block_len = fft.rows_per_block() * n;
+            fft.forward_rows(
+                a.par_chunks(block_len),
+                |rows: &mut &[f64], r, buf| {
+                    let mut guard = nested.lock().unwrap();
+                    let (inner_scratch, inner_out, calls) = &mut *guard;
+                    fft.forward(&b, inner_out, inner_scratch);
+                    *calls += 1;
+                    buf.copy_from_slice(&rows[r * n..(r + 1) * n]);
+                },
+                &mut got_a,
+                &mut scratch,
+            );
+        });
+        let (_, got_b, calls) = nested.into_inner().unwrap();
+        assert_eq!(calls, n, "one nested transform per row");
+        assert_eq!(got_a, expected_a);
+        assert_eq!(got_b, expected_b);
     }
 
     fn pseudo_random_field(n: usize) -> Vec<f64> {
