@@ -274,9 +274,9 @@ pub struct Solver<'a> {
 }
 
 impl<'a> Solver<'a> {
-    /// Check the surface and allocate every buffer (about 5 n² doubles with the operator's
-    /// at n = 512, fewer per n² at larger n, plus n²/8 for the lists of changed nodes;
-    /// besides the heights).
+    /// Check the surface and allocate every buffer: 4 n² doubles (the transform's rows, `p`,
+    /// `w`, `t`), n²/8 for the lists of changed nodes, and one more n² at the first
+    /// preconditioned solve (`z`); besides the heights and the operator's kernel (n²/2).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
         let len = n * n;
