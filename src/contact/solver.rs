@@ -24,15 +24,14 @@
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
 //! A sweep's warm start scales the previous converged state, `p` and `K p` alike
 //! (`K (s p) = s K p`), in one pass without a convolution.
-//! The deflection is updated by linearity,
-//! `u ← s (u − τ K t + K Δ)` (stored as `w = u − h`, so that the passes of an iteration
-//! read the heights only when the load is rescaled), where `Δ` is the departure of the projected pressure from the
-//! linear step at the nodes that left or re-entered the contact set: `K Δ` is summed
-//! directly when there are at most [`MAX_SPARSE`] of them, otherwise convolved by FFT (the
-//! rows of `Δ` without a change skip the forward row transform, as do the empty rows of every
-//! transformed field), and `u = K p` is recomputed exactly every [`RESYNC`] steps, before
-//! convergence is declared, and when more than one node in [`CHANGES_PER_NODE`] of a block
-//! changed. The
+//! The deflection is updated by linearity, `u ← s (u − τ K t + K Δ)` (stored as `w = u − h`,
+//! so that the passes of an iteration read the heights only when the load is rescaled), where
+//! `Δ` is the departure of the projected pressure from the linear step at the nodes that left
+//! or re-entered the contact set: `K Δ` is summed directly when there are at most
+//! [`MAX_SPARSE`] of them, otherwise convolved by FFT (the rows of `Δ` without a change skip
+//! the forward row transform, as do the empty rows of every transformed field), and `u = K p`
+//! is recomputed exactly every [`RESYNC`] steps, before convergence is declared, and when more
+//! than one node in [`CHANGES_PER_NODE`] of a block changed. The
 //! curvature `⟨t, K t⟩` comes from Parseval's identity inside the convolution. The search
 //! direction is kept centred on the contact set (the projected conjugate gradient), so the
 //! step preserves the load. The direction pass is fused with the forward FFT (each row of
