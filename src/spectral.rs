@@ -191,10 +191,14 @@ impl Fft2 {
     }
 
     /// Allocate the scratch these plans need: `(n/2 + 1)·n` complex values (about `n²`
-    /// doubles). Each thread that runs a transform also keeps a few rows of its own (about
-    /// `11 n` doubles, see [`with_work`]), whatever the number of work blocks.
+    /// doubles). Each thread of the current rayon pool also gets (here, once) a few rows of
+    /// its own (about `11 n` doubles, see [`with_work`]), whatever the number of work blocks;
+    /// a thread of another pool allocates them at its first transform.
     pub fn make_scratch(&self) -> Fft2Scratch {
         let n = self.n;
+        // Give every thread of the current pool its working rows now, so that no thread
+        // allocates them during the transforms that follow (e.g. in a solver's iterations).
+        rayon::broadcast(|_| with_work(n, self.complex_len, GATHER * n, |_, _, _| ()));
         Fft2Scratch {
             n,
             rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
