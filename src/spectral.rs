@@ -133,9 +133,6 @@ pub struct Fft2Scratch {
     n: usize,
     /// Row-transformed data, `n` rows of `n/2+1` (y-major), between the two passes.
     rows: Vec<Complex64>,
-    /// Number of work blocks ([`Fft2::block_count`]).
-    blocks: usize,
-    rows_per_block: usize,
 }
 
 impl Fft2 {
@@ -202,8 +199,6 @@ impl Fft2 {
         Fft2Scratch {
             n,
             rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
-            blocks: self.block_count(),
-            rows_per_block: self.rows_per_block(),
         }
     }
 
@@ -268,13 +263,13 @@ impl Fft2 {
         let n = self.n;
         let h = n / 2 + 1;
         self.check(n * n, output.len(), scratch);
-        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
+        assert_eq!(blocks.len(), self.block_count(), "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
         // 2. transpose (n × h) → (h × n).
         transpose(&scratch.rows, output, n, h);
         // 3. complex FFT along y for every kx.
-        let cpb = h.div_ceil(scratch.blocks);
+        let cpb = h.div_ceil(self.block_count());
         output.par_chunks_mut(cpb * n).for_each(|cols| {
             let len = self.col_forward.get_inplace_scratch_len();
             with_work(0, len, 0, |_, complex, _| {
@@ -328,8 +323,8 @@ impl Fft2 {
         let n = self.n;
         let h = n / 2 + 1;
         self.check(n * n, spectrum.len(), scratch);
-        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
-        let cpb = h.div_ceil(scratch.blocks);
+        assert_eq!(blocks.len(), self.block_count(), "one state per work block");
+        let cpb = h.div_ceil(self.block_count());
         // 1. inverse complex FFT along y for every kx.
         spectrum.par_chunks_mut(cpb * n).for_each(|cols| {
             let len = self.col_inverse.get_inplace_scratch_len();
@@ -371,11 +366,11 @@ impl Fft2 {
         let h = n / 2 + 1;
         assert_eq!(scratch.n, n, "scratch was made for another grid size");
         assert_eq!(column_values.len(), h, "one value per column kx");
-        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
+        assert_eq!(blocks.len(), self.block_count(), "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
         // 2. columns, in place, GATHER at a time; block b takes groups b·gpb.. .
-        let gpb = Self::groups_per_block(n, scratch.blocks);
+        let gpb = Self::groups_per_block(n, self.block_count());
         let rows = SharedRows(scratch.rows.as_mut_ptr());
         column_values
             .par_chunks_mut(gpb * GATHER)
@@ -415,7 +410,7 @@ impl Fft2 {
         F: Fn(&mut S, usize, &[f64]) + Sync,
     {
         assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
-        assert_eq!(blocks.len(), scratch.blocks, "one state per work block");
+        assert_eq!(blocks.len(), self.block_count(), "one state per work block");
         self.c2r_rows(blocks, consume, scratch);
     }
 
@@ -427,7 +422,7 @@ impl Fft2 {
         F: Fn(&mut S, usize, &mut [f64]) + Sync,
     {
         let h = self.n / 2 + 1;
-        let rpb = scratch.rows_per_block;
+        let rpb = self.rows_per_block();
         let len = self.r2c.get_scratch_len();
         scratch
             .rows
@@ -459,7 +454,7 @@ impl Fft2 {
         F: Fn(&mut S, usize, &[f64]) + Sync,
     {
         let h = self.n / 2 + 1;
-        let rpb = scratch.rows_per_block;
+        let rpb = self.rows_per_block();
         let len = self.c2r.get_scratch_len();
         scratch
             .rows
