@@ -9,15 +9,17 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use serde_json::json;
 
+mod cli;
+
 use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
 use wearcoef::config::{ConfigError, Pipeline};
-use wearcoef::contact::elastic::ElasticOperator;
 use wearcoef::contact::solver::SolverConfig;
-use wearcoef::contact::sweep::{sweep, SweepError};
+use wearcoef::contact::sweep::{sweep_heights, SweepError};
 use wearcoef::grid::Grid;
 use wearcoef::pipeline::runner::{self, RunOptions};
 use wearcoef::pipeline::store::Store;
+use wearcoef::pipeline::UsageError;
 use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceError, SurfaceParams};
 
@@ -61,6 +63,39 @@ enum Command {
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
+    },
+    /// Print the plan of a profile: every stage instance (stage, key, job, inputs, level,
+    /// whether the store holds it, estimated seconds and peak bytes) and its totals
+    /// (core-hours, largest memory). Targets: stage, study or figure names.
+    Plan {
+        targets: Vec<String>,
+        #[command(flatten)]
+        store: StoreArgs,
+        #[arg(long, default_value = "default")]
+        profile: String,
+        /// Print the whole plan as one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Also write the plan (JSON) to this file, for `wearcoef exec`.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Run instances of a plan file whose inputs are in the store: all, one level
+    /// (`--level`), or one slice of them (`--slice I/K`, the I-th of K, 0-based).
+    Exec {
+        /// Plan written by `wearcoef plan --out`.
+        #[arg(long)]
+        plan: PathBuf,
+        #[arg(long, default_value = "data")]
+        data: PathBuf,
+        #[arg(long)]
+        level: Option<usize>,
+        #[arg(long, value_parser = cli::plan::parse_slice)]
+        slice: Option<(usize, usize)>,
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[arg(long)]
+        quiet: bool,
     },
     /// Show what is present or missing for a profile.
     Status {
@@ -205,6 +240,7 @@ fn main() -> ExitCode {
                 c.downcast_ref::<ConfigError>().is_some()
                     || c.downcast_ref::<SurfaceError>().is_some()
                     || c.downcast_ref::<InputError>().is_some()
+                    || c.downcast_ref::<UsageError>().is_some()
                     || c.downcast_ref::<wearcoef::io::IoError>().is_some()
                     || matches!(
                         c.downcast_ref::<SweepError>(),
@@ -249,6 +285,31 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             } else {
                 println!("{summary}");
             }
+        }
+        Command::Plan {
+            targets,
+            store,
+            profile,
+            json,
+            out,
+        } => {
+            let pipeline = load(&store.config)?;
+            let origin = store.config.display().to_string();
+            let plan = cli::plan::make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
+            cli::plan::print_plan(&plan, json, out.as_ref())?;
+        }
+        Command::Exec {
+            plan,
+            data,
+            level,
+            slice,
+            jobs,
+            quiet,
+        } => {
+            let jobs =
+                jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let done = cli::plan::exec(&plan, &data, level, slice, jobs.max(1), quiet)?;
+            println!("{done}");
         }
         Command::Status {
             store,
@@ -459,7 +520,7 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if !(args.tol.is_finite() && args.tol > 0.0) || args.max_iter == 0 {
         return Err(InputError("--tol must be finite and > 0 and --max-iter ≥ 1".into()).into());
     }
-    let grid = Grid::unit(n)?;
+    Grid::unit(n)?;
     if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(InputError(format!(
             "{}: height at row {}, column {} is {v}; heights must be finite",
@@ -469,8 +530,6 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let slope = wearcoef::surface::rms_slope(&grid, &heights);
-    let op = ElasticOperator::new(grid, args.e_star);
     let cfg = SolverConfig {
         tolerance: args.tol,
         max_iterations: args.max_iter,
@@ -480,13 +539,20 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
     let mut pressures = Vec::new();
     let mut contacts = Vec::new();
-    let results = sweep(&op, &heights, slope, &args.loads, &cfg, |_, solver, _| {
-        if keep_fields {
-            pressures.extend_from_slice(solver.pressure());
-            contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
-        }
-        Ok(())
-    })?;
+    let (_, results) = sweep_heights(
+        &heights,
+        n,
+        args.e_star,
+        &args.loads,
+        &cfg,
+        |_, solver, _| {
+            if keep_fields {
+                pressures.extend_from_slice(solver.pressure());
+                contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
+            }
+            Ok(())
+        },
+    )?;
     let shape: Vec<usize> = if args.loads.len() == 1 {
         vec![n, n]
     } else {
@@ -534,7 +600,7 @@ fn peak_rss_bytes() -> Option<u64> {
 }
 
 /// Write through a temporary sibling file and rename, so a failure leaves no partial file.
-fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {

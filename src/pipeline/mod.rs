@@ -1,14 +1,17 @@
-//! The cached stage graph: content keys ([`hash`]), the artifact store ([`store`]), stage
-//! definitions ([`stages`]), the runner ([`runner`]) and the catalog ([`catalog`]).
-//!
-//! This is the only part of the library that touches polars; the numerical modules know
-//! nothing of it.
+//! The cached stage graph around the stages of [`crate::stages`]: content keys ([`hash`]),
+//! the artifact store ([`store`]), Parquet helpers ([`table`]), the plan ([`plan`]) with its
+//! cost model ([`cost`]), the local executor ([`runner`]) and the catalog ([`catalog`]).
 
 pub mod catalog;
-mod cluster_stages;
-mod figures;
+pub mod cost;
 pub mod hash;
-pub mod plot;
+pub mod plan;
 pub mod runner;
-pub mod stages;
 pub mod store;
+pub mod table;
+
+/// A usage error (an unknown target, a plan that cannot run here): the command exits with
+/// status 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);

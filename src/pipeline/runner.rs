@@ -9,9 +9,11 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::catalog::{self, Row};
-use super::stages::{self, Instance};
+use super::cost::{machine_memory_bytes, CostModel};
+use super::plan::{Instance, Plan};
 use super::store::{CommitOutcome, Manifest, Program, Store};
-use crate::config::{Pipeline, StudyPlan};
+use crate::config::Pipeline;
+use crate::stages::Inputs;
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -51,47 +53,8 @@ impl std::fmt::Display for RunSummary {
     }
 }
 
-/// Studies of the profile selected by `targets` (study names) and the stage filter.
-fn select(
-    pipeline: &Pipeline,
-    origin: &str,
-    profile: &str,
-    targets: &[String],
-) -> anyhow::Result<(Vec<StudyPlan>, Vec<&'static str>)> {
-    let plans = pipeline.plan(profile, origin)?;
-    let mut studies = Vec::new();
-    let mut stage_filter = Vec::new();
-    for t in targets {
-        if let Some(s) = stages::STAGES.iter().find(|s| **s == t.as_str()) {
-            stage_filter.push(*s);
-        } else if plans.iter().any(|p| &p.name == t) {
-            studies.push(t.clone());
-        } else {
-            anyhow::bail!(
-                "unknown target '{t}' for profile '{profile}': use a stage ({}) or a study of this profile ({})",
-                stages::STAGES.join(", "),
-                plans.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
-            );
-        }
-    }
-    let plans = if studies.is_empty() {
-        plans
-    } else {
-        plans
-            .into_iter()
-            .filter(|p| studies.contains(&p.name))
-            .collect()
-    };
-    // A stage target builds that stage and everything upstream of it.
-    let last = stage_filter
-        .iter()
-        .filter_map(|s| stages::STAGES.iter().position(|x| x == s))
-        .max()
-        .unwrap_or(stages::STAGES.len() - 1);
-    Ok((plans, stages::STAGES[..=last].to_vec()))
-}
-
-/// Build what is missing for a profile.
+/// Build what is missing for a profile: plan, refuse a plan that cannot fit in memory, run
+/// the missing instances level by level, export the figures, write the catalog.
 pub fn run(
     pipeline: &Pipeline,
     origin: &str,
@@ -99,28 +62,63 @@ pub fn run(
     opts: &RunOptions,
 ) -> anyhow::Result<RunSummary> {
     let start = Instant::now();
-    let (plans, wanted_stages) = select(pipeline, origin, &opts.profile, &opts.targets)?;
+    let mut plan = Plan::build(pipeline, origin, &opts.profile, &opts.targets)?;
+    plan.mark(store, &CostModel::fit(store)?)?;
+    if let Some(memory) = machine_memory_bytes() {
+        Plan {
+            profile: plan.profile.clone(),
+            instances: plan
+                .instances
+                .iter()
+                .filter(|i| !i.cached)
+                .cloned()
+                .collect(),
+        }
+        .check_memory(memory)?;
+    }
     store.remove_stale_temporaries()?;
-    let jobs = opts.jobs.max(1);
+    let reused = plan.instances.iter().filter(|i| i.cached).count();
+    let computed = execute(store, &plan.instances, opts.jobs, opts.quiet)?;
 
-    let all = stages::instances(&plans);
+    let catalog_dir = store.root().join(&opts.profile);
+    export_figures(store, &plan.instances, &opts.profile)?;
+    let rows = catalog_rows(store, &plan.instances)?;
+    catalog::write(&catalog_dir, &rows)?;
+    Ok(RunSummary {
+        profile: opts.profile.clone(),
+        instances: plan.instances.len(),
+        computed,
+        reused,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        catalog: catalog_dir.join("index.parquet").display().to_string(),
+    })
+}
+
+/// Compute the instances of `instances` that the store lacks, level by level (every input
+/// of a level is on a lower one), each level's instances in parallel. An instance whose
+/// inputs are neither in the store nor among `instances` fails with an error naming the
+/// missing input. Returns how many were computed.
+pub fn execute(
+    store: &Store,
+    instances: &[Instance],
+    jobs: usize,
+    quiet: bool,
+) -> anyhow::Result<usize> {
+    let jobs = jobs.max(1);
+    let levels = instances.iter().map(|i| i.level + 1).max().unwrap_or(0);
     let mut computed = 0;
-    let mut reused = 0;
-    let mut total = 0;
-    for stage in &wanted_stages {
-        let batch: Vec<&Instance> = all.iter().filter(|i| i.stage == *stage).collect();
-        total += batch.len();
+    for level in 0..levels {
         let mut missing = Vec::new();
-        for inst in batch {
-            match store.lookup(inst.stage, &inst.key)? {
-                Some(_) => reused += 1,
-                None => missing.push(inst),
+        for inst in instances.iter().filter(|i| i.level == level) {
+            if store.lookup(&inst.stage, &inst.key)?.is_none() {
+                missing.push(inst);
             }
         }
         if missing.is_empty() {
             continue;
         }
-        let bar = progress(missing.len(), stage, opts.quiet);
+        let label = stage_list(&missing);
+        let bar = progress(missing.len(), &label, quiet);
         let results = build_all(store, &missing, jobs, &bar)?;
         bar.finish_and_clear();
         for r in results {
@@ -128,19 +126,18 @@ pub fn run(
             computed += 1;
         }
     }
+    Ok(computed)
+}
 
-    let catalog_dir = store.root().join(&opts.profile);
-    export_figures(store, &all, &opts.profile)?;
-    let rows = catalog_rows(store, &all)?;
-    catalog::write(&catalog_dir, &rows)?;
-    Ok(RunSummary {
-        profile: opts.profile.clone(),
-        instances: total,
-        computed,
-        reused,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        catalog: catalog_dir.join("index.parquet").display().to_string(),
-    })
+/// The stages of a batch, in order of first appearance (`contact+clusters`).
+fn stage_list(batch: &[&Instance]) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for i in batch {
+        if !names.contains(&i.stage.as_str()) {
+            names.push(&i.stage);
+        }
+    }
+    names.join("+")
 }
 
 /// Directory the figures of `profile` are copied to: `figures/<profile>/` beside the data
@@ -159,7 +156,7 @@ pub fn figures_dir(store: &Store, profile: &str) -> std::path::PathBuf {
 fn export_figures(store: &Store, all: &[Instance], profile: &str) -> anyhow::Result<()> {
     let out = figures_dir(store, profile);
     for inst in all.iter().filter(|i| i.stage == "figures") {
-        let Some(manifest) = store.lookup(inst.stage, &inst.key)? else {
+        let Some(manifest) = store.lookup(&inst.stage, &inst.key)? else {
             continue;
         };
         std::fs::create_dir_all(&out)?;
@@ -241,21 +238,39 @@ fn build_all(
 
 fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
     let start = Instant::now();
-    let entry = store.begin(inst.stage, &inst.key)?;
-    let results = stages::compute(inst, entry.path(), store).map_err(|e| {
+    let stage = crate::stages::find(&inst.stage).ok_or_else(|| {
         anyhow::anyhow!(
-            "stage {} (studies {}, realization {}) failed: {e}",
+            "the plan names stage '{}', which this build does not have ({})",
             inst.stage,
-            inst.studies.join(", "),
-            inst.realization.map_or("-".to_string(), |r| r.to_string())
+            crate::stages::names().join(", ")
         )
     })?;
+    let keys: Vec<String> = inst.inputs.iter().map(|r| r.key.clone()).collect();
+    let key = super::hash::instance_key(stage.name(), stage.version(), &inst.params, &keys);
+    anyhow::ensure!(
+        key == inst.key,
+        "the plan's {} instance {} does not match its parameters (their key is {key}): the plan was edited or made by another version; make it anew with `wearcoef plan`",
+        inst.stage,
+        inst.key
+    );
+    let inputs = Inputs::load(store, &inst.inputs)?;
+    let entry = store.begin(&inst.stage, &inst.key)?;
+    let results = stage
+        .compute(&inst.params, &inputs, entry.path())
+        .map_err(|e| {
+            anyhow::anyhow!(
+                "stage {} (studies {}, realization {}) failed: {e:#}",
+                inst.stage,
+                inst.studies.join(", "),
+                inst.realization.map_or("-".to_string(), |r| r.to_string())
+            )
+        })?;
     let manifest = Manifest {
-        stage: inst.stage.to_string(),
-        version: inst.version,
+        stage: inst.stage.clone(),
+        version: stage.version(),
         key: inst.key.clone(),
         params: inst.params.clone(),
-        inputs: inst.inputs.clone(),
+        inputs: keys,
         outputs: Default::default(),
         program: Program::current(),
         wall_seconds: start.elapsed().as_secs_f64(),
@@ -269,7 +284,7 @@ fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
 fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
     let mut rows = Vec::new();
     for inst in all {
-        let Some(manifest) = store.lookup(inst.stage, &inst.key)? else {
+        let Some(manifest) = store.lookup(&inst.stage, &inst.key)? else {
             continue;
         };
         let mut extra = std::collections::BTreeMap::new();
@@ -285,12 +300,18 @@ fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
                 }
             }
         }
-        let dir = store.entry_dir(inst.stage, &inst.key);
-        let loads = match &inst.job {
-            stages::Job::Contact(job) => Some(&job.loads),
-            _ => None,
+        let dir = store.entry_dir(&inst.stage, &inst.key);
+        let loads: Option<Vec<f64>> = (inst.stage == "contact")
+            .then(|| inst.params.get("loads_w_over_w0")?.as_array().cloned())
+            .flatten()
+            .map(|a| a.iter().filter_map(Value::as_f64).collect());
+        // Shared instances (the model curves of Fig. 6) are listed once, with no study.
+        let studies = if inst.studies.is_empty() {
+            vec![String::new()]
+        } else {
+            inst.studies.clone()
         };
-        for study in &inst.studies {
+        for study in &studies {
             for file in manifest.outputs.keys() {
                 let mut extra = extra.clone();
                 // Per-load files carry their load index in the name (`contact_007.npy`).
@@ -298,12 +319,12 @@ fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
                     .rsplit_once('_')
                     .and_then(|(_, rest)| rest.strip_suffix(".npy"))
                     .and_then(|d| d.parse::<usize>().ok());
-                if let (Some(i), Some(loads)) = (index, loads) {
+                if let (Some(i), Some(loads)) = (index, &loads) {
                     extra.insert("load_index".into(), Value::from(i as u64));
                     extra.insert("w_over_w0".into(), Value::from(loads[i]));
                 }
                 rows.push(Row {
-                    stage: inst.stage.to_string(),
+                    stage: inst.stage.clone(),
                     study: study.clone(),
                     realization: inst.realization,
                     file: file.clone(),
@@ -334,21 +355,22 @@ pub fn status(
     profile: &str,
 ) -> anyhow::Result<Vec<StatusLine>> {
     let plans = pipeline.plan(profile, origin)?;
-    let all = stages::instances(&plans);
+    let plan = Plan::build(pipeline, origin, profile, &[])?;
     let mut lines: Vec<StatusLine> = Vec::new();
-    for stage in stages::STAGES {
-        for plan in &plans {
+    for stage in crate::stages::names() {
+        for study in &plans {
             let mut line = StatusLine {
                 stage: stage.to_string(),
-                study: plan.name.clone(),
+                study: study.name.clone(),
                 present: 0,
                 missing: 0,
             };
-            for inst in all
+            for inst in plan
+                .instances
                 .iter()
-                .filter(|i| i.stage == *stage && i.studies.contains(&plan.name))
+                .filter(|i| i.stage == stage && i.studies.contains(&study.name))
             {
-                if store.lookup(inst.stage, &inst.key)?.is_some() {
+                if store.lookup(&inst.stage, &inst.key)?.is_some() {
                     line.present += 1;
                 } else {
                     line.missing += 1;

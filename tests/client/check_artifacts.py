@@ -215,8 +215,7 @@ def check_load_resolution(path, wear_of):
     ln W/W0 of the chosen sweep's curves at the finer sweep's loads) from the two studies'
     wear tables, and the manifest's rule from the table."""
     m = manifest_of(path)
-    studies = m["params"]
-    fine, chosen = wear_of(studies["fine"]), wear_of(studies["chosen"])
+    fine, chosen = wear_of(0), wear_of(1)
     if not check(fine is not None and chosen is not None, f"{path}: wear tables not found"):
         return
     table = pd.read_parquet(path)
@@ -401,9 +400,15 @@ def main(data_dir, profile):
             check_schema(r.path, LOAD_RESOLUTION)
             parquet_files += 1
 
-            def wear_of(study):
-                sel = rows("statistics", "wear.parquet", study=study)
-                return pd.read_parquet(sel["path"].iloc[0]) if len(sel) else None
+            def wear_of(i, figure=r.path):
+                """Wear table of input i of the load-resolution audit the figure draws
+                (0: the finer sweep, 1: the chosen one), found through the manifests."""
+                cache = os.path.dirname(os.path.dirname(os.path.dirname(figure)))
+                audit = manifest_of(figure)["inputs"][0]
+                with open(os.path.join(cache, "audits", audit, "manifest.json")) as f:
+                    key = json.load(f)["inputs"][i]
+                path = os.path.join(cache, "statistics", key, "wear.parquet")
+                return pd.read_parquet(path) if os.path.exists(path) else None
 
             check_load_resolution(r.path, wear_of)
         elif r.file == "fig2_convergence.parquet":

@@ -27,3 +27,7 @@ start=$(date +%s%N)
 end=$(date +%s%N)
 echo "quick profile end to end: $(( (end - start) / 1000000 )) ms"
 "$venv/bin/python" "$repo/tests/client/check_artifacts.py" data quick
+# Every number of the quick profile as before: value digests against the committed ones
+# (tests/golden/quick_values.json; `values.py digest data quick` makes them anew).
+"$venv/bin/python" "$repo/tests/client/values.py" digest data quick > values.json
+"$venv/bin/python" "$repo/tests/client/values.py" compare "$repo/tests/golden/quick_values.json" values.json

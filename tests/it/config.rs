@@ -205,3 +205,70 @@ fn the_shipped_pipeline_is_valid_for_every_profile() {
         assert_eq!(conv.iter().filter(|s| s.surface.n == n).count(), 1);
     }
 }
+
+/// A study of its own sweep (`s`) and one without loads (`t`), drawn by one figure.
+fn with_figure(figure: &str) -> String {
+    BASE.replace(
+        "      quick: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 2}\n",
+        "      quick: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 2}\n  t:\n    hurst: 0.7\n    lambda_l_over_lambda_s: 8\n    seed: 2\n    profiles:\n      quick: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 1}\n",
+    ) + "figures:\n" + figure
+}
+
+/// Figures name their studies: a study renamed (or never declared), or one without an entry
+/// for a profile the figure is drawn in, is an error naming the figure, the study and the
+/// fix, never a silently missing curve.
+#[test]
+fn a_figure_whose_study_is_missing_or_absent_from_a_profile_is_an_error() {
+    let ok = "  f: {kind: fig3_fig4a, ratios: [s, t], loads: [0.005, 0.02], inset_load: 0.02, profiles: [quick]}\n";
+    assert_eq!(field_of(&with_figure(ok)), "OK");
+    let renamed = ok.replace("ratios: [s, t]", "ratios: [s, t8]");
+    let err = Pipeline::parse(&with_figure(&renamed), "test.yaml")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("figures.f") && err.contains("'t8'"), "{err}");
+    let absent = ok.replace("profiles: [quick]", "profiles: [quick, default]");
+    let err = Pipeline::parse(&with_figure(&absent), "test.yaml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("figures.f.profiles") && err.contains("studies.s.profiles.default"),
+        "{err}"
+    );
+    // Left out explicitly, a study is not drawn in that profile; the figure still needs one.
+    let omitted = absent.replace(
+        "profiles: [quick, default]",
+        "profiles: [quick, default], omit: {default: [s, t]}",
+    );
+    let err = Pipeline::parse(&with_figure(&omitted), "test.yaml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("figures.f.omit") && err.contains("leaves 0 studies"),
+        "{err}"
+    );
+    // A field the kind does not take.
+    let extra = ok.replace("profiles: [quick]", "profiles: [quick], study: s");
+    assert_eq!(field_of(&with_figure(&extra)), "figures.f.study");
+}
+
+/// A study without loads of its own computes exactly the loads its figures ask for; a sweep
+/// keeps its loads (figures take the nearest), and a figure's load outside the sweep is an
+/// error naming the figure's field.
+#[test]
+fn a_study_computes_the_loads_its_figures_ask_for() {
+    let text = with_figure(
+        "  f: {kind: fig3_fig4a, ratios: [s, t], loads: [0.02, 0.005], inset_load: 0.06, hurst: [t], profiles: [quick]}\n",
+    );
+    let p = Pipeline::parse(&text, "test.yaml").unwrap();
+    let plans = p.plan("quick", "test.yaml").unwrap();
+    let loads = |name: &str| plans.iter().find(|s| s.name == name).unwrap().loads.clone();
+    assert_eq!(loads("t"), vec![0.005, 0.02, 0.06]);
+    assert_eq!(loads("s").len(), 5, "the sweep is kept");
+    let outside = text.replace("loads: [0.02, 0.005]", "loads: [0.02, 0.5]");
+    assert_eq!(field_of(&outside), "figures.f.loads");
+    // A study that no figure draws and that has no loads of its own has nothing to compute.
+    let undrawn = text
+        .replace("ratios: [s, t]", "ratios: [s]")
+        .replace("hurst: [t], ", "");
+    assert_eq!(field_of(&undrawn), "studies.t.loads");
+}

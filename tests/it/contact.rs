@@ -230,7 +230,7 @@ fn westergaard_mean_gap() {
         for ratio in [0.2, 0.5] {
             let mean = ratio * w.full_contact_pressure();
             assert!(solver.solve(mean, &cfgp(pre, 1e-12)).unwrap().converged());
-            let gap = solver.gap().iter().sum::<f64>() / (n * n) as f64;
+            let gap = solver.gap().sum::<f64>() / (n * n) as f64;
             let exact = w.mean_gap_over_2h0(mean) * 2.0 * w.amplitude;
             // VALIDATION §1.3: 1e-6 of 2h0 at N = 1024; at N = 512 the discretisation error is
             // about four times larger.
@@ -316,7 +316,7 @@ fn check_load_balance_and_complementarity(n: usize, lambda_l_px: f64) {
             "load balance {mean_p} vs {mean}"
         );
         assert!(p.iter().all(|&v| v >= 0.0));
-        assert!(solver.gap().iter().all(|&g| g >= 0.0));
+        assert!(solver.gap().all(|g| g >= 0.0));
         let err = independent_error(&op, &h, p);
         assert!(err <= 1e-10 * 1.01, "complementarity recomputed: {err}");
         assert!(
@@ -451,7 +451,7 @@ fn zero_load_gives_no_contact_and_no_nan() {
         assert_eq!(solver.contact_count(), 0);
         assert!(solver.pressure().iter().all(|&p| p == 0.0));
         let max_h = h.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        for (g, hi) in solver.gap().iter().zip(&h) {
+        for (g, hi) in solver.gap().zip(&h) {
             assert!(
                 (g - (max_h - hi)).abs() < 1e-15,
                 "gap is the distance to the highest point"
@@ -493,7 +493,7 @@ fn flat_surface_gives_uniform_pressure() {
         assert!(r.converged());
         assert!(solver.pressure().iter().all(|&p| p == 0.3));
         assert_eq!(solver.contact_count(), n * n);
-        assert!(solver.gap().iter().all(|&g| g == 0.0));
+        assert!(solver.gap().all(|g| g == 0.0));
     }
 }
 
@@ -508,7 +508,7 @@ fn rough_surface_in_full_contact() {
         assert!(r.converged(), "{r:?}");
         assert_eq!(solver.contact_count(), n * n);
         // In full contact the gap vanishes: u − h is constant.
-        let max_gap = solver.gap().iter().cloned().fold(0.0, f64::max);
+        let max_gap = solver.gap().fold(0.0, f64::max);
         let std_h = (h.iter().map(|v| v * v).sum::<f64>() / h.len() as f64).sqrt();
         assert!(max_gap <= 1e-10 * std_h, "gap {max_gap}");
     }

@@ -62,6 +62,8 @@ studies:
     loads: {{values: [0.01]}}
     profiles:
       t: {{l_over_lambda_l: 2, lambda_s_over_dl: 8, realizations: 2}}
+figures:
+  fig6: {{kind: fig6, profiles: [t]}}
 "#
     )
 }

@@ -182,16 +182,16 @@ fn extreme_hurst_exponents_give_valid_surfaces_and_converged_contact() {
 
 #[test]
 fn loads_outside_a_study_range_are_errors_naming_the_field() {
-    // A kept pressure field at a load the sweep does not reach.
+    // A figure drawing a map at a load the study's sweep does not reach.
     let text = HIGH_LOAD.replace(
         "    loads: {values: [0.002, 0.6, 1.5]}",
-        "    loads: {values: [0.002, 0.6, 1.5]}\n    keep_pressure: [3.0]",
-    );
+        "    loads: {min: 0.002, max: 1.5, count: 3}",
+    ) + "figures:\n  maps: {kind: fig2, study: s, loads: [3.0], profiles: [t]}\n";
     let (_t, dir) = workdir(&text);
     let out = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("studies.s.keep_pressure[0]"), "{err}");
+    assert!(err.contains("figures.maps.loads"), "{err}");
     assert!(err.contains("[0.002, 1.5]"), "{err}");
     assert!(!dir.join("data/cache").exists(), "nothing stored");
     // Negative and non-finite loads on the command line.

@@ -324,13 +324,12 @@ fn figures_are_valid_images_with_their_data_copied_beside_the_data_directory() {
     }
 }
 
-/// The λ_l/λ_s = 128 convergence figure compares the `c128_*` studies of one Hurst exponent:
-/// a profile of one exponent gets `fig128_convergence`, a profile of several one
-/// `fig128_convergence_h<H>` per exponent, each with only its own exponent's studies (the
-/// same sizes at two exponents would otherwise share labels, which get the study name).
+/// A convergence figure compares exactly the studies its declaration names: a profile of
+/// one exponent with one figure, a profile of two exponents with one figure each (the same
+/// sizes at two exponents would otherwise share labels, which then get the study name).
 #[test]
 #[ignore = "four 256²/512² sweeps, slow in debug builds: run by `make test` in release"]
-fn c128_convergence_figures_are_made_per_hurst_exponent() {
+fn convergence_figures_draw_the_studies_they_declare() {
     let entry = |name: &str, hurst: f64, l: u32, seed: u32, both: bool| {
         let size = format!("{{l_over_lambda_l: {l}, lambda_s_over_dl: 2, realizations: 1}}");
         let mut profiles = format!("      two: {size}\n");
@@ -342,13 +341,19 @@ fn c128_convergence_figures_are_made_per_hurst_exponent() {
              loads: {{values: [0.06]}}\n    profiles:\n{profiles}"
         )
     };
+    let figure = |name: &str, studies: &str, profile: &str| {
+        format!("  {name}: {{kind: convergence, studies: [{studies}], profiles: [{profile}]}}\n")
+    };
     let text = format!(
         "schema_version: 1\nmaterial: {{e_star: 1.0}}\nsolver: {{tolerance: 1.0e-10, max_iterations: 2000}}\n\
-         profiles: {{one: \"H = 0.8\", two: \"H = 0.6 and 0.8\"}}\nstudies:\n{}{}{}{}",
+         profiles: {{one: \"H = 0.8\", two: \"H = 0.6 and 0.8\"}}\nstudies:\n{}{}{}{}figures:\n{}{}{}",
         entry("c128_a8", 0.8, 1, 1, true),
         entry("c128_b8", 0.8, 2, 2, true),
         entry("c128_a6", 0.6, 1, 3, false),
         entry("c128_b6", 0.6, 2, 4, false),
+        figure("fig128_convergence", "c128_a8, c128_b8", "one"),
+        figure("fig128_convergence_h0.8", "c128_a8, c128_b8", "two"),
+        figure("fig128_convergence_h0.6", "c128_a6, c128_b6", "two"),
     );
     let (_t, dir) = workdir(&text);
     for profile in ["one", "two"] {

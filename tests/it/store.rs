@@ -92,7 +92,9 @@ fn second_run_computes_nothing_and_one_changed_parameter_recomputes_only_its_ins
     std::fs::write(dir.join("pipeline.yaml"), small_pipeline(0.5, "renamed")).unwrap();
     let only_a = run_json(&dir, &["a"]);
     assert_eq!(only_a["computed"], 0);
-    assert_eq!(only_a["instances"], 13);
+    // 3 surfaces, sweeps and cluster tables, the statistics and the fitted model of `a`
+    // (the Fig. 6 model curves belong to no study).
+    assert_eq!(only_a["instances"], 11);
     // A stage target builds that stage and what it needs, nothing downstream.
     let surfaces = run_json(&dir, &["surface"]);
     assert_eq!(surfaces["instances"], 5);
@@ -114,10 +116,10 @@ fn status_reports_present_and_missing() {
         .iter()
         .map(|l| l["missing"].as_u64().unwrap())
         .sum();
-    // The Fig. 6 curves and plot are instances listed under both studies, so counted twice.
+    // The Fig. 6 curves and plot belong to no study.
     assert_eq!(
-        missing, 23,
-        "5 surfaces, 5 sweeps, 5 cluster tables, 2 statistics, 2 fitted models, Fig. 6 twice"
+        missing, 19,
+        "5 surfaces, 5 sweeps, 5 cluster tables, 2 statistics, 2 fitted models"
     );
     run_json(&dir, &["a"]);
     let after = stdout_json(&run_in(&dir, &["status", "--profile", "t", "--json"]));
@@ -316,11 +318,8 @@ fn catalog_reads_back_with_typed_columns() {
     // 5 surfaces; 5 sweeps, each with loads.parquet and one contact map per load
     // (study a: 3 realizations × 2 loads, study b: 2 × 1); 5 cluster tables with their
     // per-load summaries; 2 statistics entries of 5 tables each; 2 fitted models; the
-    // Fig. 6 curves and its PNG, SVG and CSV, listed under both studies.
-    assert_eq!(
-        df.height(),
-        5 + 5 + 3 * 2 + 2 + 5 * 2 + 2 * 5 + 2 + 2 + 3 * 2
-    );
+    // Fig. 6 curves and its PNG, SVG and CSV, listed once (they belong to no study).
+    assert_eq!(df.height(), 5 + 5 + 3 * 2 + 2 + 5 * 2 + 2 * 5 + 2 + 1 + 3);
     for (name, dtype) in [
         ("stage", DataType::String),
         ("study", DataType::String),
@@ -359,10 +358,8 @@ fn catalog_reads_back_with_typed_columns() {
 /// is bumped on purpose: this pins the key of one surface instance.
 #[test]
 fn cache_key_is_stable() {
-    use wearcoef::pipeline::hash::instance_key;
-    use wearcoef::pipeline::stages::{surface_params_json, SURFACE_VERSION};
-    let p = key_fixture();
-    let key = instance_key("surface", SURFACE_VERSION, &surface_params_json(&p), &[]);
+    use wearcoef::stages::{keyed, surface::Surface};
+    let (_, key) = keyed::<Surface>(&key_fixture(), &[]);
     assert_eq!(
         key, PINNED_SURFACE_KEY,
         "surface keys changed: bump SURFACE_VERSION or the salt deliberately"
@@ -387,12 +384,10 @@ const PINNED_SURFACE_KEY: &str = "8aa76b2801a9988576896a292e010b73809f1fcc17df84
 /// Every parameter the surface stage reads changes its key.
 #[test]
 fn every_surface_parameter_changes_the_key() {
-    use wearcoef::pipeline::hash::instance_key;
-    use wearcoef::pipeline::stages::{surface_params_json, SURFACE_VERSION};
+    use wearcoef::stages::{keyed, surface::Surface};
     use wearcoef::surface::{Method, SurfaceParams};
     let base = key_fixture();
-    let key =
-        |p: &SurfaceParams| instance_key("surface", SURFACE_VERSION, &surface_params_json(p), &[]);
+    let key = |p: &SurfaceParams| keyed::<Surface>(p, &[]).1;
     let variants = [
         SurfaceParams {
             n: 128,

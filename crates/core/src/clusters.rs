@@ -22,8 +22,9 @@
 
 use thiserror::Error;
 
-/// Neighbourhood used to link pixels.
+/// Neighbourhood used to link pixels; serialised as its number of neighbours (4 or 8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(into = "u32", try_from = "u32")]
 pub enum Connectivity {
     /// Edge neighbours only.
     Four,
@@ -48,6 +49,19 @@ impl Connectivity {
             Self::Four => 4,
             Self::Eight => 8,
         }
+    }
+}
+
+impl From<Connectivity> for u32 {
+    fn from(c: Connectivity) -> u32 {
+        c.neighbours()
+    }
+}
+
+impl TryFrom<u32> for Connectivity {
+    type Error = String;
+    fn try_from(k: u32) -> Result<Self, String> {
+        Self::from_neighbours(k).ok_or_else(|| format!("connectivity {k}: use 4 or 8"))
     }
 }
 

@@ -1,130 +1,87 @@
-//! The clusters stage (labelling of every contact map of a sweep) and the statistics
-//! stage (per study: PDFs, CCDFs, wear coefficients, exponents), writing Parquet tables.
-//! File layouts are in docs/CONVENTIONS.md.
+//! The statistics stage: one study's ensemble statistics from its realizations' cluster
+//! tables: per-load summary and dN/dA_c (`loads.parquet`), area PDF in logarithmic bins
+//! (`pdf.parquet`), exact CCDF (`ccdf.parquet`), K, 𝒦 and the wear rate on a grid of A*
+//! (`wear.parquet`), and the exponent α by maximum likelihood (`alpha.parquet`). Layouts in
+//! docs/CONVENTIONS.md.
 
 use std::path::Path;
 
 use polars::prelude::*;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use super::stages::{
-    contact_file, AnalyticJob, ClustersJob, StatisticsJob, A_STAR_OVER_LS2, BOOTSTRAP_RESAMPLES,
-    FIG6_ALPHA, FIG6_A_STAR_OVER_A_S, FIG6_POINTS, PDF_BINS,
-};
-use super::store::Store;
-use crate::analytic::PlateauPowerLaw;
-use crate::clusters;
+use super::{Inputs, Stage};
+use crate::pipeline::table::{col, write};
 use crate::powerlaw::{self, Estimator};
-use crate::statistics::{self as stats, OMEGA};
+use crate::statistics as stats;
 
-fn write_parquet(dir: &Path, name: &str, mut df: DataFrame) -> anyhow::Result<()> {
-    let file = std::fs::File::create(dir.join(name))?;
-    ParquetWriter::new(file).finish(&mut df)?;
-    Ok(())
+pub struct Statistics;
+
+/// Thresholds `A*/λ_s²` at which the statistics stage evaluates `K`, `𝒦` and the wear
+/// rate: powers of two from 1/4 to 1024 (the paper's Fig. 2 uses `A* = 2 λ_s²`).
+pub const A_STAR_OVER_LS2: [f64; 13] = [
+    0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0,
+];
+/// Logarithmic bins of the area PDF (paper Fig. 3).
+pub const PDF_BINS: usize = 20;
+/// Bootstrap resamples of the exponent's interval.
+pub const BOOTSTRAP_RESAMPLES: usize = 200;
+
+/// One study's statistics. Inputs: its realizations' clusters instances, in order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StatisticsJob {
+    #[serde(rename = "loads_w_over_w0")]
+    pub loads: Vec<f64>,
+    /// Grid side.
+    pub n: usize,
+    /// λ_s in grid spacings (areas per λ_s²).
+    pub lambda_s_px: f64,
+    /// Seed of the bootstrap resampling.
+    pub seed: u64,
+    /// Thresholds A*/λ_s² of `wear.parquet`.
+    pub a_star_over_ls2: Vec<f64>,
+    /// Logarithmic bins of the PDF.
+    pub pdf_bins: usize,
+    /// Bootstrap resamples of α's interval.
+    pub bootstrap_resamples: usize,
+    /// Fewest clusters in a fitted tail.
+    pub min_tail: usize,
+    /// Wear-volume factor ω of the wear rate (volume = ω A^(3/2)).
+    pub omega: f64,
 }
 
-fn col<T>(name: &str, values: Vec<T>) -> Column
-where
-    Series: NamedFrom<Vec<T>, [T]>,
-{
-    Column::new(name.into(), values)
-}
-
-/// Label the contact map of every load of one realization.
-pub(super) fn compute_clusters(
-    job: &ClustersJob,
-    dir: &Path,
-    store: &Store,
-) -> anyhow::Result<Value> {
-    let manifest = store.lookup("contact", &job.contact_key)?.ok_or_else(|| {
-        anyhow::anyhow!(
-            "input contact {} is missing from the store",
-            job.contact_key
-        )
-    })?;
-    let ls2 = job.lambda_s_px * job.lambda_s_px;
-    let pixels = (job.n * job.n) as f64;
-    // Per cluster.
-    let (mut load_index, mut w, mut id) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut area, mut area_ls2, mut perimeter) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut extent_x, mut extent_y, mut percolating) = (Vec::new(), Vec::new(), Vec::new());
-    // Per load.
-    let (mut n_clusters, mut fraction, mut largest, mut n_perc) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (i, &load) in job.loads.iter().enumerate() {
-        let path = store.read_output(&manifest, &contact_file(i))?;
-        let (rows, cols, map, _) = crate::io::read_contact_map(&path)?;
-        if (rows, cols) != (job.n, job.n) {
-            anyhow::bail!(
-                "{}: contact map is {rows} × {cols}, the study's grid is {n} × {n}",
-                path.display(),
-                n = job.n
-            );
-        }
-        let l = clusters::label(&map, rows, cols, job.connectivity)?;
-        let mut in_contact = 0u64;
-        let mut max_area = 0u64;
-        for (k, c) in l.clusters.iter().enumerate() {
-            load_index.push(i as u32);
-            w.push(load);
-            id.push(k as u32 + 1);
-            area.push(c.area_px);
-            area_ls2.push(c.area_px as f64 / ls2);
-            perimeter.push(c.perimeter_px);
-            extent_x.push(c.extent_x_px);
-            extent_y.push(c.extent_y_px);
-            percolating.push(c.percolating());
-            in_contact += c.area_px;
-            max_area = max_area.max(c.area_px);
-        }
-        n_clusters.push(l.clusters.len() as u32);
-        fraction.push(in_contact as f64 / pixels);
-        largest.push(max_area as f64 / ls2);
-        n_perc.push(l.clusters.iter().filter(|c| c.percolating()).count() as u32);
-    }
-    let rows = area.len();
-    let realization = vec![job.realization; rows];
-    write_parquet(
-        dir,
-        "clusters.parquet",
-        DataFrame::new(
-            rows,
-            vec![
-                col("realization", realization),
-                col("load_index", load_index),
-                col("w_over_w0", w),
-                col("cluster_id", id),
-                col("area_px", area),
-                col("area_over_ls2", area_ls2),
-                col("perimeter_px", perimeter),
-                col("extent_x_px", extent_x),
-                col("extent_y_px", extent_y),
-                col("percolating", percolating),
-            ],
-        )?,
-    )?;
-    let loads = job.loads.len();
-    let total: u64 = n_clusters.iter().map(|&v| v as u64).sum();
-    let percolating_loads = n_perc.iter().filter(|&&v| v > 0).count();
-    write_parquet(
-        dir,
-        "loads.parquet",
-        DataFrame::new(
+impl StatisticsJob {
+    /// The job of a study with the stage's standard grid of thresholds, bins and resamples.
+    pub fn standard(loads: Vec<f64>, n: usize, lambda_s_px: f64, seed: u64) -> Self {
+        Self {
             loads,
-            vec![
-                col("load_index", (0..loads as u32).collect::<Vec<_>>()),
-                col("w_over_w0", job.loads.clone()),
-                col("n_clusters", n_clusters),
-                col("area_fraction", fraction),
-                col("largest_area_over_ls2", largest),
-                col("n_percolating", n_perc),
-            ],
-        )?,
-    )?;
-    Ok(json!({
-        "total_clusters": total,
-        "loads_with_percolating_cluster": percolating_loads,
-    }))
+            n,
+            lambda_s_px,
+            seed,
+            a_star_over_ls2: A_STAR_OVER_LS2.to_vec(),
+            pdf_bins: PDF_BINS,
+            bootstrap_resamples: BOOTSTRAP_RESAMPLES,
+            min_tail: powerlaw::MIN_TAIL,
+            omega: stats::OMEGA,
+        }
+    }
+}
+
+impl Stage for Statistics {
+    const NAME: &'static str = "statistics";
+    const VERSION: u32 = 1;
+    type Job = StatisticsJob;
+
+    fn compute(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+        anyhow::ensure!(
+            job.min_tail == powerlaw::MIN_TAIL,
+            "min_tail {} differs from this build's {}: the fits use the built-in value",
+            job.min_tail,
+            powerlaw::MIN_TAIL
+        );
+        compute_statistics(job, inputs, dir)
+    }
 }
 
 /// Areas (pixels) of the non-percolating clusters and summary per realization and load.
@@ -139,9 +96,9 @@ struct Sample {
     percolating: Vec<Vec<u64>>,
 }
 
-fn read_sample(job: &StatisticsJob, store: &Store) -> anyhow::Result<Sample> {
+fn read_sample(job: &StatisticsJob, inputs: &Inputs) -> anyhow::Result<Sample> {
     let loads = job.loads.len();
-    let realizations = job.clusters_keys.len();
+    let realizations = inputs.len();
     let mut s = Sample {
         areas: vec![vec![Vec::new(); loads]; realizations],
         contact_px: vec![vec![0; loads]; realizations],
@@ -149,12 +106,9 @@ fn read_sample(job: &StatisticsJob, store: &Store) -> anyhow::Result<Sample> {
         largest: vec![vec![0; loads]; realizations],
         percolating: vec![vec![0; loads]; realizations],
     };
-    for (r, key) in job.clusters_keys.iter().enumerate() {
-        let manifest = store
-            .lookup("clusters", key)?
-            .ok_or_else(|| anyhow::anyhow!("input clusters {key} is missing from the store"))?;
-        let path = store.read_output(&manifest, "clusters.parquet")?;
-        let df = ParquetReader::new(std::fs::File::open(&path)?).finish()?;
+    for r in 0..realizations {
+        let path = inputs.file(r, "clusters", "clusters.parquet")?;
+        let df = crate::pipeline::table::read(&path)?;
         let li = df.column("load_index")?.u32()?.clone();
         let area = df.column("area_px")?.u64()?.clone();
         let perc = df.column("percolating")?.bool()?.clone();
@@ -180,16 +134,12 @@ fn read_sample(job: &StatisticsJob, store: &Store) -> anyhow::Result<Sample> {
 }
 
 /// Ensemble statistics of one study.
-pub(super) fn compute_statistics(
-    job: &StatisticsJob,
-    dir: &Path,
-    store: &Store,
-) -> anyhow::Result<Value> {
-    let s = read_sample(job, store)?;
+fn compute_statistics(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+    let s = read_sample(job, inputs)?;
     let ls2 = job.lambda_s_px * job.lambda_s_px;
     let pixels = (job.n * job.n) as f64;
     let loads = job.loads.len();
-    let realizations = job.clusters_keys.len();
+    let realizations = inputs.len();
     let pooled: Vec<Vec<u64>> = (0..loads)
         .map(|l| s.areas.iter().flat_map(|r| r[l].iter().copied()).collect())
         .collect();
@@ -220,7 +170,7 @@ pub(super) fn compute_statistics(
             .collect();
         let first = |v: &[(f64, f64)]| v.iter().map(|x| x.0).collect::<Vec<_>>();
         let second = |v: &[(f64, f64)]| v.iter().map(|x| x.1).collect::<Vec<_>>();
-        write_parquet(
+        write(
             dir,
             "loads.parquet",
             DataFrame::new(
@@ -247,7 +197,7 @@ pub(super) fn compute_statistics(
     {
         // Edges from 1 px to the largest area (a single bin [1, 2] if all areas are 1 px;
         // no rows if there is no cluster at all).
-        let edges = stats::log_edges(1.0, (max_area as f64).max(2.0), PDF_BINS);
+        let edges = stats::log_edges(1.0, (max_area as f64).max(2.0), job.pdf_bins);
         let (mut li, mut w, mut bin) = (Vec::new(), Vec::new(), Vec::new());
         let (mut lo, mut hi, mut centre, mut width) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -275,7 +225,7 @@ pub(super) fn compute_statistics(
             }
         }
         pdf_rows = li.len();
-        write_parquet(
+        write(
             dir,
             "pdf.parquet",
             DataFrame::new(
@@ -347,7 +297,7 @@ pub(super) fn compute_statistics(
             }
         }
         let rows = li.len();
-        write_parquet(
+        write(
             dir,
             "ccdf.parquet",
             DataFrame::new(
@@ -371,7 +321,7 @@ pub(super) fn compute_statistics(
         let mut cols_v: [Vec<f64>; 9] = Default::default();
         let (mut li, mut w) = (Vec::new(), Vec::new());
         for (l, pooled_l) in pooled.iter().enumerate() {
-            for &a_star in &A_STAR_OVER_LS2 {
+            for &a_star in &job.a_star_over_ls2 {
                 let a_px = a_star * ls2;
                 let per: Vec<stats::WearAt> = (0..realizations)
                     .map(|r| stats::wear_at(&s.areas[r][l], a_px))
@@ -384,7 +334,7 @@ pub(super) fn compute_statistics(
                 };
                 let k = band(&|x| x.k_archard);
                 let kk = band(&|x| x.k_upscaled);
-                let rate = band(&|x| OMEGA * x.area_above_px / pixels);
+                let rate = band(&|x| job.omega * x.area_above_px / pixels);
                 li.push(l as u32);
                 w.push(job.loads[l]);
                 for (c, v) in cols_v.iter_mut().zip([
@@ -418,7 +368,7 @@ pub(super) fn compute_statistics(
         for (name, v) in names.iter().zip(cols_v) {
             columns.push(col(name, v));
         }
-        write_parquet(dir, "wear.parquet", DataFrame::new(rows, columns)?)?;
+        write(dir, "wear.parquet", DataFrame::new(rows, columns)?)?;
     }
 
     // Exponents per load, pooled over realizations.
@@ -428,7 +378,7 @@ pub(super) fn compute_statistics(
         "realizations": realizations,
         "pdf_rows": pdf_rows,
         "loads_with_exponent": fitted,
-        "omega": OMEGA,
+        "omega": job.omega,
     }))
 }
 
@@ -470,7 +420,7 @@ fn write_alpha(
                     areas,
                     f.lower as u64,
                     Some(m),
-                    BOOTSTRAP_RESAMPLES,
+                    job.bootstrap_resamples,
                     job.seed ^ (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
                 )
                 .ok();
@@ -525,7 +475,7 @@ fn write_alpha(
         }
     }
     let rows = li.len();
-    write_parquet(
+    write(
         dir,
         "alpha.parquet",
         DataFrame::new(
@@ -549,118 +499,4 @@ fn write_alpha(
         )?,
     )?;
     Ok(fitted)
-}
-
-/// The analytic stage: the fitted plateau + power-law model of each load of a study on the
-/// statistics' A* grid (`model.parquet`), or the model curves of Fig. 6 (`fig6.parquet`).
-pub(super) fn compute_analytic(
-    job: &AnalyticJob,
-    dir: &Path,
-    store: &Store,
-) -> anyhow::Result<Value> {
-    let Some(key) = &job.statistics_key else {
-        return fig6_curves(dir);
-    };
-    let manifest = store
-        .lookup("statistics", key)?
-        .ok_or_else(|| anyhow::anyhow!("input statistics {key} is missing from the store"))?;
-    let path = store.read_output(&manifest, "alpha.parquet")?;
-    let df = ParquetReader::new(std::fs::File::open(&path)?).finish()?;
-    let ls2 = job.lambda_s_px * job.lambda_s_px;
-    let est = df.column("estimator")?.str()?.clone();
-    let li = df.column("load_index")?.u32()?.clone();
-    let w = df.column("w_over_w0")?.f64()?.clone();
-    let alpha = df.column("alpha")?.f64()?.clone();
-    let k_s = df.column("k_s_px")?.f64()?.clone();
-    let k_m = df.column("k_max_px")?.f64()?.clone();
-    let mut rows: (Vec<u32>, Vec<f64>, Vec<f64>) = Default::default();
-    let mut fit: [Vec<Option<f64>>; 5] = Default::default();
-    let mut fitted_loads = 0;
-    for i in 0..df.height() {
-        if est.get(i) != Some(Estimator::DiscretePlateauPowerLaw.name()) {
-            continue;
-        }
-        let (Some(l), Some(wi)) = (li.get(i), w.get(i)) else {
-            anyhow::bail!("{}: null load in row {i}", path.display());
-        };
-        let model = match (alpha.get(i), k_s.get(i), k_m.get(i)) {
-            (Some(a), Some(s), Some(m)) => Some(PlateauPowerLaw::new(a, s, m)?),
-            _ => None,
-        };
-        fitted_loads += usize::from(model.is_some());
-        for &a_star in &A_STAR_OVER_LS2 {
-            rows.0.push(l);
-            rows.1.push(wi);
-            rows.2.push(a_star);
-            let values = match &model {
-                Some(m) => [
-                    Some(m.alpha),
-                    Some(m.a_s / ls2),
-                    Some(m.a_m / ls2),
-                    Some(m.k_archard(a_star * ls2)?),
-                    Some(m.k_upscaled(a_star * ls2)?),
-                ],
-                None => [None; 5],
-            };
-            for (c, v) in fit.iter_mut().zip(values) {
-                c.push(v);
-            }
-        }
-    }
-    let n = rows.0.len();
-    let [a, s, m, k, kk] = fit;
-    write_parquet(
-        dir,
-        "model.parquet",
-        DataFrame::new(
-            n,
-            vec![
-                col("load_index", rows.0),
-                col("w_over_w0", rows.1),
-                col("a_star_over_ls2", rows.2),
-                Column::new("alpha".into(), a),
-                Column::new("a_s_over_ls2".into(), s),
-                Column::new("a_m_over_ls2".into(), m),
-                Column::new("k_pl".into(), k),
-                Column::new("k_upscaled_pl".into(), kk),
-            ],
-        )?,
-    )?;
-    Ok(
-        json!({ "fitted_loads": fitted_loads, "source_estimator": Estimator::DiscretePlateauPowerLaw.name() }),
-    )
-}
-
-/// K_PL and 𝒦_PL against `A_m/A_s` for α = 1.5 and several `A*/A_s` (paper Fig. 6), plus
-/// the `A_m → ∞` limits as rows with `a_m_over_a_s = inf`.
-fn fig6_curves(dir: &Path) -> anyhow::Result<Value> {
-    let (mut a_star, mut a_m, mut k, mut kk) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for &s in &FIG6_A_STAR_OVER_A_S {
-        let grid = (0..FIG6_POINTS)
-            .map(|i| 10f64.powf(12.0 * i as f64 / (FIG6_POINTS - 1) as f64))
-            .chain(std::iter::once(f64::INFINITY));
-        for m in grid {
-            let model = PlateauPowerLaw::new(FIG6_ALPHA, 1.0, m)?;
-            a_star.push(s);
-            a_m.push(m);
-            k.push(model.k_archard(s)?);
-            kk.push(model.k_upscaled(s)?);
-        }
-    }
-    let n = a_star.len();
-    write_parquet(
-        dir,
-        "fig6.parquet",
-        DataFrame::new(
-            n,
-            vec![
-                col("alpha", vec![FIG6_ALPHA; n]),
-                col("a_star_over_a_s", a_star),
-                col("a_m_over_a_s", a_m),
-                col("k_pl", k),
-                col("k_upscaled_pl", kk),
-            ],
-        )?,
-    )?;
-    Ok(json!({ "rows": n }))
 }

@@ -30,7 +30,8 @@ use crate::grid::Grid;
 use crate::spectral::{Fft2, Fft2Scratch};
 
 /// How random amplitudes are drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// Fourier filtering of Gaussian white noise (random amplitude and phase).
     #[default]
@@ -58,8 +59,10 @@ impl Method {
     }
 }
 
-/// Parameters of one surface realization. Lengths in grid spacings Δl.
-#[derive(Debug, Clone, PartialEq)]
+/// Parameters of one surface realization. Lengths in grid spacings Δl. Serialised with these
+/// field names (the pipeline's surface stage hashes them as its job).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SurfaceParams {
     /// Nodes per side (`L/Δl`), even.
     pub n: usize,

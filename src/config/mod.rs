@@ -12,6 +12,9 @@ use serde::Deserialize;
 
 use crate::surface::{Method, SurfaceParams};
 
+mod figures;
+pub use figures::{FigureDecl, FigureKind};
+
 /// A configuration error: a YAML syntax/schema problem or an invalid value.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -49,6 +52,9 @@ pub struct Pipeline {
     pub profiles: BTreeMap<String, String>,
     /// Study name → study.
     pub studies: BTreeMap<String, Study>,
+    /// Figure name → what it draws (see [`FigureDecl`]).
+    #[serde(default)]
+    pub figures: BTreeMap<String, FigureDecl>,
 }
 
 /// Elastic constants.
@@ -88,13 +94,12 @@ pub struct Study {
     pub method: String,
     /// Study seed; realization i uses `surface::realization_seed(seed, i)`.
     pub seed: u64,
-    /// Loads W/W0, shared by all profiles unless a profile overrides them.
-    pub loads: Loads,
-    /// Loads (W/W0 values) whose full pressure fields are stored: each value selects the
-    /// study's load nearest to it in log scale (it must lie within the load range).
-    /// Contact maps are stored for every load.
+    /// Loads W/W0 of the study's own, shared by all profiles unless a profile overrides
+    /// them. A sweep (`min/max/count`) gives the figures that draw the study their nearest
+    /// loads; listed values are joined by the loads the study's figures ask for. Without
+    /// loads of its own, a study computes exactly what its figures ask for.
     #[serde(default)]
-    pub keep_pressure: Vec<f64>,
+    pub loads: Option<Loads>,
     /// Profile name → sizes for that profile. A study without an entry for a profile is not
     /// part of that profile.
     pub profiles: BTreeMap<String, StudyProfile>,
@@ -148,8 +153,10 @@ pub struct StudyPlan {
     pub surface: SurfaceParams,
     /// W/W0, strictly increasing.
     pub loads: Vec<f64>,
-    /// Indices into `loads` whose pressure fields are stored.
+    /// Indices into `loads` whose pressure fields are stored (the maps a figure draws).
     pub keep_pressure: Vec<usize>,
+    /// Whether `loads` is the study's own sweep (figures take their nearest loads from it).
+    pub sweep: bool,
     /// Effective modulus E*.
     pub e_star: f64,
     /// Solver tolerance and iteration cap.
@@ -253,6 +260,11 @@ impl Pipeline {
                     ));
                 }
             }
+        }
+        for (name, fig) in &self.figures {
+            fig.validate(name, origin, &self.studies, &self.profiles)?;
+        }
+        for (name, study) in &self.studies {
             for profile in study.profiles.keys() {
                 self.resolve_study(name, profile, origin)?;
             }
@@ -369,33 +381,7 @@ impl Pipeline {
                 format!("the grid L/Δl = {n} must be an even integer in [4, {MAX_N}]"),
             ));
         }
-        let loads_field;
-        let loads = match &sp.loads {
-            Some(l) => {
-                loads_field = format!("{pbase}.loads");
-                l
-            }
-            None => {
-                loads_field = format!("{base}.loads");
-                &study.loads
-            }
-        };
-        let loads = resolve_loads(loads, &loads_field, origin)?;
-        let mut keep_pressure = Vec::new();
-        for (i, &w) in study.keep_pressure.iter().enumerate() {
-            let (lo, hi) = (loads[0], loads[loads.len() - 1]);
-            if !(w.is_finite() && w >= lo * (1.0 - 1e-9) && w <= hi * (1.0 + 1e-9)) {
-                return Err(invalid(
-                    format!("{base}.keep_pressure[{i}]"),
-                    w,
-                    format!("must lie within the loads of profile '{profile}', [{lo}, {hi}] ({loads_field})"),
-                ));
-            }
-            keep_pressure
-                .push(crate::statistics::nearest_in_log(&loads, w).expect("loads are positive"));
-        }
-        keep_pressure.sort_unstable();
-        keep_pressure.dedup();
+        let (loads, sweep, keep_pressure) = self.resolve_study_loads(name, profile, origin)?;
         let lambda_s_px = res;
         let lambda_l_px = res * ratio;
         let surface = SurfaceParams {
@@ -421,10 +407,92 @@ impl Pipeline {
             surface,
             loads,
             keep_pressure,
+            sweep,
             e_star: self.material.e_star,
             tolerance: self.solver.tolerance,
             max_iterations: self.solver.max_iterations,
         })
+    }
+}
+
+impl Pipeline {
+    /// The figures of `profile`, in name order.
+    pub fn figures_of(&self, profile: &str) -> Vec<(&str, &FigureDecl)> {
+        self.figures
+            .iter()
+            .filter(|(_, f)| f.profiles.iter().any(|p| p == profile))
+            .map(|(n, f)| (n.as_str(), f))
+            .collect()
+    }
+
+    /// The loads a study computes in `profile`: its own sweep, or its own values joined by
+    /// the loads its figures ask for; whether they are a sweep; and the indices of the loads
+    /// whose pressure a figure draws.
+    fn resolve_study_loads(
+        &self,
+        name: &str,
+        profile: &str,
+        origin: &str,
+    ) -> Result<(Vec<f64>, bool, Vec<usize>), ConfigError> {
+        let study = &self.studies[name];
+        let base = format!("studies.{name}");
+        let (own, field) = match (&study.profiles[profile].loads, &study.loads) {
+            (Some(l), _) => (Some(l), format!("{base}.profiles.{profile}.loads")),
+            (None, Some(l)) => (Some(l), format!("{base}.loads")),
+            (None, None) => (None, format!("{base}.loads")),
+        };
+        let sweep = own.is_some_and(|l| l.values.is_none());
+        let mut loads = match own {
+            Some(l) => resolve_loads(l, &field, origin)?,
+            None => Vec::new(),
+        };
+        let figures = self.figures_of(profile);
+        let asked: Vec<(&str, f64)> = figures
+            .iter()
+            .filter(|(_, f)| f.uses(name, profile))
+            .flat_map(|(fname, f)| f.loads_for(name).into_iter().map(move |w| (*fname, w)))
+            .collect();
+        let invalid = |field: String, value: f64, allowed: String| ConfigError::Invalid {
+            path: origin.to_string(),
+            field,
+            value: value.to_string(),
+            allowed,
+        };
+        if sweep {
+            let (lo, hi) = (loads[0], loads[loads.len() - 1]);
+            for &(fname, w) in &asked {
+                if !(w >= lo * (1.0 - 1e-9) && w <= hi * (1.0 + 1e-9)) {
+                    return Err(invalid(
+                        format!("figures.{fname}.loads"),
+                        w,
+                        format!("draws study '{name}', whose sweep in profile '{profile}' spans [{lo}, {hi}] ({field}): the load must lie within it"),
+                    ));
+                }
+            }
+        } else {
+            for &(_, w) in &asked {
+                if !loads.contains(&w) {
+                    loads.push(w);
+                }
+            }
+            loads.sort_by(f64::total_cmp);
+        }
+        if loads.is_empty() {
+            return Err(invalid(
+                field,
+                f64::NAN,
+                format!("study '{name}' has no loads in profile '{profile}': give it `loads`, or draw it in a figure that lists the loads it needs"),
+            ));
+        }
+        let mut keep_pressure: Vec<usize> = figures
+            .iter()
+            .filter(|(_, f)| f.kind == FigureKind::Fig2 && f.uses(name, profile))
+            .flat_map(|(_, f)| f.loads.iter())
+            .map(|&w| crate::statistics::nearest_in_log(&loads, w).expect("loads are positive"))
+            .collect();
+        keep_pressure.sort_unstable();
+        keep_pressure.dedup();
+        Ok((loads, sweep, keep_pressure))
     }
 }
 

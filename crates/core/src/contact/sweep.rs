@@ -3,6 +3,7 @@
 
 use super::elastic::ElasticOperator;
 use super::solver::{ContactError, SolveReport, Solver, SolverConfig};
+use crate::grid::{Grid, GridError};
 
 /// One solved load.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -38,6 +39,32 @@ pub enum SweepError {
     BadLoad { index: usize, value: f64 },
     #[error("{0}")]
     Callback(String),
+    #[error(transparent)]
+    Grid(#[from] GridError),
+}
+
+/// The contact of a square height field (row-major, side `n`, on the unit box) at every
+/// load W/W0 of `loads`, with W0 = E*·rms slope·L² from the heights' own rms slope: the
+/// operator is built, then [`sweep`] runs. Returns the rms slope and the loads' results.
+pub fn sweep_heights(
+    heights: &[f64],
+    n: usize,
+    e_star: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    on_load: impl FnMut(usize, &Solver, &LoadResult) -> Result<(), String>,
+) -> Result<(f64, Vec<LoadResult>), SweepError> {
+    if heights.len() != n * n {
+        return Err(ContactError::BadLength {
+            expected: n * n,
+            got: heights.len(),
+        }
+        .into());
+    }
+    let grid = Grid::unit(n)?;
+    let slope = crate::surface::rms_slope(&grid, heights);
+    let op = ElasticOperator::new(grid, e_star);
+    Ok((slope, sweep(&op, heights, slope, loads, cfg, on_load)?))
 }
 
 /// Solve every load of `loads` (W/W0) on `heights` with rms slope `rms_slope`. After each

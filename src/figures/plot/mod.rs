@@ -12,10 +12,12 @@ use std::path::Path;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::colors::colormaps::ViridisRGB;
+
+mod raster;
+pub use raster::{viridis, ColorBar, RasterPlot, Rgb};
 
 /// The embedded font's bytes.
-static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 /// Size of a single plot: 6.4 × 4.8 in at 150 dpi.
 pub const SIZE_PX: (u32, u32) = (960, 720);
 /// Size of a raster figure (map with its colour bar or legend): 6.4 × 5.6 in at 150 dpi.
@@ -580,161 +582,6 @@ impl Panels {
     }
 }
 
-/// A colour bar beside a raster: values `lo … hi` mapped through viridis.
-#[derive(Clone, Debug)]
-pub struct ColorBar {
-    pub lo: f64,
-    pub hi: f64,
-    pub label: String,
-}
-
-/// An sRGB colour.
-pub type Rgb = (u8, u8, u8);
-
-/// A raster image (row 0 at the top, as numpy's `imshow`) drawn on `[0, 1]²`.
-pub struct RasterPlot {
-    pub title: String,
-    pub x_label: String,
-    pub y_label: String,
-    /// Rows × columns of RGB pixels.
-    pub rows: usize,
-    pub cols: usize,
-    pub rgb: Vec<u8>,
-    pub colorbar: Option<ColorBar>,
-    /// Legend beside the image: (label, colour), text alone without a colour.
-    pub legend: Vec<(String, Option<Rgb>)>,
-}
-
-/// Viridis colour of `t` in [0, 1].
-pub fn viridis(t: f64) -> (u8, u8, u8) {
-    let RGBColor(r, g, b) = ViridisRGB::get_color(t.clamp(0.0, 1.0));
-    (r, g, b)
-}
-
-impl RasterPlot {
-    /// Nearest-neighbour resampling of the raster to `w × h` pixels.
-    fn resampled(&self, w: u32, h: u32) -> Vec<u8> {
-        let mut out = vec![0u8; (w * h * 3) as usize];
-        for y in 0..h as usize {
-            let r = (y * self.rows) / h as usize;
-            for x in 0..w as usize {
-                let c = (x * self.cols) / w as usize;
-                let s = 3 * (r * self.cols + c);
-                let d = 3 * (y * w as usize + x);
-                out[d..d + 3].copy_from_slice(&self.rgb[s..s + 3]);
-            }
-        }
-        out
-    }
-
-    /// Write `<stem>.png` and `<stem>.svg` in `dir`.
-    pub fn write(&self, dir: &Path, stem: &str) -> DrawResult {
-        anyhow::ensure!(
-            self.rows > 0 && self.cols > 0 && self.rgb.len() == 3 * self.rows * self.cols,
-            "raster '{}' has {} bytes for {}×{} pixels",
-            self.title,
-            self.rgb.len(),
-            self.rows,
-            self.cols
-        );
-        write_scene(dir, stem, RASTER_SIZE_PX, self)
-    }
-
-    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
-        let (w, _) = root.dim_in_pixel();
-        let (main, side) = root.split_horizontally(w - 160);
-        let main = main
-            .titled(&self.title, ("sans-serif", 26))
-            .map_err(plot_err)?;
-        // Margins chosen so that the image area is square (pixels of the map are square).
-        let (margin, x_area, y_area, top) = (18u32, 60u32, 80u32, 10u32);
-        let (mw, mh) = main.dim_in_pixel();
-        let pw = mw.saturating_sub(2 * margin + y_area);
-        let ph = mh.saturating_sub(top + margin + x_area);
-        let (extra_right, extra_bottom) = if pw > ph { (pw - ph, 0) } else { (0, ph - pw) };
-        let mut builder = ChartBuilder::on(&main);
-        builder
-            .margin_left(margin)
-            .margin_right(margin + extra_right)
-            .margin_top(top)
-            .margin_bottom(margin + extra_bottom)
-            .x_label_area_size(x_area)
-            .y_label_area_size(y_area);
-        let mut chart = builder
-            .build_cartesian_2d(0.0..1.0, 1.0..0.0)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_labels(6)
-            .y_labels(6)
-            .x_label_formatter(&tick)
-            .y_label_formatter(&tick)
-            .x_desc(&self.x_label)
-            .y_desc(&self.y_label)
-            .label_style(("sans-serif", 18))
-            .axis_desc_style(("sans-serif", 20))
-            .draw()
-            .map_err(plot_err)?;
-        let (xr, yr) = chart.plotting_area().get_pixel_range();
-        let (pw, ph) = ((xr.end - xr.start) as u32, (yr.end - yr.start) as u32);
-        let buffer = self.resampled(pw, ph);
-        let element =
-            BitMapElement::<(i32, i32)>::with_owned_buffer((xr.start, yr.start), (pw, ph), buffer)
-                .ok_or_else(|| anyhow::anyhow!("raster buffer has the wrong size"))?;
-        root.draw(&element).map_err(plot_err)?;
-        // Legend entries beside the image: a coloured square and its label, or text alone.
-        let x = w as i32 - 150;
-        let mut y = yr.start;
-        for (label, color) in &self.legend {
-            if let Some((r, g, b)) = color {
-                let square = [(x, y), (x + 18, y + 18)];
-                root.draw(&Rectangle::new(square, RGBColor(*r, *g, *b).filled()))
-                    .map_err(plot_err)?;
-                root.draw(&Rectangle::new(square, BLACK))
-                    .map_err(plot_err)?;
-            }
-            let tx = if color.is_some() { x + 26 } else { x };
-            root.draw(&Text::new(label.clone(), (tx, y), ("sans-serif", 18)))
-                .map_err(plot_err)?;
-            y += 30;
-        }
-        if let Some(bar) = &self.colorbar {
-            let mut cb = ChartBuilder::on(&side);
-            cb.margin_top(yr.start)
-                .margin_bottom((main.dim_in_pixel().1 as i32 - yr.end).max(0))
-                .margin_right(10)
-                .y_label_area_size(0)
-                .right_y_label_area_size(90);
-            let mut chart = cb
-                .build_cartesian_2d(0.0..1.0, bar.lo..bar.hi)
-                .map_err(plot_err)?;
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .disable_x_axis()
-                .y_labels(8)
-                .y_label_formatter(&tick)
-                .y_desc(&bar.label)
-                .label_style(("sans-serif", 16))
-                .axis_desc_style(("sans-serif", 18))
-                .draw()
-                .map_err(plot_err)?;
-            let steps = 256;
-            let span = bar.hi - bar.lo;
-            chart
-                .draw_series((0..steps).map(|i| {
-                    let a = bar.lo + span * i as f64 / steps as f64;
-                    let b = bar.lo + span * (i + 1) as f64 / steps as f64;
-                    let (r, g, bl) = viridis((i as f64 + 0.5) / steps as f64);
-                    Rectangle::new([(0.0, a), (1.0, b)], RGBColor(r, g, bl).filled())
-                }))
-                .map_err(plot_err)?;
-        }
-        Ok(())
-    }
-}
-
 /// Something drawn on a drawing area of any backend.
 trait Scene {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult;
@@ -779,63 +626,4 @@ fn write_scene(dir: &Path, stem: &str, size: (u32, u32), scene: &impl Scene) -> 
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn linear_then_log_axis_is_continuous_and_monotonic() {
-        let c = LinLogCoord {
-            threshold: 1e-5,
-            hi: 1.0,
-        };
-        // Linear part: proportional; log part: one unit per decade; continuous at the joint.
-        assert_eq!(c.t(0.0), 0.0);
-        assert!((c.t(5e-6) - 0.5).abs() < 1e-15);
-        assert!((c.t(1e-5) - 1.0).abs() < 1e-15);
-        assert!((c.t(1e-5 * (1.0 + 1e-12)) - 1.0).abs() < 1e-11);
-        assert!((c.t(1e-3) - 3.0).abs() < 1e-12);
-        let pixels: Vec<i32> = [0.0, 2e-6, 1e-5, 1e-4, 1e-2, 1.0]
-            .iter()
-            .map(|v| c.map(v, (500, 0)))
-            .collect();
-        assert_eq!(pixels.first(), Some(&500));
-        assert_eq!(pixels.last(), Some(&0));
-        assert!(pixels.windows(2).all(|w| w[1] < w[0]), "{pixels:?}");
-        assert_eq!(
-            c.key_points(10usize),
-            vec![0.0, 5e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0]
-        );
-    }
-
-    #[test]
-    fn count_axes_label_whole_numbers_only() {
-        assert_eq!(axis_tick(&2.0, true), "2");
-        assert_eq!(axis_tick(&20.0, true), "20");
-        assert_eq!(axis_tick(&1.5, true), "");
-        assert_eq!(axis_tick(&1.5, false), "1.5");
-        assert_eq!(axis_tick(&0.001, false), "0.001");
-    }
-
-    #[test]
-    fn raster_resampling_keeps_every_pixel_when_enlarging() {
-        let raster = RasterPlot {
-            title: String::new(),
-            x_label: String::new(),
-            y_label: String::new(),
-            rows: 2,
-            cols: 3,
-            rgb: (0..18).collect(),
-            colorbar: None,
-            legend: Vec::new(),
-        };
-        let out = raster.resampled(6, 4);
-        // Each source pixel (r, c) fills the 2×2 block at (2r, 2c).
-        for y in 0..4 {
-            for x in 0..6 {
-                let (r, c) = (y / 2, x / 2);
-                let d = 3 * (y * 6 + x);
-                assert_eq!(out[d], (3 * (r * 3 + c)) as u8);
-            }
-        }
-    }
-}
+mod tests;

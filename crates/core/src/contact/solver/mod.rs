@@ -1,0 +1,496 @@
+//! Polonsky–Keer constrained conjugate gradient under load control (mean pressure imposed),
+//! pressure as the unknown (Polonsky & Keer 1999; Rey, Anciaux & Molinari 2017).
+//!
+//! Minimises `½⟨p, K p⟩ − ⟨p, h⟩` subject to `p ≥ 0` and `mean(p) = p̄`. The gap is
+//! `g = (K p − h) − min(K p − h) ≥ 0`, zero in contact.
+//!
+//! **Convergence** (docs/CONVENTIONS.md): the dimensionless complementarity error
+//! `err = Σ p_i g_i / (Σ p_i · σ_h)`, with `σ_h` the standard deviation of the heights about
+//! their mean; it is zero only at the exact discrete solution. It is never larger than
+//! Tamaas's measure (which divides by the `ddof = 1` deviation), so a tolerance here is at
+//! least as strict as the same tolerance there.
+//!
+//! **Preconditioning** (the default, [`SolverConfig::preconditioned`]): the gradient on the
+//! contact set is replaced by `z = P K⁻¹ P g` (`K⁻¹`: the multiplier `E*|q|/2`, 0 at q = 0;
+//! `P`: zero off the contact set and centred on it), with `β = ⟨g, z⟩/⟨g, z⟩_old` — the
+//! preconditioned conjugate gradient, projected as below. `K⁻¹` is the exact inverse in
+//! full contact and approximates the inverse of the restricted operator elsewhere; the
+//! iteration count then grows slowly with n (a 16-load 2048² sweep: 1090 iterations against
+//! 5399), at one more convolution per iteration. `K⁻¹ P g` is summed over the contact set
+//! as its rows leave the inverse FFT (its mean, `⟨g, z⟩` and `Σ g t_old`), so the direction
+//! pass only subtracts the mean and the line-search numerator `⟨g, t⟩` follows from those
+//! sums.
+//!
+//! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
+//! A sweep's warm start scales the previous converged state, `p` and `K p` alike
+//! (`K (s p) = s K p`), in one pass without a convolution.
+//! The deflection is updated by linearity, `u ← s (u − τ K t + K Δ)` (stored as `w = u − h`,
+//! so that the passes of an iteration read the heights only when the load is rescaled), where
+//! `Δ` is the departure of the projected pressure from the linear step at the nodes that left
+//! or re-entered the contact set: `K Δ` is summed directly when there are at most
+//! [`MAX_SPARSE`] of them, otherwise convolved by FFT (the rows of `Δ` without a change skip
+//! the forward row transform, as do the empty rows of every transformed field), and `u = K p`
+//! is recomputed exactly every [`RESYNC`] steps, before convergence is declared, and when more
+//! than one node in [`CHANGES_PER_NODE`] of a block changed. The
+//! curvature `⟨t, K t⟩` comes from Parseval's identity inside the convolution. The search
+//! direction is kept centred on the contact set (the projected conjugate gradient), so the
+//! step preserves the load. The direction pass is fused with the forward FFT (each row of
+//! `t` is handed to the transform as it is made) and the update pass with the inverse FFT
+//! (each row of `K t` is consumed as it comes out, never stored): the line search needs
+//! only `⟨t, K t⟩`, which is known before the inverse transform starts. Between the two, the
+//! column transforms, the multiplier and Parseval's sum run per group of columns in cache
+//! ([`crate::spectral::Fft2::convolve_start`]); an exact recomputation of `u = K p` gathers
+//! the next gradient statistics from the rows of `K p` as they come out. All reductions use
+//! the FFT's fixed row blocks, so results are bit-identical whatever the number of threads.
+//!
+//! **Defined behaviour where the method breaks down**:
+//! - zero load: `p = 0`, no contact, converged in 0 iterations;
+//! - flat surface (σ_h = 0): uniform `p = p̄`, full contact, converged in 0 iterations;
+//! - single-node contact set: the centred gradient vanishes and the CG step is 0/0; the step
+//!   falls back to a Jacobi-scaled steepest descent on the re-admitted nodes (`τ = 1/K_ii`),
+//!   and a single-node solution that is the discrete optimum has error exactly 0;
+//! - all pressure projected away: reset to the uniform pressure, restart;
+//! - non-finite heights or loads, wrong lengths: an error before solving;
+//! - no progress for `stall_window` iterations, or a non-finite error: `Stalled`;
+//!   `max_iterations` reached: `MaxIterations`. Neither is ever a result that looks valid.
+
+mod passes;
+mod precond;
+mod report;
+mod rows;
+#[cfg(test)]
+mod tests;
+
+use rayon::prelude::*;
+
+use super::elastic::{ElasticOperator, OperatorWorkspace};
+pub use report::{SolveReport, Status};
+use rows::{GradientStats, UpdateAcc, LANES};
+
+/// When at most this many nodes leave or re-enter the contact set in an iteration, the
+/// deflection is corrected by direct summation (all nodes' kernel rows added row by row, in
+/// the same pass as the next gradient statistics) instead of a new convolution. Limits of
+/// 32–128 save 10–20 % of the convolutions but cost as much in summation
+/// (docs/BENCHMARKS.md).
+pub const MAX_SPARSE: usize = 6;
+/// Exact recomputation of `u = K p` after this many linear updates.
+pub const RESYNC: usize = 32;
+
+/// The change lists hold up to one node in `CHANGES_PER_NODE` of each block; an update that
+/// changes more recomputes `u = K p` instead of correcting it.
+pub const CHANGES_PER_NODE: usize = 16;
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverConfig {
+    /// Threshold on the complementarity error.
+    pub tolerance: f64,
+    /// Iteration cap.
+    pub max_iterations: usize,
+    /// Declare `Stalled` when the error has not reached a new minimum for this many
+    /// iterations.
+    pub stall_window: usize,
+    /// Precondition the conjugate gradient with the inverse elastic operator restricted to
+    /// the contact set, `z = P K⁻¹ P g` (`P`: zero off the set, centred on it): one more
+    /// convolution per iteration, and an iteration count that grows much more slowly with
+    /// n (3.3 times faster for a 16-load 2048² sweep; docs/BENCHMARKS.md). Same fixed point
+    /// and error measure. The default; `false` is the plain Polonsky–Keer iteration.
+    pub preconditioned: bool,
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-10,
+            max_iterations: 5000,
+            stall_window: 1000,
+            preconditioned: true,
+        }
+    }
+}
+
+/// Invalid input to the solver.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ContactError {
+    #[error("heights have {got} values but the grid has {expected} (n × n)")]
+    BadLength { expected: usize, got: usize },
+    #[error("height at row {row}, column {col} is {value}: heights must be finite")]
+    NonFinite { row: usize, col: usize, value: f64 },
+    #[error("start pressure at row {row}, column {col} is {value}: it must be finite and ≥ 0")]
+    BadStart { row: usize, col: usize, value: f64 },
+    #[error("mean pressure {0} is invalid: it must be finite and ≥ 0")]
+    BadLoad(f64),
+    #[error("solver settings invalid: {0}")]
+    BadConfig(String),
+}
+
+/// A solver bound to one operator and one surface; it keeps its fields between solves so
+/// that a load sweep warm-starts each step from the previous solution (scaled to the new
+/// load).
+pub struct Solver<'a> {
+    op: &'a ElasticOperator,
+    heights: &'a [f64],
+    height_std: f64,
+    flat: bool,
+    ws: OperatorWorkspace,
+    pressure: Vec<f64>,
+    /// `w = u − h`, the deflection minus the heights (the gap up to the rigid-body shift),
+    /// stored instead of `u` so that the passes of an iteration need not read `h`.
+    separation: Vec<f64>,
+    /// The search direction `t`.
+    direction: Vec<f64>,
+    /// `min w` after a solve: the gap is `w − gap_level`.
+    gap_level: f64,
+    /// Values per work block: the operator's fixed row blocks (`rows_per_block · n`), so
+    /// that the passes fused with the FFT and the plain passes reduce over the same blocks
+    /// and sums do not depend on the thread count.
+    chunk: usize,
+    /// Per block: lane sums of the plain reductions (a sum, the line search's numerator).
+    lane_sums: Vec<[f64; LANES]>,
+    /// Per block: gradient statistics of the passes not fused with an FFT.
+    block_stats: Vec<GradientStats>,
+    /// Per block: accumulators of the update pass fused with the inverse FFT.
+    update_acc: Vec<UpdateAcc>,
+    /// Per-block lane sums of [`Solver::precondition`].
+    precondition_acc: Vec<[[f64; LANES]; 5]>,
+    /// Per block: the nodes whose projection departed from the linear step, `(node, Δ)` in
+    /// node order, up to the list's capacity (one node in [`CHANGES_PER_NODE`] of the
+    /// block; never reallocated).
+    changes: Vec<Vec<(usize, f64)>>,
+    sparse: Vec<(usize, f64)>,
+    /// The preconditioned gradient `z` (allocated at the first preconditioned solve).
+    preconditioned: Vec<f64>,
+    has_solution: bool,
+    /// Whether `separation` is `K p − h` for the current `pressure`, computed exactly (after
+    /// a converged solve; not after [`Self::set_start`]).
+    separation_exact: bool,
+}
+
+impl<'a> Solver<'a> {
+    /// Check the surface and allocate every buffer: 4 n² doubles (the transform's rows, `p`,
+    /// `w`, `t`), n²/8 for the lists of changed nodes, and one more n² at the first
+    /// preconditioned solve (`z`); besides the heights and the operator's kernel (n²/2).
+    pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
+        let n = op.grid().n();
+        let len = n * n;
+        if heights.len() != len {
+            return Err(ContactError::BadLength {
+                expected: len,
+                got: heights.len(),
+            });
+        }
+        if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(ContactError::NonFinite {
+                row: i / n,
+                col: i % n,
+                value: *v,
+            });
+        }
+        let mean = heights.iter().sum::<f64>() / len as f64;
+        let height_std =
+            (heights.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / len as f64).sqrt();
+        let chunk = op.rows_per_block() * n;
+        let blocks = len.div_ceil(chunk);
+        let (lo, hi) = heights
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        Ok(Self {
+            op,
+            heights,
+            height_std,
+            flat: lo == hi,
+            ws: op.make_workspace(),
+            pressure: vec![0.0; len],
+            separation: vec![0.0; len],
+            direction: vec![0.0; len],
+            gap_level: 0.0,
+            chunk,
+            lane_sums: vec![[0.0; LANES]; blocks],
+            block_stats: vec![GradientStats::EMPTY; blocks],
+            update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
+            precondition_acc: vec![[[0.0; LANES]; 5]; blocks],
+            changes: (0..blocks)
+                .map(|_| Vec::with_capacity((chunk / CHANGES_PER_NODE).max(MAX_SPARSE)))
+                .collect(),
+            sparse: Vec::with_capacity(MAX_SPARSE),
+            preconditioned: Vec::new(),
+            has_solution: false,
+            separation_exact: false,
+        })
+    }
+
+    /// Standard deviation of the heights (the error's length scale).
+    pub fn height_std(&self) -> f64 {
+        self.height_std
+    }
+
+    /// Pressure of the last solve (row-major).
+    pub fn pressure(&self) -> &[f64] {
+        &self.pressure
+    }
+
+    /// Gap `(K p − h) − min(K p − h)` of the last solve (row-major), computed as it is read.
+    pub fn gap(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        let level = self.gap_level;
+        self.separation.iter().map(move |&w| w - level)
+    }
+
+    /// Number of nodes in contact (`p > 0`) in the last solve.
+    pub fn contact_count(&self) -> usize {
+        self.pressure.iter().filter(|&&p| p > 0.0).count()
+    }
+
+    /// Start the next [`Self::solve`] from `pressure` (row-major, finite, ≥ 0, not all
+    /// zero) instead of the previous solution; like the previous solution, it is scaled to
+    /// the new load first. For warm starts other than the sweep's own (e.g. extrapolation
+    /// over loads, compared in `cargo bench --bench warm_start`).
+    pub fn set_start(&mut self, pressure: &[f64]) -> Result<(), ContactError> {
+        let n = self.op.grid().n();
+        if pressure.len() != self.pressure.len() {
+            return Err(ContactError::BadLength {
+                expected: self.pressure.len(),
+                got: pressure.len(),
+            });
+        }
+        if let Some((i, v)) = pressure
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(ContactError::BadStart {
+                row: i / n,
+                col: i % n,
+                value: *v,
+            });
+        }
+        if pressure.iter().all(|&p| p == 0.0) {
+            return Err(ContactError::BadConfig(
+                "a start pressure must not be zero everywhere".into(),
+            ));
+        }
+        self.pressure.copy_from_slice(pressure);
+        self.has_solution = true;
+        self.separation_exact = false;
+        Ok(())
+    }
+
+    /// Solve for the mean pressure `mean_pressure` (≥ 0), warm-starting from the previous
+    /// solution scaled to the new load if there is one.
+    pub fn solve(
+        &mut self,
+        mean_pressure: f64,
+        cfg: &SolverConfig,
+    ) -> Result<SolveReport, ContactError> {
+        if !(mean_pressure.is_finite() && mean_pressure >= 0.0) {
+            return Err(ContactError::BadLoad(mean_pressure));
+        }
+        if !(cfg.tolerance > 0.0 && cfg.tolerance.is_finite()) || cfg.max_iterations == 0 {
+            return Err(ContactError::BadConfig(format!(
+                "tolerance {} must be finite and > 0, max_iterations {} must be ≥ 1",
+                cfg.tolerance, cfg.max_iterations
+            )));
+        }
+        let len = self.pressure.len();
+        if cfg.preconditioned && self.preconditioned.len() != len {
+            self.preconditioned = vec![0.0; len];
+        }
+        let target = mean_pressure;
+        let mut report = SolveReport {
+            status: Status::Converged,
+            iterations: 0,
+            error: 0.0,
+            error_history: Vec::with_capacity(cfg.max_iterations + 2),
+            convolutions: 0,
+            mean_pressure,
+        };
+
+        if target == 0.0 || self.flat {
+            self.pressure.fill(target);
+            // u = 0: w = −h.
+            let h = self.heights;
+            self.separation
+                .par_iter_mut()
+                .zip(h.par_iter())
+                .for_each(|(w, &h)| *w = -h);
+            self.finish_gap();
+            self.has_solution = target > 0.0;
+            self.separation_exact = true;
+            report.error_history.push(0.0);
+            return Ok(report);
+        }
+
+        // Start: the previous solution scaled to the new load, or uniform pressure, with the
+        // gradient statistics of that state (every update below computes them in the pass
+        // that makes the state). After a converged solve `w = K p − h` is exact, and
+        // `K (s p) = s K p`, so the scaled start needs a pass, not a convolution.
+        let previous_total: f64 = self.chunked_sum(|p| p);
+        let warm = self.has_solution && previous_total > 0.0;
+        let scale = if warm {
+            target * len as f64 / previous_total
+        } else {
+            1.0
+        };
+        let mut stats = if warm && self.separation_exact {
+            self.sparse.clear();
+            self.sparse_update(scale, 0.0)
+        } else {
+            if warm {
+                self.pressure.par_iter_mut().for_each(|p| *p *= scale);
+            } else {
+                self.pressure.fill(target);
+            }
+            report.convolutions += 1;
+            self.exact_deflection(1.0, 0.0)
+        };
+        self.has_solution = false;
+        self.separation_exact = false;
+
+        let mut exact = true;
+        let mut linear_steps = 0usize;
+        let mut shift = 0.0f64;
+        let mut restart = true;
+        let mut g_norm_old = 0.0f64;
+        let mut best = f64::INFINITY;
+        let mut best_at = 0usize;
+        let mut direction_mean = 0.0f64;
+        let self_influence = self.op.self_influence();
+
+        loop {
+            // Gradient statistics on the contact set.
+            let GradientStats {
+                contact_nodes: n_s,
+                sum_g,
+                sum_g2,
+                sum_pg,
+                sum_p,
+                min_g,
+            } = stats;
+            let mean_g = sum_g / n_s;
+            let g_norm = (sum_g2 - n_s * mean_g * mean_g).max(0.0);
+            let error = (sum_pg - min_g * sum_p) / (sum_p * self.height_std);
+
+            if error <= cfg.tolerance && !exact {
+                // Confirm with an exact deflection (and the exact load) before declaring
+                // convergence.
+                stats = self.exact_deflection(target * len as f64 / sum_p, shift);
+                report.convolutions += 1;
+                exact = true;
+                linear_steps = 0;
+                continue;
+            }
+            report.error_history.push(error);
+            report.error = error;
+            if !error.is_finite() {
+                report.status = Status::Stalled;
+                break;
+            }
+            if error <= cfg.tolerance {
+                report.status = Status::Converged;
+                break;
+            }
+            if error < best {
+                best = error;
+                best_at = report.iterations;
+            } else if report.iterations - best_at >= cfg.stall_window {
+                report.status = Status::Stalled;
+                break;
+            }
+            if report.iterations >= cfg.max_iterations {
+                report.status = Status::MaxIterations;
+                break;
+            }
+            report.iterations += 1;
+
+            // Pass 2, fused with the forward FFT: conjugate direction on the contact set,
+            // kept centred there; then K t and the curvature ⟨t, K t⟩ (Parseval).
+            let level = shift + mean_g;
+            // ⟨g, z⟩ replaces ⟨g, g⟩ in β when preconditioned.
+            let preconditioned = if cfg.preconditioned {
+                report.convolutions += 1;
+                Some(self.precondition(level))
+            } else {
+                None
+            };
+            let g_dot = preconditioned.map_or(g_norm, |(_, g_dot, _, _)| g_dot);
+            let beta = if restart || g_norm_old <= 0.0 {
+                0.0
+            } else {
+                g_dot / g_norm_old
+            };
+            g_norm_old = g_dot;
+            let (denominator, numerator) = match preconditioned {
+                // Σ_S g t = ⟨g, z − z̄⟩ + β (Σ_S g t_old − t̄ Σ_S g), from the sums of
+                // `precondition`, so the direction pass reads t, p and z only.
+                Some((z_mean, g_dot, g_t_old, g_sum)) => (
+                    self.preconditioned_direction_and_transform(z_mean, beta, direction_mean),
+                    g_dot + beta * (g_t_old - direction_mean * g_sum),
+                ),
+                None => self.direction_and_transform(level, beta, direction_mean),
+            };
+            report.convolutions += 1;
+            // Exact line search.
+            let tau = if denominator > 0.0 && denominator.is_finite() && numerator.is_finite() {
+                numerator / denominator
+            } else {
+                1.0 / self_influence
+            };
+
+            // Pass 3, fused with the inverse FFT: step, project, re-admit interpenetrating
+            // nodes; speculatively update the deflection linearly (u − τ K t) and gather the
+            // next gradient statistics.
+            let new_shift = level;
+            let (totals, linear_stats) = self.update_from_transform(tau, level, new_shift);
+            let total = totals.sum_p;
+            direction_mean = if totals.contact_nodes > 0.0 {
+                totals.sum_t_kept / totals.contact_nodes
+            } else {
+                0.0
+            };
+            restart = totals.readmitted > 0;
+            shift = new_shift;
+            if total <= 0.0 {
+                self.pressure.fill(target);
+                stats = self.exact_deflection(1.0, shift);
+                report.convolutions += 1;
+                exact = true;
+                restart = true;
+                continue;
+            }
+            let scale = target * len as f64 / total;
+            if totals.changed == 0 && linear_steps + 1 < RESYNC {
+                // Nothing left or entered the set: p and u are both exact linear updates and
+                // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next
+                // exact step.
+                stats = linear_stats;
+                exact = false;
+                linear_steps += 1;
+            } else if totals.changed <= MAX_SPARSE
+                && linear_steps + 1 < RESYNC
+                && self.gather_changes()
+            {
+                stats = self.sparse_update(scale, shift);
+                exact = false;
+                linear_steps += 1;
+            } else if linear_steps + 1 < RESYNC && self.changes_listed() {
+                stats = self.fft_correction(scale, shift);
+                report.convolutions += 1;
+                exact = false;
+                linear_steps += 1;
+            } else {
+                stats = self.exact_deflection(scale, shift);
+                report.convolutions += 1;
+                exact = true;
+                linear_steps = 0;
+            }
+        }
+
+        self.finish_gap();
+        self.has_solution = report.status == Status::Converged;
+        // A converged state was confirmed by an exact deflection (or is the flat or zero
+        // solution, `w = −h`).
+        self.separation_exact = self.has_solution;
+        Ok(report)
+    }
+}

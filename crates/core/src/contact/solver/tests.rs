@@ -1,0 +1,103 @@
+//! Unit tests of the solver's internal passes.
+
+use super::rows::GradientStats;
+use super::*;
+use crate::grid::Grid;
+
+/// The FFT correction `u ← s (u + K Δ)` from the change lists equals an exact
+/// recomputation `u = s K (p + Δ)`, with the same gradient statistics, when `Δ` sits on a
+/// few rows (the others skip their forward row transform) or on many.
+#[test]
+fn fft_correction_equals_an_exact_recomputation() {
+    let n = 64;
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let heights: Vec<f64> = (0..n * n)
+        .map(|i| ((i * 7919 % 1009) as f64 / 1009.0 - 0.5) * 0.01)
+        .collect();
+    // A pressure on rows 10–29 only; changes on rows 3, 12 and 40, or on every row.
+    let start: Vec<f64> = (0..n * n)
+        .map(|i| {
+            let row = i / n;
+            if (10..30).contains(&row) {
+                (i * 31 % 97) as f64 / 97.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let few: Vec<(usize, f64)> = (0..40)
+        .map(|k| {
+            let row = [3, 12, 40][k % 3];
+            (row * n + (k * 13) % n, 0.01 * (k as f64 + 1.0))
+        })
+        .collect();
+    let many: Vec<(usize, f64)> = (0..n).map(|r| (r * n + (r * 5) % n, 0.02)).collect();
+    for changes in [few, many] {
+        let (scale, shift) = (0.9, 0.003);
+        let mut solver = Solver::new(&op, &heights).unwrap();
+        solver.pressure.copy_from_slice(&start);
+        solver.exact_deflection(1.0, 0.0);
+        let mut changed = start.clone();
+        let mut sorted = changes.clone();
+        sorted.sort_by_key(|c| c.0);
+        sorted.dedup_by_key(|c| c.0);
+        for list in &mut solver.changes {
+            list.clear();
+        }
+        for acc in &mut solver.update_acc {
+            acc.changed = 0;
+        }
+        for &(i, d) in &sorted {
+            changed[i] += d;
+            solver.pressure[i] += d;
+            let b = i / solver.chunk;
+            solver.changes[b].push((i, d));
+            solver.update_acc[b].changed += 1;
+        }
+        assert!(solver.changes_listed());
+        let stats = solver.fft_correction(scale, shift);
+
+        let mut exact = Solver::new(&op, &heights).unwrap();
+        exact.pressure.copy_from_slice(&changed);
+        let expected = exact.exact_deflection(scale, shift);
+        let u_max = exact.separation.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (i, (a, b)) in solver.separation.iter().zip(&exact.separation).enumerate() {
+            assert!((a - b).abs() <= 1e-13 * u_max, "node {i}: {a} vs {b}");
+        }
+        assert_eq!(solver.pressure, exact.pressure);
+        let fields = |s: &GradientStats| {
+            [
+                ("contact_nodes", s.contact_nodes),
+                ("sum_g", s.sum_g),
+                ("sum_g2", s.sum_g2),
+                ("sum_pg", s.sum_pg),
+                ("sum_p", s.sum_p),
+                ("min_g", s.min_g),
+            ]
+        };
+        for ((name, got), (_, want)) in fields(&stats).into_iter().zip(fields(&expected)) {
+            let tol = 1e-11 * want.abs().max(1e-300);
+            assert!(
+                (got - want).abs() <= tol,
+                "statistic {name}: {got} vs {want}"
+            );
+        }
+    }
+}
+
+/// A block that changed more nodes than its list holds forces an exact recomputation.
+#[test]
+fn overflowing_change_lists_are_detected() {
+    let n = 32;
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let heights: Vec<f64> = (0..n * n).map(|i| (i % 7) as f64).collect();
+    let mut solver = Solver::new(&op, &heights).unwrap();
+    let cap = solver.changes[0].capacity();
+    for k in 0..cap {
+        solver.changes[0].push((k, 1.0));
+    }
+    solver.update_acc[0].changed = cap;
+    assert!(solver.changes_listed());
+    solver.update_acc[0].changed = cap + 1;
+    assert!(!solver.changes_listed());
+}

@@ -1,0 +1,193 @@
+use super::*;
+use std::f64::consts::PI;
+
+/// Naive 2-D DFT of a real field, returned in this module's kx-major half layout.
+fn naive_half_dft(field: &[f64], n: usize) -> Vec<Complex64> {
+    let h = n / 2 + 1;
+    let mut out = vec![Complex64::new(0.0, 0.0); h * n];
+    for kx in 0..h {
+        for ky in 0..n {
+            let mut acc = Complex64::new(0.0, 0.0);
+            for iy in 0..n {
+                for ix in 0..n {
+                    let phase = -2.0 * PI * ((kx * ix + ky * iy) % n) as f64 / n as f64;
+                    acc += field[iy * n + ix] * Complex64::new(phase.cos(), phase.sin());
+                }
+            }
+            out[kx * n + ky] = acc;
+        }
+    }
+    out
+}
+
+/// The per-thread working rows are taken again by a transform started from inside a
+/// `produce` callback (on a one-thread pool every nested task runs on the same thread):
+/// the nested call gets buffers of its own, and both results equal the same transforms
+/// run one after the other.
+#[test]
+fn a_transform_nested_in_a_callback_gets_its_own_working_rows() {
+    let n = 24;
+    let fft = Fft2::new(n);
+    let (a, b) = (
+        pseudo_random_field(n),
+        pseudo_random_field(n)
+            .iter()
+            .map(|v| v * v)
+            .collect::<Vec<_>>(),
+    );
+    let mut scratch = fft.make_scratch();
+    let (mut expected_a, mut expected_b) = (fft.make_spectrum(), fft.make_spectrum());
+    fft.forward(&a, &mut expected_a, &mut scratch);
+    fft.forward(&b, &mut expected_b, &mut scratch);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let nested = std::sync::Mutex::new((fft.make_scratch(), fft.make_spectrum(), 0usize));
+    let mut got_a = fft.make_spectrum();
+    pool.install(|| {
+        let block_len = fft.rows_per_block() * n;
+        fft.forward_rows(
+            a.par_chunks(block_len),
+            |rows: &mut &[f64], r, buf| {
+                let mut guard = nested.lock().unwrap();
+                let (inner_scratch, inner_out, calls) = &mut *guard;
+                fft.forward(&b, inner_out, inner_scratch);
+                *calls += 1;
+                buf.copy_from_slice(&rows[r * n..(r + 1) * n]);
+            },
+            &mut got_a,
+            &mut scratch,
+        );
+    });
+    let (_, got_b, calls) = nested.into_inner().unwrap();
+    assert_eq!(calls, n, "one nested transform per row");
+    assert_eq!(got_a, expected_a);
+    assert_eq!(got_b, expected_b);
+}
+
+/// The column gather and scatter of the fused convolution move exactly the values of
+/// columns `kx0 ..` (the AVX path for full groups of four, the plain loop for the last,
+/// narrower one), and scattering back what was gathered restores the array.
+#[test]
+fn column_gather_and_scatter_move_the_right_values() {
+    for n in [2, 6, 8, 10, 64] {
+        let h = n / 2 + 1;
+        let original: Vec<Complex64> = (0..n * h)
+            .map(|i| Complex64::new(i as f64, -(i as f64) - 0.5))
+            .collect();
+        let mut rows = original.clone();
+        for kx0 in (0..h).step_by(GATHER) {
+            let w = GATHER.min(h - kx0);
+            let mut cols = vec![Complex64::new(f64::NAN, f64::NAN); w * n];
+            // SAFETY: `rows` holds n·h values and kx0 + w ≤ h.
+            unsafe { gather_columns(rows.as_ptr(), n, h, kx0, &mut cols) };
+            for j in 0..w {
+                for r in 0..n {
+                    assert_eq!(
+                        cols[j * n + r],
+                        original[r * h + kx0 + j],
+                        "n {n}, kx {}",
+                        kx0 + j
+                    );
+                }
+            }
+            for c in cols.iter_mut() {
+                *c = -*c;
+            }
+            // SAFETY: as above.
+            unsafe { scatter_columns(rows.as_mut_ptr(), n, h, kx0, &cols) };
+        }
+        let negated: Vec<Complex64> = original.iter().map(|c| -*c).collect();
+        assert_eq!(
+            rows, negated,
+            "n {n}: every value scattered back once, to its place"
+        );
+    }
+}
+
+fn pseudo_random_field(n: usize) -> Vec<f64> {
+    // A fixed, platform-independent sequence (LCG) is enough for a transform test.
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    (0..n * n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect()
+}
+
+/// Also with empty rows (zeros, some negative zeros), whose row transform is skipped.
+#[test]
+fn forward_matches_naive_dft_and_inverse_round_trips() {
+    for (n, empty_rows) in [2usize, 4, 6, 8, 16, 30, 64, 96]
+        .into_iter()
+        .flat_map(|n| [(n, false), (n, true)])
+    {
+        let mut field = pseudo_random_field(n);
+        if empty_rows {
+            for (r, row) in field.chunks_exact_mut(n).enumerate() {
+                if r % 3 != 2 {
+                    row.fill(if r % 2 == 0 { 0.0 } else { -0.0 });
+                }
+            }
+        }
+        let fft = Fft2::new(n);
+        let mut scratch = fft.make_scratch();
+        let mut spec = fft.make_spectrum();
+        fft.forward(&field, &mut spec, &mut scratch);
+        let reference = naive_half_dft(&field, n);
+        let scale = reference.iter().map(|c| c.norm()).fold(0.0, f64::max);
+        for (a, b) in spec.iter().zip(&reference) {
+            assert!(
+                (a - b).norm() <= 1e-12 * scale.max(1.0),
+                "n={n}: {a} vs {b}"
+            );
+        }
+        let mut back = vec![0.0; n * n];
+        fft.inverse(&mut spec, &mut back, &mut scratch);
+        let norm = (n * n) as f64;
+        for (a, b) in back.iter().zip(&field) {
+            assert!(
+                (a / norm - b).abs() <= 1e-14,
+                "n={n}: round trip {a} vs {b}"
+            );
+        }
+    }
+}
+
+#[test]
+fn zero_rows_are_recognised_at_every_position() {
+    // ±0 anywhere is zero; one non-zero value (smallest subnormal, NaN, negative) at any
+    // position, in a full group of eight or in the remainder, is not.
+    for len in [1usize, 7, 8, 9, 16, 21] {
+        let mut row = vec![0.0; len];
+        assert!(all_zero(&row));
+        row.iter_mut().step_by(2).for_each(|v| *v = -0.0);
+        assert!(all_zero(&row), "−0 counts as zero (len {len})");
+        for i in 0..len {
+            for bad in [f64::from_bits(1), f64::NAN, -3.5, f64::INFINITY] {
+                let mut r = row.clone();
+                r[i] = bad;
+                assert!(!all_zero(&r), "len {len}, value {bad} at {i}");
+            }
+        }
+    }
+}
+
+#[test]
+fn transpose_handles_ragged_tiles() {
+    let (rows, cols) = (37usize, 70usize);
+    let src: Vec<Complex64> = (0..rows * cols)
+        .map(|i| Complex64::new(i as f64, -(i as f64)))
+        .collect();
+    let mut dst = vec![Complex64::new(0.0, 0.0); rows * cols];
+    transpose(&src, &mut dst, rows, cols);
+    for r in 0..rows {
+        for c in 0..cols {
+            assert_eq!(dst[c * rows + r], src[r * cols + c]);
+        }
+    }
+}

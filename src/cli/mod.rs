@@ -1,0 +1,3 @@
+//! Command groups of the `wearcoef` binary.
+
+pub mod plan;

@@ -1,0 +1,194 @@
+//! `wearcoef plan` (the DAG of a profile, its cost and what the store holds) and
+//! `wearcoef exec` (run given instances of a plan file: the scheduler-neutral core that a
+//! cluster's job arrays, or a plain shell loop, call).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use serde::Serialize;
+use serde_json::json;
+
+use wearcoef::config::Pipeline;
+use wearcoef::pipeline::cost::{machine_memory_bytes, CostModel};
+use wearcoef::pipeline::plan::{Instance, Plan};
+use wearcoef::pipeline::runner;
+use wearcoef::pipeline::store::Store;
+use wearcoef::pipeline::UsageError;
+
+/// Totals of a plan, per stage and overall.
+#[derive(Debug, Serialize)]
+pub struct Totals {
+    pub instances: usize,
+    pub cached: usize,
+    pub levels: usize,
+    /// Estimated wall hours of the missing instances, run one after another with all of
+    /// `cores` cores each.
+    pub missing_hours: f64,
+    /// The same in core-hours (`missing_hours × cores`).
+    pub missing_core_hours: f64,
+    /// Core-hours of every instance, cached or not (the campaign from nothing).
+    pub total_core_hours: f64,
+    pub cores: usize,
+    /// The largest instance's estimated peak memory and its stage and key.
+    pub largest_peak_bytes: u64,
+    pub largest: Option<String>,
+    pub machine_memory_bytes: Option<u64>,
+    pub per_stage: BTreeMap<String, StageTotals>,
+}
+
+#[derive(Debug, Default, Serialize)]
+pub struct StageTotals {
+    pub instances: usize,
+    pub cached: usize,
+    pub core_hours: f64,
+    pub largest_peak_bytes: u64,
+}
+
+pub fn totals(plan: &Plan, cores: usize) -> Totals {
+    let core_hours = |i: &Instance| i.estimate.seconds * cores as f64 / 3600.0;
+    let mut per_stage: BTreeMap<String, StageTotals> = BTreeMap::new();
+    for i in &plan.instances {
+        let t = per_stage.entry(i.stage.clone()).or_default();
+        t.instances += 1;
+        t.cached += usize::from(i.cached);
+        t.core_hours += core_hours(i);
+        t.largest_peak_bytes = t.largest_peak_bytes.max(i.estimate.peak_bytes);
+    }
+    let missing: Vec<&Instance> = plan.instances.iter().filter(|i| !i.cached).collect();
+    let missing_hours = missing.iter().map(|i| i.estimate.seconds).sum::<f64>() / 3600.0;
+    let largest = plan.largest();
+    Totals {
+        instances: plan.instances.len(),
+        cached: plan.instances.len() - missing.len(),
+        levels: plan.levels(),
+        missing_hours,
+        missing_core_hours: missing_hours * cores as f64,
+        total_core_hours: plan.instances.iter().map(core_hours).sum(),
+        cores,
+        largest_peak_bytes: largest.map_or(0, |i| i.estimate.peak_bytes),
+        largest: largest.map(|i| format!("{} {}", i.stage, i.key)),
+        machine_memory_bytes: machine_memory_bytes(),
+        per_stage,
+    }
+}
+
+/// Plan a profile against a store, with estimates.
+pub fn make_plan(
+    pipeline: &Pipeline,
+    origin: &str,
+    data: &std::path::Path,
+    profile: &str,
+    targets: &[String],
+) -> anyhow::Result<Plan> {
+    let store = Store::new(data);
+    let mut plan = Plan::build(pipeline, origin, profile, targets)?;
+    plan.mark(&store, &CostModel::fit(&store)?)?;
+    Ok(plan)
+}
+
+/// Print a plan: the whole DAG as one JSON object, or a table of totals per stage.
+pub fn print_plan(plan: &Plan, json_out: bool, out: Option<&PathBuf>) -> anyhow::Result<()> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let totals = totals(plan, cores);
+    let doc = json!({
+        "profile": plan.profile,
+        "totals": totals,
+        "instances": plan.instances,
+    });
+    if let Some(path) = out {
+        crate::write_atomically(path, |tmp| {
+            std::fs::write(tmp, serde_json::to_vec_pretty(&doc)?)?;
+            Ok(())
+        })?;
+    }
+    if json_out {
+        println!("{}", serde_json::to_string(&doc)?);
+        return Ok(());
+    }
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    println!(
+        "{:<11} {:>9} {:>7} {:>11} {:>12}",
+        "stage", "instances", "cached", "core-hours", "largest GiB"
+    );
+    for (stage, t) in &totals.per_stage {
+        println!(
+            "{:<11} {:>9} {:>7} {:>11.3} {:>12.2}",
+            stage,
+            t.instances,
+            t.cached,
+            t.core_hours,
+            gib(t.largest_peak_bytes)
+        );
+    }
+    println!(
+        "profile {}: {} instances in {} levels, {} cached; {:.2} core-hours from nothing, {:.2} core-hours ({:.2} h on {} cores) for what is missing; largest instance {:.2} GiB ({})",
+        plan.profile,
+        totals.instances,
+        totals.levels,
+        totals.cached,
+        totals.total_core_hours,
+        totals.missing_core_hours,
+        totals.missing_hours,
+        cores,
+        gib(totals.largest_peak_bytes),
+        totals.largest.as_deref().unwrap_or("-"),
+    );
+    Ok(())
+}
+
+/// `I/K`: the I-th (0-based) of K contiguous slices.
+pub fn parse_slice(s: &str) -> Result<(usize, usize), String> {
+    let (i, k) = s
+        .split_once('/')
+        .ok_or_else(|| format!("--slice {s}: write I/K, e.g. 0/4"))?;
+    let (i, k): (usize, usize) = (
+        i.parse()
+            .map_err(|_| format!("--slice {s}: I is not a whole number"))?,
+        k.parse()
+            .map_err(|_| format!("--slice {s}: K is not a whole number"))?,
+    );
+    if k == 0 || i >= k {
+        return Err(format!("--slice {s}: need 0 ≤ I < K"));
+    }
+    Ok((i, k))
+}
+
+/// Run the instances of a plan file (optionally one level, optionally one slice of it).
+pub fn exec(
+    plan_path: &std::path::Path,
+    data: &std::path::Path,
+    level: Option<usize>,
+    slice: Option<(usize, usize)>,
+    jobs: usize,
+    quiet: bool,
+) -> anyhow::Result<serde_json::Value> {
+    let text = std::fs::read_to_string(plan_path)
+        .map_err(|e| UsageError(format!("--plan {}: {e}", plan_path.display())))?;
+    let plan: Plan = serde_json::from_str(&text).map_err(|e| {
+        UsageError(format!(
+            "--plan {}: not a plan made by `wearcoef plan --out`: {e}",
+            plan_path.display()
+        ))
+    })?;
+    let mut chosen: Vec<Instance> = plan
+        .instances
+        .into_iter()
+        .filter(|i| level.is_none_or(|l| i.level == l))
+        .collect();
+    if let Some((i, k)) = slice {
+        let per = chosen.len().div_ceil(k);
+        chosen = chosen.into_iter().skip(i * per).take(per).collect();
+    }
+    for inst in &chosen {
+        let stage = wearcoef::stages::find(&inst.stage).ok_or_else(|| {
+            UsageError(format!(
+                "the plan names stage '{}', which this build does not have",
+                inst.stage
+            ))
+        })?;
+        stage.check(&inst.params)?;
+    }
+    let store = Store::new(data);
+    let computed = runner::execute(&store, &chosen, jobs, quiet)?;
+    Ok(json!({ "instances": chosen.len(), "computed": computed }))
+}

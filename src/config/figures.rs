@@ -1,0 +1,287 @@
+//! The `figures:` block of `pipeline.yaml`: which studies and loads each figure draws, and in
+//! which profiles. A figure names its studies explicitly (no name prefixes), and a study
+//! that a figure draws must belong to each of the figure's profiles (or be listed under the
+//! figure's `omit` for that profile): a renamed or missing study is a configuration error,
+//! never a silently missing curve.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use super::ConfigError;
+
+/// What a figure declaration draws (each kind is one figure family of the paper, or one of
+/// the project's audits drawn as a figure).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FigureKind {
+    /// Fig. 6: model curves K_PL, 𝒦_PL against A_m/A_s; no study.
+    Fig6,
+    /// Figs. 2a–d (surface and contact maps of realization 0 at `maps`) and 2e–f (A_c,
+    /// largest cluster, dN/dA_c over the sweep), with the realization-convergence audit of
+    /// 2e–f; `study`.
+    Fig2,
+    /// Fig. 3 (area PDF at `loads`, inset: `hurst` studies at `inset_load`) and Fig. 4a
+    /// (CCDF); `ratios`, `hurst`.
+    Fig3Fig4a,
+    /// Figs. 4b, 5a, 5b (K, 𝒦, wear rate over the sweep); `study`.
+    Fig45,
+    /// Fig. B.1 (box size L/λ_l varies) with its convergence audit; `studies`.
+    AppendixB1,
+    /// Fig. B.2 (discretisation λ_s/Δl varies) with its convergence audit; `studies`.
+    AppendixB2,
+    /// Convergence of grid sizes against the largest grid (the last study is the
+    /// reference); `studies`.
+    Convergence,
+    /// Load resolution of a sweep (`chosen`) against a finer sweep of the same realizations
+    /// (`fine`).
+    LoadResolution,
+}
+
+/// One entry of the `figures:` block.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FigureDecl {
+    pub kind: FigureKind,
+    #[serde(default)]
+    pub description: String,
+    /// Profiles whose gallery holds this figure.
+    pub profiles: Vec<String>,
+    /// Profile → studies of this figure left out of that profile.
+    #[serde(default)]
+    pub omit: BTreeMap<String, Vec<String>>,
+    /// The study (fig2, fig45).
+    #[serde(default)]
+    pub study: Option<String>,
+    /// The studies compared (appendix_b1, appendix_b2, convergence), in drawing order.
+    #[serde(default)]
+    pub studies: Vec<String>,
+    /// fig3_fig4a: the main panel's studies (λ_l/λ_s varies) and the inset's (H varies).
+    #[serde(default)]
+    pub ratios: Vec<String>,
+    #[serde(default)]
+    pub hurst: Vec<String>,
+    /// Loads W/W0 the figure draws (fig2: the maps; fig3_fig4a: the PDFs and CCDFs;
+    /// appendix: every setting's). A study whose own loads are a sweep (`min/max/count`)
+    /// gives its nearest load (in ln W); otherwise the study computes exactly these.
+    #[serde(default)]
+    pub loads: Vec<f64>,
+    /// fig3_fig4a: the load of the inset.
+    #[serde(default)]
+    pub inset_load: Option<f64>,
+    /// load_resolution: the sweep judged and the reference sweep.
+    #[serde(default)]
+    pub chosen: Option<String>,
+    #[serde(default)]
+    pub fine: Option<String>,
+}
+
+impl FigureDecl {
+    /// Every study the declaration names, in declaration order (deduplicated).
+    pub fn studies_named(&self) -> Vec<&str> {
+        let mut out: Vec<&str> = Vec::new();
+        let all = self
+            .study
+            .iter()
+            .chain(&self.studies)
+            .chain(&self.ratios)
+            .chain(&self.hurst)
+            .chain(&self.chosen)
+            .chain(&self.fine);
+        for s in all {
+            if !out.contains(&s.as_str()) {
+                out.push(s);
+            }
+        }
+        out
+    }
+
+    /// Whether the figure uses `study` in `profile`.
+    pub fn uses(&self, study: &str, profile: &str) -> bool {
+        self.profiles.iter().any(|p| p == profile)
+            && self.studies_named().contains(&study)
+            && !self
+                .omit
+                .get(profile)
+                .is_some_and(|o| o.iter().any(|s| s == study))
+    }
+
+    /// The studies of `list` used in `profile`, in order.
+    pub fn used<'a>(&self, list: &'a [String], profile: &str) -> Vec<&'a str> {
+        list.iter()
+            .map(String::as_str)
+            .filter(|s| self.uses(s, profile))
+            .collect()
+    }
+
+    /// The loads this figure asks of `study` (W/W0; empty: the study's own).
+    pub fn loads_for(&self, study: &str) -> Vec<f64> {
+        let mut out = Vec::new();
+        match self.kind {
+            FigureKind::Fig3Fig4a => {
+                if self.ratios.iter().any(|s| s == study) {
+                    out.extend(&self.loads);
+                }
+                if self.hurst.iter().any(|s| s == study) {
+                    out.extend(self.inset_load);
+                }
+            }
+            FigureKind::Fig2 | FigureKind::AppendixB1 | FigureKind::AppendixB2 => {
+                out.extend(&self.loads)
+            }
+            _ => {}
+        }
+        out
+    }
+
+    /// Check the declaration's fields against its kind and the declared studies and
+    /// profiles.
+    pub(super) fn validate(
+        &self,
+        name: &str,
+        origin: &str,
+        studies: &BTreeMap<String, super::Study>,
+        profiles: &BTreeMap<String, String>,
+    ) -> Result<(), ConfigError> {
+        let base = format!("figures.{name}");
+        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
+            path: origin.to_string(),
+            field: format!("{base}{field}"),
+            value,
+            allowed,
+        };
+        use FigureKind::*;
+        let (study, list, fig3, pair) = match self.kind {
+            Fig6 => (false, false, false, false),
+            Fig2 | Fig45 => (true, false, false, false),
+            AppendixB1 | AppendixB2 | Convergence => (false, true, false, false),
+            Fig3Fig4a => (false, false, true, false),
+            LoadResolution => (false, false, false, true),
+        };
+        let fields = [
+            (".study", self.study.is_some(), study),
+            (".studies", !self.studies.is_empty(), list),
+            (".ratios", !self.ratios.is_empty(), fig3),
+            (".hurst", !self.hurst.is_empty(), false),
+            (".inset_load", self.inset_load.is_some(), fig3),
+            (".chosen", self.chosen.is_some(), pair),
+            (".fine", self.fine.is_some(), pair),
+        ];
+        for (field, given, required) in fields {
+            let allowed_here = required || (field == ".hurst" && fig3);
+            if given && !allowed_here {
+                return Err(invalid(
+                    field,
+                    "(given)".into(),
+                    format!("a figure of kind {:?} takes no {}", self.kind, &field[1..]),
+                ));
+            }
+            if required && !given {
+                return Err(invalid(
+                    field,
+                    "(missing)".into(),
+                    format!("a figure of kind {:?} needs {}", self.kind, &field[1..]),
+                ));
+            }
+        }
+        let wants_loads = matches!(self.kind, Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2);
+        if wants_loads && self.loads.is_empty() {
+            return Err(invalid(
+                ".loads",
+                "[]".into(),
+                "list the loads W/W0 this figure draws".into(),
+            ));
+        }
+        if !wants_loads && !self.loads.is_empty() {
+            return Err(invalid(
+                ".loads",
+                format!("{:?}", self.loads),
+                format!(
+                    "a figure of kind {:?} draws its studies' own loads",
+                    self.kind
+                ),
+            ));
+        }
+        for (i, &w) in self.loads.iter().chain(&self.inset_load).enumerate() {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(invalid(
+                    &format!(".loads[{i}]"),
+                    w.to_string(),
+                    "loads W/W0 must be finite and > 0".into(),
+                ));
+            }
+        }
+        if self.profiles.is_empty() {
+            return Err(invalid(
+                ".profiles",
+                "[]".into(),
+                "list the profiles whose gallery holds this figure".into(),
+            ));
+        }
+        for p in self.profiles.iter().chain(self.omit.keys()) {
+            if !profiles.contains_key(p) {
+                return Err(invalid(
+                    ".profiles",
+                    p.clone(),
+                    format!(
+                        "not a declared profile; use one of: {}",
+                        profiles.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            }
+        }
+        for s in self.studies_named() {
+            let Some(decl) = studies.get(s) else {
+                return Err(invalid(
+                    "",
+                    s.to_string(),
+                    format!(
+                        "names study '{s}', which is not declared under `studies`; declare it or correct the name"
+                    ),
+                ));
+            };
+            for p in &self.profiles {
+                if self.uses(s, p) && !decl.profiles.contains_key(p) {
+                    return Err(invalid(
+                        ".profiles",
+                        p.clone(),
+                        format!(
+                            "draws study '{s}', which has no entry for profile '{p}': add studies.{s}.profiles.{p}, or list '{s}' under figures.{name}.omit.{p}"
+                        ),
+                    ));
+                }
+            }
+        }
+        for (p, omitted) in &self.omit {
+            for s in omitted {
+                if !self.studies_named().contains(&s.as_str()) {
+                    return Err(invalid(
+                        &format!(".omit.{p}"),
+                        s.clone(),
+                        "omits a study this figure does not name".into(),
+                    ));
+                }
+            }
+        }
+        let min_used = match self.kind {
+            Convergence | LoadResolution => 2,
+            Fig6 => 0,
+            _ => 1,
+        };
+        for p in &self.profiles {
+            let used = self
+                .studies_named()
+                .into_iter()
+                .filter(|s| self.uses(s, p))
+                .count();
+            if used < min_used {
+                return Err(invalid(
+                    ".omit",
+                    p.clone(),
+                    format!("leaves {used} studies in profile '{p}'; this kind needs {min_used}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

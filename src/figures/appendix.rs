@@ -1,0 +1,220 @@
+//! Figs. B.1 and B.2 (the CCDF of cluster areas as the box size or the discretisation
+//! varies) and their convergence audit.
+
+use super::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
+use super::{tolerance_line, CcdfTable, Drawn};
+use crate::stages::audits::{ConvergenceRow, ConvergenceTable, CONVERGENCE_KS_TOLERANCE, TABLE};
+use crate::stages::figures::StudyRef;
+use crate::stages::Inputs;
+
+/// Figs. B.1 and B.2: the CCDF of cluster areas per setting. B.1 (one panel per setting):
+/// every realization in grey and the ensemble mean in red, per load; B.2 (one panel per
+/// load): the ensemble mean of each setting.
+///
+/// Inputs: each setting's statistics, then the settings audit.
+pub fn appendix(
+    inputs: &Inputs,
+    figure: &str,
+    quantity: &str,
+    b1: bool,
+    settings: &[StudyRef],
+) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let tables = (0..settings.len())
+        .map(|i| CcdfTable::read(inputs, i))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut plots = Vec::new();
+    if b1 {
+        for (s, table) in settings.iter().zip(&tables) {
+            let mut plot = LinePlot::new(
+                format!("Fig. B.1: {}", s.label),
+                "A / λ_s²",
+                "P(A > a)",
+                true,
+                YAxis::Log,
+            );
+            plot.legend = LegendAt::LowerLeft;
+            let loads = table.loads();
+            for (j, &(load_index, _)) in loads.iter().enumerate() {
+                for (r_i, &r) in table.realizations().iter().enumerate() {
+                    let label = if j == 0 && r_i == 0 {
+                        "each realization"
+                    } else {
+                        ""
+                    };
+                    plot.series.push(Series {
+                        rgb: Some((170, 170, 170)),
+                        width: 1,
+                        ..Series::line(label, table.curve(load_index, Some(r), false), 0)
+                    });
+                }
+            }
+            for (j, &(load_index, w)) in loads.iter().enumerate() {
+                plot.series.push(Series {
+                    rgb: Some((214, 39, 40)),
+                    tint: 0.5 * (loads.len() - 1 - j) as f64 / loads.len().max(2) as f64,
+                    ..Series::line(
+                        format!("ensemble mean, W/W0 = {w:.3}"),
+                        table.curve(load_index, None, true),
+                        3,
+                    )
+                });
+            }
+            plots.push(plot);
+        }
+    } else {
+        let loads = tables.first().map(CcdfTable::loads).unwrap_or_default();
+        for &(load_index, w) in &loads {
+            let mut plot = LinePlot::new(
+                format!("Fig. B.2: W/W0 = {w:.3}"),
+                "A / λ_s²",
+                "P(A > a), ensemble mean",
+                true,
+                YAxis::Log,
+            );
+            plot.legend = LegendAt::LowerLeft;
+            for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
+                plot.series.push(Series::line(
+                    s.label.clone(),
+                    table.curve(load_index, None, true),
+                    c,
+                ));
+            }
+            plots.push(plot);
+        }
+    }
+    anyhow::ensure!(!plots.is_empty(), "{figure}: no setting to draw");
+    let columns = plots.len().min(3);
+    let mut out = vec![(
+        figure.to_string(),
+        Drawn::Panels(Panels {
+            plots,
+            layout: Layout::Grid { columns },
+        }),
+    )];
+    let audit = settings.len();
+    let frame = inputs.table(audit, "audits", TABLE)?;
+    let table = ConvergenceTable::from_frame(&frame)?;
+    out.push((
+        format!("{figure}_convergence"),
+        Drawn::Panels(convergence_plots(figure, quantity, settings, &table)),
+    ));
+    out.push((format!("{figure}_convergence"), Drawn::Table(frame)));
+    out.push((
+        "convergence".into(),
+        Drawn::Result(inputs.of(audit, "audits")?.results.clone()),
+    ));
+    Ok(out)
+}
+
+/// One curve of a convergence figure: KS distance (markers) and its 95 % critical value
+/// (dashed, labelled `critical_label`) on `ks`, exponent difference on `da`, against `x(row)`.
+pub(super) fn push_convergence_curves(
+    ks: &mut LinePlot,
+    da: &mut LinePlot,
+    label: &str,
+    critical_label: &str,
+    rows: &[&ConvergenceRow],
+    x: impl Fn(&ConvergenceRow) -> f64,
+    color: usize,
+) {
+    ks.series.push(Series {
+        markers: true,
+        ..Series::line(label, rows.iter().map(|r| (x(r), r.ks)).collect(), color)
+    });
+    ks.series.push(Series {
+        dashed: true,
+        width: 1,
+        // A single point of a dashed line would not show.
+        markers: rows.len() == 1,
+        ..Series::line(
+            critical_label,
+            rows.iter().map(|r| (x(r), r.critical)).collect(),
+            color,
+        )
+    });
+    da.series.push(Series {
+        markers: true,
+        ..Series::line(
+            label,
+            rows.iter()
+                .filter_map(|r| Some((x(r), r.alpha? - r.alpha_reference?)))
+                .collect(),
+            color,
+        )
+    });
+}
+
+/// The convergence figure: KS distance and exponent difference to the finest setting against
+/// the setting (one curve per load), and KS distance of `r` realizations to all of them.
+fn convergence_plots(
+    figure: &str,
+    name: &str,
+    settings: &[StudyRef],
+    table: &ConvergenceTable,
+) -> Panels {
+    let mut ks = LinePlot::new(
+        format!("{figure}: KS distance to the finest"),
+        name,
+        "KS distance",
+        false,
+        YAxis::Linear,
+    );
+    let mut da = LinePlot::new(
+        format!("{figure}: α − α(finest)"),
+        name,
+        "α − α(finest), plateau + power-law MLE",
+        false,
+        YAxis::Linear,
+    );
+    let mut real = LinePlot::new(
+        format!("{figure}: first r realizations vs all"),
+        "realizations r",
+        "max KS distance over loads",
+        false,
+        YAxis::Linear,
+    );
+    real.x_integer = true;
+    let mut loads: Vec<(u32, f64)> = table
+        .rows
+        .iter()
+        .filter(|r| r.kind == "setting")
+        .map(|r| (r.load_index, r.w_over_w0))
+        .collect();
+    loads.sort_by(|a, b| a.1.total_cmp(&b.1));
+    loads.dedup_by(|a, b| a.1 == b.1);
+    for (c, &(_, w)) in loads.iter().enumerate() {
+        let rows: Vec<&ConvergenceRow> = table
+            .rows
+            .iter()
+            .filter(|r| r.kind == "setting" && r.w_over_w0 == w)
+            .collect();
+        let critical = if c == 0 { "95 % critical value" } else { "" };
+        let label = format!("W/W0 = {w:.3}");
+        push_convergence_curves(&mut ks, &mut da, &label, critical, &rows, |r| r.setting, c);
+    }
+    if let (Some(lo), Some(hi)) = (settings.first(), settings.last()) {
+        ks.series
+            .push(tolerance_line(CONVERGENCE_KS_TOLERANCE, lo.value, hi.value));
+    }
+    for (c, s) in settings.iter().enumerate() {
+        let by_r = table.max_ks_by_realizations(s.value);
+        real.series.push(Series {
+            markers: true,
+            ..Series::line(s.label.clone(), by_r, c + 4)
+        });
+    }
+    let most_realizations = table
+        .rows
+        .iter()
+        .map(|r| r.realizations as f64)
+        .fold(1.0, f64::max);
+    real.series.push(tolerance_line(
+        CONVERGENCE_KS_TOLERANCE,
+        1.0,
+        20.0_f64.min(most_realizations),
+    ));
+    Panels {
+        plots: vec![ks, da, real],
+        layout: Layout::Grid { columns: 3 },
+    }
+}

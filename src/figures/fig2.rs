@@ -1,0 +1,228 @@
+//! Fig. 2: the surface and contact maps of one realization (2a–d), contact area, largest
+//! cluster and dN/dA_c over the sweep (2e–f), and the realization audit of 2e–f.
+
+use super::plot::{viridis, ColorBar, LegendAt, LinePlot, RasterPlot, Series, YAxis};
+use super::{tolerance_line, Drawn, NpyData};
+use crate::clusters::{label, Connectivity};
+use crate::pipeline::table::{f64_column, u32_column};
+use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
+use crate::stages::contact::contact_file;
+use crate::stages::Inputs;
+
+/// Fig. 2e (A_c and the largest cluster) and 2f (dN/dA_c) against W/W0; the loads of the
+/// contact maps (Fig. 2b–d) marked by dashed lines.
+/// Input 0: the study's statistics; input 1: its realization audit.
+pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let df = inputs.table(0, "statistics", "loads.parquet")?;
+    let df = &df;
+    let w = f64_column(df, "w_over_w0")?;
+    let ac = f64_column(df, "area_fraction_mean")?;
+    let largest = f64_column(df, "largest_area_over_ls2_mean")?;
+    let dn = f64_column(df, "dn_dac_per_ls2")?;
+    let mut e = LinePlot::new(
+        "Fig. 2e: contact area and largest cluster",
+        "W / W0",
+        "A_c / L²  and  largest A / λ_s²",
+        true,
+        YAxis::Log,
+    );
+    e.legend = LegendAt::LowerRight;
+    e.x_marks = marked_loads.to_vec();
+    e.series = vec![
+        Series::line(
+            "A_c / L² (ensemble mean)",
+            w.iter().copied().zip(ac).collect(),
+            0,
+        ),
+        Series::line(
+            "largest cluster A / λ_s² (ensemble mean)",
+            w.iter().copied().zip(largest).collect(),
+            1,
+        ),
+    ];
+    let mut f = LinePlot::new(
+        "Fig. 2f: growth of the cluster count",
+        "W / W0",
+        "dN / d(A_c/λ_s²)",
+        true,
+        YAxis::Linear,
+    );
+    f.x_marks = marked_loads.to_vec();
+    f.series = vec![
+        Series::line(
+            "dN/dA_c (central differences of ensemble means)",
+            w.iter().copied().zip(dn).collect(),
+            0,
+        ),
+        Series {
+            rgb: Some((0, 0, 0)),
+            width: 1,
+            ..Series::line("", vec![(w[0], 0.0), (w[w.len() - 1], 0.0)], 0)
+        },
+    ];
+    let mut out = vec![
+        ("fig2e".into(), Drawn::Line(e)),
+        ("fig2f".into(), Drawn::Line(f)),
+    ];
+    out.extend(fig2_convergence(inputs)?);
+    Ok(out)
+}
+
+/// Colours of the contact maps of Fig. 2b–d.
+const OUT_OF_CONTACT: (u8, u8, u8) = (0, 0, 0);
+const SMALL_CLUSTER: (u8, u8, u8) = (255, 215, 0);
+const LARGE_CLUSTER: (u8, u8, u8) = (220, 30, 30);
+/// Fig. 2a (the surface of realization 0) and 2b–d (its contact maps at the kept loads,
+/// clusters with `A ≤ A*` yellow and `A > A*` red on black).
+/// Inputs: the surface and the contact sweep of realization 0.
+pub fn fig2_maps(
+    inputs: &Inputs,
+    maps: &[(usize, f64)],
+    lambda_s_px: f64,
+    a_star_over_ls2: f64,
+) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let (n, heights) = crate::io::read_square_f64(&inputs.file(0, "surface", "heights.npy")?)?;
+    let (lo, hi) = heights
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    let rgb: Vec<u8> = heights
+        .iter()
+        .flat_map(|&h| {
+            let (r, g, b) = viridis((h - lo) / span);
+            [r, g, b]
+        })
+        .collect();
+    let mut out = vec![(
+        "fig2a".to_string(),
+        Drawn::Raster(
+            RasterPlot {
+                title: "Fig. 2a: rough surface (realization 0)".into(),
+                x_label: "x / L".into(),
+                y_label: "y / L".into(),
+                rows: n,
+                cols: n,
+                rgb,
+                colorbar: Some(ColorBar {
+                    lo,
+                    hi,
+                    label: "height h / L (rms slope 1)".into(),
+                }),
+                legend: Vec::new(),
+            },
+            NpyData::F64(vec![n, n], heights),
+        ),
+    )];
+    let a_star_px = a_star_over_ls2 * lambda_s_px * lambda_s_px;
+    for (panel, &(index, w)) in ["b", "c", "d"].iter().zip(maps) {
+        let path = inputs.file(1, "contact", &contact_file(index))?;
+        let (rows, cols, map, _) = crate::io::read_contact_map(&path)?;
+        let lab = label(&map, rows, cols, Connectivity::Eight)?;
+        // 0: out of contact, 1: A ≤ A*, 2: A > A*.
+        let class: Vec<u8> = lab
+            .labels
+            .iter()
+            .map(|&id| match id {
+                0 => 0,
+                id if lab.clusters[id as usize - 1].area_px as f64 > a_star_px => 2,
+                _ => 1,
+            })
+            .collect();
+        let rgb = class
+            .iter()
+            .flat_map(|&c| {
+                let (r, g, b) = [OUT_OF_CONTACT, SMALL_CLUSTER, LARGE_CLUSTER][c as usize];
+                [r, g, b]
+            })
+            .collect();
+        out.push((
+            format!("fig2{panel}"),
+            Drawn::Raster(
+                RasterPlot {
+                    title: format!("Fig. 2{panel}: contact clusters at W/W0 = {w:.3}"),
+                    x_label: "x / L".into(),
+                    y_label: "y / L".into(),
+                    rows,
+                    cols,
+                    rgb,
+                    colorbar: None,
+                    legend: vec![
+                        ("A ≤ A*".into(), Some(SMALL_CLUSTER)),
+                        ("A > A*".into(), Some(LARGE_CLUSTER)),
+                        ("out of contact".into(), Some(OUT_OF_CONTACT)),
+                        ("A* = 2 λ_s²".into(), None),
+                    ],
+                },
+                NpyData::U8(vec![rows, cols], class),
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+/// The realization audit of Fig. 2e–f drawn: the largest deviation over loads of the first-r
+/// means from the full ensemble's, per quantity (input 1).
+fn fig2_convergence(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let audit = inputs.of(1, "audits")?;
+    let Ok(path) = inputs.file(1, "audits", TABLE) else {
+        // Fewer than two realizations: the audit has a verdict and no table.
+        return Ok(vec![(
+            "convergence".into(),
+            Drawn::Result(audit.results.clone()),
+        )]);
+    };
+    let table = crate::pipeline::table::read(&path)?;
+    let realizations: Vec<f64> = u32_column(&table, "realizations")?
+        .into_iter()
+        .map(|r| r.unwrap_or(0) as f64)
+        .collect();
+    let total = realizations.iter().copied().fold(2.0, f64::max);
+    let deviation = |name: &str| -> anyhow::Result<Vec<f64>> {
+        f64_column(&table, &format!("{name}_max_rel_deviation"))
+    };
+    let rows: Vec<(f64, [f64; 3])> = {
+        let (a, c, l) = (
+            deviation("area")?,
+            deviation("count")?,
+            deviation("largest")?,
+        );
+        (0..realizations.len())
+            .map(|i| (realizations[i], [a[i], c[i], l[i]]))
+            .collect()
+    };
+    let mut plot = LinePlot::new(
+        "Fig. 2e–f: first r realizations vs all",
+        "realizations r",
+        "max relative deviation of the mean over loads",
+        false,
+        YAxis::Log,
+    );
+    plot.legend = LegendAt::UpperRight;
+    plot.x_integer = true;
+    let labels = [
+        "A_c (Fig. 2e)",
+        "largest cluster (Fig. 2e)",
+        "N (Fig. 2f: dN/dA_c)",
+    ];
+    for (c, (q, label)) in [0usize, 2, 1].iter().zip(labels).enumerate() {
+        plot.series.push(Series::line(
+            label,
+            rows.iter()
+                .filter(|x| x.1[*q] > 0.0)
+                .map(|x| (x.0, x.1[*q]))
+                .collect(),
+            c,
+        ));
+    }
+    plot.series.push(Series {
+        width: 1,
+        ..tolerance_line(FIG2_CURVE_TOLERANCE, 2.0, total)
+    });
+    Ok(vec![
+        ("fig2_convergence".into(), Drawn::Table(table)),
+        ("fig2_convergence".into(), Drawn::Line(plot)),
+        ("convergence".into(), Drawn::Result(audit.results.clone())),
+    ])
+}

@@ -1,0 +1,213 @@
+//! Figs. 4b, 5a and 5b (K, 𝒦 and the wear rate against the load, simulated and fitted), the
+//! load-resolution audit of those curves, and Fig. 6 (the model's curves).
+
+use polars::prelude::*;
+
+use super::plot::{LegendAt, LinePlot, Series, YAxis};
+use super::{tolerance_line, Drawn};
+use crate::pipeline::table::{bool_column, f64_column, str_column};
+use crate::stages::audits::{FIG45_A_STAR, FIG45_CURVES, LOAD_RESOLUTION_TOLERANCE, TABLE};
+use crate::stages::Inputs;
+
+/// Fig. 6: K_PL and 𝒦_PL against A_m/A_s for α = 1.5 and several A*/A_s.
+///
+/// Input 0: the model curves (analytic stage, `fig6.parquet`).
+pub fn fig6(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let df = &inputs.table(0, "analytic", "fig6.parquet")?;
+    let s = f64_column(df, "a_star_over_a_s")?;
+    let m = f64_column(df, "a_m_over_a_s")?;
+    let k = f64_column(df, "k_pl")?;
+    let kk = f64_column(df, "k_upscaled_pl")?;
+    let alpha = f64_column(df, "alpha")?
+        .first()
+        .copied()
+        .unwrap_or(f64::NAN);
+    let mut thresholds: Vec<f64> = s.clone();
+    thresholds.dedup();
+    let mut plot = LinePlot::new(
+        format!("Fig. 6: power-law model, α = {alpha}"),
+        "A_m / A_s",
+        "K_PL (solid), up-scaled K_PL (dashed)",
+        true,
+        YAxis::Linear,
+    );
+    for (name, values, dashed) in [("K_PL", &k, false), ("up-scaled K_PL", &kk, true)] {
+        for (c, &t) in thresholds.iter().enumerate() {
+            let points: Vec<(f64, f64)> = (0..s.len())
+                .filter(|&i| s[i] == t && m[i].is_finite() && m[i] >= t)
+                .map(|i| (m[i], values[i]))
+                .collect();
+            plot.series.push(Series {
+                dashed,
+                ..Series::line(format!("{name}, A*/A_s = {t}"), points, c)
+            });
+        }
+    }
+    Ok(vec![("fig6".into(), Drawn::Line(plot))])
+}
+
+/// Fig. 4b: the y axis is linear up to this value and logarithmic above (as in the paper).
+const FIG4B_LINEAR_UP_TO: f64 = 1e-5;
+
+/// One series per threshold of `value` against W/W0 from a table with columns
+/// `a_star_over_ls2` and `w_over_w0`.
+fn per_threshold(
+    df: &DataFrame,
+    value: &str,
+    label: &str,
+    dashed: bool,
+) -> anyhow::Result<Vec<Series>> {
+    let a = f64_column(df, "a_star_over_ls2")?;
+    let w = f64_column(df, "w_over_w0")?;
+    let v = f64_column(df, value)?;
+    let mut out: Vec<Series> = FIG45_A_STAR
+        .iter()
+        .enumerate()
+        .map(|(c, &t)| Series {
+            dashed,
+            ..Series::line(
+                if dashed {
+                    String::new()
+                } else {
+                    format!("{label}, A*/λ_s² = {t}")
+                },
+                (0..a.len())
+                    .filter(|&i| a[i] == t)
+                    .map(|i| (w[i], v[i]))
+                    .collect(),
+                c,
+            )
+        })
+        .collect();
+    if dashed {
+        // One legend entry for all the dashed curves (same colours as the simulated ones).
+        out.push(Series {
+            dashed: true,
+            rgb: Some((0, 0, 0)),
+            ..Series::line(format!("{label} (dashed, colour = A*)"), Vec::new(), 0)
+        });
+    }
+    Ok(out)
+}
+
+/// Figs. 4b (K vs load), 5a (𝒦 vs load) and 5b (wear rate vs load), simulated (solid,
+/// pooled over realizations) and from the fitted plateau + power-law model (dashed).
+///
+/// Input 0: the study's statistics; input 1: its fitted model (analytic).
+pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let wear = &inputs.table(0, "statistics", "wear.parquet")?;
+    let model = &inputs.table(1, "analytic", "model.parquet")?;
+    let mut k = per_threshold(wear, "k_archard_pooled", "K_num", false)?;
+    k.extend(per_threshold(model, "k_pl", "K_PL fit", true)?);
+    let mut kk = per_threshold(wear, "k_upscaled_pooled", "up-scaled K_num", false)?;
+    kk.extend(per_threshold(
+        model,
+        "k_upscaled_pl",
+        "up-scaled K_PL fit",
+        true,
+    )?);
+    let rate = per_threshold(wear, "wear_rate_over_l2_mean", "R / L²", false)?;
+    let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
+        let mut p = LinePlot::new(title, "W / W0", y, true, y_axis);
+        p.series = series;
+        match y_axis {
+            YAxis::Log => p.legend = LegendAt::LowerRight,
+            YAxis::LinLog { .. } => p.legend = LegendAt::MiddleLeft,
+            YAxis::Linear => {
+                // Fig. 5a: the curves fill the width between 0 and 1, so the legend gets
+                // its own band above them.
+                p.legend = LegendAt::UpperLeft;
+                p.y_headroom = 0.45;
+            }
+        }
+        Drawn::Line(p)
+    };
+    Ok(vec![
+        (
+            "fig4b".into(),
+            plot(
+                "Fig. 4b: Archard's wear coefficient, λ_l/λ_s = 128",
+                "K = P(A > A*)  (linear below 1e-5)",
+                YAxis::LinLog {
+                    threshold: FIG4B_LINEAR_UP_TO,
+                },
+                k,
+            ),
+        ),
+        (
+            "fig5a".into(),
+            plot(
+                "Fig. 5a: up-scaled wear coefficient, λ_l/λ_s = 128",
+                "A_c* / A_c",
+                YAxis::Linear,
+                kk,
+            ),
+        ),
+        (
+            "fig5b".into(),
+            plot(
+                "Fig. 5b: wear rate (ω = 1/3), λ_l/λ_s = 128",
+                "R / L²",
+                YAxis::Log,
+                rate,
+            ),
+        ),
+    ])
+}
+
+/// The load-resolution audit of Figs. 4b and 5 drawn: per curve and load of the finer sweep,
+/// the largest interpolation error over thresholds in units of the band (input 0: the audit).
+pub fn load_resolution(inputs: &Inputs, figure: &str) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let audit = inputs.of(0, "audits")?;
+    let table = inputs.table(0, "audits", TABLE)?;
+    let curve = str_column(&table, "curve")?;
+    let w = f64_column(&table, "w_over_w0")?;
+    let error = f64_column(&table, "error_over_ci95")?;
+    let at_transition = bool_column(&table, "at_transition")?;
+    let mut fine_loads = w.clone();
+    fine_loads.sort_by(f64::total_cmp);
+    fine_loads.dedup();
+    let judged: Vec<usize> = (0..w.len()).filter(|&i| !at_transition[i]).collect();
+    let mut plot = LinePlot::new(
+        "Figs. 4b, 5: fewer loads interpolated vs the finer sweep",
+        "W / W0",
+        "|interpolated − value| / 95 % half-width (max over A*)",
+        true,
+        YAxis::Linear,
+    );
+    plot.legend = LegendAt::UpperRight;
+    for (c, &(_, _, name, legend)) in FIG45_CURVES.iter().enumerate() {
+        let mut points: Vec<(f64, f64)> = Vec::new();
+        for &load in &fine_loads {
+            let e = judged
+                .iter()
+                .filter(|&&i| curve[i] == name && w[i] == load)
+                .map(|&i| error[i])
+                .filter(|e| e.is_finite())
+                .fold(f64::NEG_INFINITY, f64::max);
+            if e.is_finite() {
+                points.push((load, e));
+            }
+        }
+        plot.series.push(Series {
+            markers: true,
+            ..Series::line(legend, points, c)
+        });
+    }
+    let (x0, x1) = (
+        w.iter().copied().fold(f64::INFINITY, f64::min),
+        w.iter().copied().fold(0.0f64, f64::max),
+    );
+    plot.series.push(Series {
+        width: 1,
+        ..tolerance_line(LOAD_RESOLUTION_TOLERANCE, x0, x1)
+    });
+    Ok(vec![
+        (figure.into(), Drawn::Table(table)),
+        (figure.into(), Drawn::Line(plot)),
+        (
+            "load_resolution".into(),
+            Drawn::Result(audit.results.clone()),
+        ),
+    ])
+}

@@ -1,0 +1,119 @@
+//! The contact stage: one surface's load sweep, its contact maps (bit-packed, every load),
+//! pressure fields (the loads a figure shows) and per-load solver summary (`loads.parquet`).
+
+use std::path::Path;
+
+use polars::prelude::*;
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+use super::{Inputs, Stage};
+use crate::contact::solver::SolverConfig;
+use crate::contact::sweep::{pack_contact, sweep_heights, LoadResult};
+use crate::pipeline::table::{col, write};
+
+pub struct Contact;
+
+/// One realization's sweep. Input 0: its surface.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactJob {
+    /// W/W0 of each load, solved in this order (warm starts).
+    #[serde(rename = "loads_w_over_w0")]
+    pub loads: Vec<f64>,
+    /// Indices into `loads` whose pressure field is stored.
+    pub keep_pressure: Vec<usize>,
+    /// Effective modulus E* (pressures are in its unit).
+    pub e_star: f64,
+    /// Solver tolerance on the complementarity error, and iteration cap.
+    pub tolerance: f64,
+    pub max_iterations: u32,
+}
+
+/// File name of the packed contact map of load `index`.
+pub fn contact_file(index: usize) -> String {
+    format!("contact_{index:03}.npy")
+}
+
+/// File name of the pressure field of load `index`.
+pub fn pressure_file(index: usize) -> String {
+    format!("pressure_{index:03}.npy")
+}
+
+impl Stage for Contact {
+    const NAME: &'static str = "contact";
+    const VERSION: u32 = 5;
+    type Job = ContactJob;
+
+    fn compute(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+        let path = inputs.file(0, "surface", "heights.npy")?;
+        let (n, heights) = crate::io::read_square_f64(&path)?;
+        let cfg = SolverConfig {
+            tolerance: job.tolerance,
+            max_iterations: job.max_iterations as usize,
+            ..SolverConfig::default()
+        };
+        let row_bytes = n.div_ceil(8);
+        let (slope, results) = sweep_heights(
+            &heights,
+            n,
+            job.e_star,
+            &job.loads,
+            &cfg,
+            |index, solver, _| {
+                let packed = pack_contact(solver.pressure(), n);
+                crate::io::write_u8(&dir.join(contact_file(index)), &[n, row_bytes], packed)
+                    .map_err(|e| e.to_string())?;
+                if job.keep_pressure.contains(&index) {
+                    crate::io::write_f64(
+                        &dir.join(pressure_file(index)),
+                        &[n, n],
+                        solver.pressure().to_vec(),
+                    )
+                    .map_err(|e| e.to_string())?;
+                }
+                Ok(())
+            },
+        )?;
+        write(dir, "loads.parquet", loads_table(&results)?)?;
+        Ok(json!({
+            "n": n,
+            "rms_slope": slope,
+            "total_iterations": results.iter().map(|r| r.report.iterations).sum::<usize>(),
+            "solve_seconds": results.iter().map(|r| r.seconds).collect::<Vec<_>>(),
+        }))
+    }
+}
+
+fn loads_table(results: &[LoadResult]) -> PolarsResult<DataFrame> {
+    let per = |f: &dyn Fn(&LoadResult) -> f64| results.iter().map(f).collect::<Vec<f64>>();
+    let count = |f: &dyn Fn(&LoadResult) -> usize| {
+        results.iter().map(|r| f(r) as u32).collect::<Vec<u32>>()
+    };
+    DataFrame::new(
+        results.len(),
+        vec![
+            col("load_index", (0..results.len() as u32).collect::<Vec<_>>()),
+            col("w_over_w0", per(&|r| r.w_over_w0)),
+            col("mean_pressure", per(&|r| r.mean_pressure)),
+            col("area_fraction", per(&|r| r.area_fraction)),
+            col(
+                "n_contact_px",
+                results
+                    .iter()
+                    .map(|r| r.n_contact_px as u64)
+                    .collect::<Vec<_>>(),
+            ),
+            col("iterations", count(&|r| r.report.iterations)),
+            col("convolutions", count(&|r| r.report.convolutions)),
+            col("error", per(&|r| r.report.error)),
+            col(
+                "converged",
+                results
+                    .iter()
+                    .map(|r| r.report.converged())
+                    .collect::<Vec<_>>(),
+            ),
+        ],
+    )
+}

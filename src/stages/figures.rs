@@ -1,0 +1,110 @@
+//! The figures stage: one figure family of the paper (or one audit's chart) drawn from the
+//! tables of its inputs, as PNG, SVG and CSV (module [`crate::figures`]). A run copies the
+//! figures of its profile to `figures/<profile>/` next to the data directory.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::{Inputs, Stage};
+use crate::figures as draw;
+
+pub struct Figures;
+
+/// The threshold of Fig. 2: `A* = 2 λ_s²`.
+pub const FIG2_A_STAR_OVER_LS2: f64 = 2.0;
+
+/// One study as a figure shows it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyRef {
+    pub study: String,
+    /// Legend text, e.g. `λ_l/λ_s = 128`.
+    pub label: String,
+    /// The value the figure varies (λ_l/λ_s, H, L/λ_l, λ_s/Δl or the grid side n).
+    pub value: f64,
+    /// λ_s in grid spacings (areas per λ_s²).
+    pub lambda_s_px: f64,
+}
+
+/// What a figures instance draws; the inputs each variant reads are listed with it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "draw", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FigureJob {
+    /// Fig. 6. Input: the model curves (analytic).
+    Fig6,
+    /// Figs. 2a–d at the loads `(index, W/W0)` whose pressure the sweep keeps. Inputs: the
+    /// surface and contact sweep of realization 0.
+    Fig2Maps {
+        maps: Vec<(usize, f64)>,
+        lambda_s_px: f64,
+        a_star_over_ls2: f64,
+    },
+    /// Figs. 2e–f with the loads of 2b–d marked, and the realization audit's chart. Inputs:
+    /// the statistics, the audit.
+    Fig2ef { marked_loads: Vec<f64> },
+    /// Figs. 3 and 4a. Inputs: the statistics of `ratios`, then of `hurst`.
+    Fig3Fig4a {
+        ratios: Vec<StudyRef>,
+        hurst: Vec<StudyRef>,
+        loads: Vec<f64>,
+        inset_load: f64,
+    },
+    /// Figs. 4b, 5a, 5b. Inputs: the statistics, the fitted model.
+    Fig45,
+    /// Fig. B.1 (`b1`) or B.2 and the convergence chart. Inputs: each setting's statistics,
+    /// then the settings audit.
+    Appendix {
+        figure: String,
+        quantity: String,
+        b1: bool,
+        settings: Vec<StudyRef>,
+    },
+    /// Grid sizes against the largest. Inputs: each setting's statistics, then the audit.
+    Convergence {
+        figure: String,
+        hurst: f64,
+        settings: Vec<StudyRef>,
+    },
+    /// The load-resolution chart. Input: the audit.
+    LoadResolution { figure: String },
+}
+
+impl Stage for Figures {
+    const NAME: &'static str = "figures";
+    const VERSION: u32 = 1;
+    type Job = FigureJob;
+
+    fn compute(job: &FigureJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+        let drawn = match job {
+            FigureJob::Fig6 => draw::fig45::fig6(inputs)?,
+            FigureJob::Fig2Maps {
+                maps,
+                lambda_s_px,
+                a_star_over_ls2,
+            } => draw::fig2::fig2_maps(inputs, maps, *lambda_s_px, *a_star_over_ls2)?,
+            FigureJob::Fig2ef { marked_loads } => draw::fig2::fig2ef(inputs, marked_loads)?,
+            FigureJob::Fig3Fig4a {
+                ratios,
+                hurst,
+                loads,
+                inset_load,
+            } => draw::fig3_4a::fig34a(inputs, ratios, hurst, loads, *inset_load)?,
+            FigureJob::Fig45 => draw::fig45::fig45(inputs)?,
+            FigureJob::Appendix {
+                figure,
+                quantity,
+                b1,
+                settings,
+            } => draw::appendix::appendix(inputs, figure, quantity, *b1, settings)?,
+            FigureJob::Convergence {
+                figure,
+                hurst,
+                settings,
+            } => draw::convergence::convergence(inputs, figure, *hurst, settings)?,
+            FigureJob::LoadResolution { figure } => draw::fig45::load_resolution(inputs, figure)?,
+        };
+        draw::write(drawn, dir)
+    }
+}
