@@ -180,7 +180,7 @@ pub fn exec(
         chosen = chosen.into_iter().skip(i * per).take(per).collect();
     }
     for inst in &chosen {
-        let stage = wearcoef::stages::find(&inst.stage).ok_or_else(|| {
+        let stage = wearcoef::pipeline::registry::find(&inst.stage).ok_or_else(|| {
             UsageError(format!(
                 "the plan names stage '{}', which this build does not have",
                 inst.stage

@@ -4,10 +4,10 @@
 use super::plot::{viridis, ColorBar, LegendAt, LinePlot, RasterPlot, Series, YAxis};
 use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label, Connectivity};
+use crate::pipeline::inputs::Inputs;
 use crate::pipeline::table::{f64_column, u32_column};
 use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
 use crate::stages::contact::contact_file;
-use crate::stages::Inputs;
 
 /// Fig. 2e (A_c and the largest cluster) and 2f (dN/dA_c) against W/W0; the loads of the
 /// contact maps (Fig. 2b–d) marked by dashed lines.

@@ -4,10 +4,10 @@
 use polars::prelude::*;
 
 use super::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
+use super::StudyRef;
 use super::{pick_loads, rows_at, CcdfTable, Drawn};
+use crate::pipeline::inputs::Inputs;
 use crate::pipeline::table::{f64_column, loads_of, str_column, u64_column};
-use crate::stages::figures::StudyRef;
-use crate::stages::Inputs;
 
 /// Fits of Fig. 3 are drawn only over at least this many decades of area.
 pub const MIN_FIT_DECADES: f64 = 1.0;

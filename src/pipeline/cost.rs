@@ -18,7 +18,6 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::plan::Instance;
 use super::store::Store;
 
 /// What one instance is expected to cost.
@@ -157,11 +156,12 @@ impl CostModel {
         self.iterations_per_load_1024 * (n / 1024.0).powf(self.iterations_exponent)
     }
 
-    /// The estimate of one instance; `n_of` gives the grid side of an input key's surface.
-    pub fn estimate(&self, inst: &Instance, n_of: &dyn Fn(&str) -> Option<f64>) -> Estimate {
+    /// The estimate of an instance of `stage` with job `params`; `input_n` is the grid side
+    /// of its first input's surface (for a contact sweep).
+    pub fn estimate(&self, stage: &str, params: &Value, input_n: Option<f64>) -> Estimate {
         let doubles = |k: f64, n: f64| (k * n * n * 8.0) as u64;
-        let p = &inst.params;
-        match inst.stage.as_str() {
+        let p = params;
+        match stage {
             "surface" => {
                 let n = num(p, "n").unwrap_or(0.0);
                 Estimate {
@@ -170,11 +170,7 @@ impl CostModel {
                 }
             }
             "contact" => {
-                let n = inst
-                    .inputs
-                    .first()
-                    .and_then(|r| n_of(&r.key))
-                    .unwrap_or(0.0);
+                let n = input_n.unwrap_or(0.0);
                 let iterations = loads_of(p) * self.iterations_per_load(n);
                 Estimate {
                     seconds: self.contact_per_iteration_n2logn * iterations * n2logn(n),

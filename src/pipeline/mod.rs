@@ -5,7 +5,9 @@
 pub mod catalog;
 pub mod cost;
 pub mod hash;
+pub mod inputs;
 pub mod plan;
+pub mod registry;
 pub mod runner;
 pub mod store;
 pub mod table;

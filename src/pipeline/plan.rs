@@ -14,11 +14,12 @@ use serde_json::Value;
 use super::cost::Estimate;
 use super::store::Store;
 use crate::config::{FigureDecl, FigureKind, Pipeline, StudyPlan};
+use crate::figures::StudyRef;
 use crate::stages::analytic::{Analytic, AnalyticJob};
 use crate::stages::audits::{AuditJob, Audits, Setting};
 use crate::stages::clusters::{Clusters, ClustersJob};
 use crate::stages::contact::{Contact, ContactJob};
-use crate::stages::figures::{FigureJob, Figures, StudyRef};
+use crate::stages::figures::{FigureJob, Figures};
 use crate::stages::statistics::{Statistics, StatisticsJob, A_STAR_OVER_LS2};
 use crate::stages::surface::Surface;
 use crate::stages::{keyed, InputRef, Stage};
@@ -141,11 +142,11 @@ impl Plan {
         for t in targets {
             let known = plans.iter().any(|p| &p.name == t)
                 || figures.iter().any(|(n, _)| n == t)
-                || crate::stages::find(t).is_some();
+                || crate::pipeline::registry::find(t).is_some();
             if !known {
                 return Err(crate::pipeline::UsageError(format!(
                     "unknown target '{t}' for profile '{profile}': use a stage ({}), a study ({}) or a figure ({}) of this profile",
-                    crate::stages::names().join(", "),
+                    crate::pipeline::registry::names().join(", "),
                     plans.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "),
                     figures.iter().map(|f| f.0).collect::<Vec<_>>().join(", "),
                 ))
@@ -179,10 +180,10 @@ impl Plan {
             .filter(|i| i.stage == Surface::NAME)
             .filter_map(|i| Some((i.key.clone(), i.params.get("n")?.as_f64()?)))
             .collect();
-        let n_of = |key: &str| sides.get(key).copied();
         for inst in &mut self.instances {
             inst.cached = store.lookup(&inst.stage, &inst.key)?.is_some();
-            inst.estimate = model.estimate(inst, &n_of);
+            let input_n = inst.inputs.first().and_then(|r| sides.get(&r.key)).copied();
+            inst.estimate = model.estimate(&inst.stage, &inst.params, input_n);
         }
         Ok(())
     }

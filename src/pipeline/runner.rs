@@ -238,11 +238,11 @@ fn build_all(
 
 fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
     let start = Instant::now();
-    let stage = crate::stages::find(&inst.stage).ok_or_else(|| {
+    let stage = crate::pipeline::registry::find(&inst.stage).ok_or_else(|| {
         anyhow::anyhow!(
             "the plan names stage '{}', which this build does not have ({})",
             inst.stage,
-            crate::stages::names().join(", ")
+            crate::pipeline::registry::names().join(", ")
         )
     })?;
     let keys: Vec<String> = inst.inputs.iter().map(|r| r.key.clone()).collect();
@@ -357,7 +357,7 @@ pub fn status(
     let plans = pipeline.plan(profile, origin)?;
     let plan = Plan::build(pipeline, origin, profile, &[])?;
     let mut lines: Vec<StatusLine> = Vec::new();
-    for stage in crate::stages::names() {
+    for stage in crate::pipeline::registry::names() {
         for study in &plans {
             let mut line = StatusLine {
                 stage: stage.to_string(),

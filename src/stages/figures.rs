@@ -8,25 +8,12 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::{Inputs, Stage};
-use crate::figures as draw;
+use crate::figures::{self as draw, StudyRef};
 
 pub struct Figures;
 
 /// The threshold of Fig. 2: `A* = 2 λ_s²`.
 pub const FIG2_A_STAR_OVER_LS2: f64 = 2.0;
-
-/// One study as a figure shows it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StudyRef {
-    pub study: String,
-    /// Legend text, e.g. `λ_l/λ_s = 128`.
-    pub label: String,
-    /// The value the figure varies (λ_l/λ_s, H, L/λ_l, λ_s/Δl or the grid side n).
-    pub value: f64,
-    /// λ_s in grid spacings (areas per λ_s²).
-    pub lambda_s_px: f64,
-}
 
 /// What a figures instance draws; the inputs each variant reads are listed with it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

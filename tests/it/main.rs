@@ -5,6 +5,7 @@ mod cli;
 mod clusters;
 mod config;
 mod contact;
+mod layout;
 mod powerlaw;
 mod stability;
 mod stages;

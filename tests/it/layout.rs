@@ -1,0 +1,208 @@
+//! The architecture's seams, checked: the numerical core depends on no IO crate, no source
+//! file outgrows one head, and the application's files import each other without a circle.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// `cargo tree` of the core crate lists none of the application's crates.
+#[test]
+fn the_core_crate_depends_on_no_table_yaml_plot_or_progress_crate() {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = std::process::Command::new(cargo)
+        .current_dir(root())
+        .args([
+            "tree",
+            "-p",
+            "wearcoef-core",
+            "-e",
+            "normal",
+            "--prefix",
+            "none",
+            "--offline",
+        ])
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let tree = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        tree.contains("rustfft"),
+        "the tree lists the core's crates: {tree}"
+    );
+    for banned in [
+        "polars",
+        "serde_yaml",
+        "serde-saphyr",
+        "plotters",
+        "indicatif",
+    ] {
+        assert!(
+            !tree.lines().any(|l| l.starts_with(&format!("{banned} "))),
+            "wearcoef-core depends on {banned}"
+        );
+    }
+}
+
+#[test]
+fn no_source_file_is_over_700_lines() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    rust_files(&root().join("crates"), &mut files);
+    let long: Vec<String> = files
+        .iter()
+        .filter_map(|f| {
+            let lines = std::fs::read_to_string(f).unwrap().lines().count();
+            (lines > 700).then(|| format!("{} ({lines})", f.display()))
+        })
+        .collect();
+    assert!(long.is_empty(), "split these: {long:?}");
+}
+
+/// The module path of a library file (`src/pipeline/plan.rs` → `pipeline::plan`).
+fn module_of(file: &Path, src: &Path) -> String {
+    let rel = file.strip_prefix(src).unwrap().with_extension("");
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if parts.last().is_some_and(|p| p == "mod" || p == "lib") {
+        parts.pop();
+    }
+    parts.join("::")
+}
+
+/// Every `crate::…` and `super::…` path of a file, resolved to module paths (`{a, b}`
+/// groups split; the item names at the end are kept and trimmed later).
+fn paths_in(text: &str, module: &str, is_mod_file: bool) -> Vec<String> {
+    let mut out = Vec::new();
+    let code: String = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    for (prefix, base) in [
+        ("crate::", String::new()),
+        ("super::", {
+            // The parent of this file's module (for a mod.rs, of the directory's module).
+            let mut m: Vec<&str> = module.split("::").filter(|s| !s.is_empty()).collect();
+            if !is_mod_file || !m.is_empty() {
+                m.pop();
+            }
+            m.join("::")
+        }),
+    ] {
+        let mut rest = code.as_str();
+        while let Some(i) = rest.find(prefix) {
+            let before = rest[..i].chars().last();
+            rest = &rest[i + prefix.len()..];
+            if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                continue;
+            }
+            let end = rest
+                .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+                .unwrap_or(rest.len());
+            let path = rest[..end].trim_end_matches(':');
+            let full = if base.is_empty() {
+                path.to_string()
+            } else {
+                format!("{base}::{path}")
+            };
+            out.push(full.clone());
+            // `use x::{a, b::c}`: each member too.
+            if rest[end..].starts_with('{') {
+                let close = rest[end..].find('}').map_or(rest.len(), |j| end + j);
+                for member in rest[end + 1..close].split(',') {
+                    let m = member.trim().split(" as ").next().unwrap_or("").trim();
+                    if !m.is_empty() && m != "self" && m != "*" {
+                        out.push(format!("{full}::{m}"));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_application_modules_import_each_other_without_a_circle() {
+    let src = root().join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    // Library files only (main.rs and cli/ are the binary, a crate of their own).
+    files.retain(|f| !f.ends_with("main.rs") && !f.starts_with(src.join("cli")));
+    let modules: BTreeMap<String, PathBuf> = files
+        .iter()
+        .map(|f| (module_of(f, &src), f.clone()))
+        .collect();
+    let resolve = |path: &str| -> Option<String> {
+        let parts: Vec<&str> = path.split("::").collect();
+        (1..=parts.len())
+            .rev()
+            .map(|k| parts[..k].join("::"))
+            .find(|m| modules.contains_key(m))
+    };
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (module, file) in &modules {
+        let text = std::fs::read_to_string(file).unwrap();
+        let is_mod = file.ends_with("mod.rs");
+        for p in paths_in(&text, module, is_mod) {
+            if let Some(target) = resolve(&p).filter(|t| t != module && !t.is_empty()) {
+                edges.entry(module.clone()).or_default().insert(target);
+            }
+        }
+    }
+    // A module depending on its parent (its `mod.rs`) and the parent naming the child is
+    // the module tree, not an import circle; every other cycle is reported.
+    fn visit(
+        m: &str,
+        edges: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, u8>,
+        stack: &mut Vec<String>,
+        cycles: &mut Vec<String>,
+    ) {
+        state.insert(m.to_string(), 1);
+        stack.push(m.to_string());
+        for t in edges.get(m).into_iter().flatten() {
+            match state.get(t.as_str()) {
+                Some(1) => {
+                    let from = stack.iter().position(|s| s == t).unwrap();
+                    cycles.push(format!("{} -> {t}", stack[from..].join(" -> ")));
+                }
+                Some(_) => {}
+                None => visit(t, edges, state, stack, cycles),
+            }
+        }
+        stack.pop();
+        state.insert(m.to_string(), 2);
+    }
+    let mut state = BTreeMap::new();
+    let mut cycles = Vec::new();
+    for m in modules.keys() {
+        if !state.contains_key(m.as_str()) {
+            visit(m, &edges, &mut state, &mut Vec::new(), &mut cycles);
+        }
+    }
+    assert!(
+        edges.values().map(BTreeSet::len).sum::<usize>() > 20,
+        "the scan finds the imports: {edges:?}"
+    );
+    assert!(cycles.is_empty(), "import circles: {cycles:#?}");
+}
