@@ -37,11 +37,11 @@ bench-fft:
 bench-solver:
 	cargo bench --bench solver -- --noplot
 
-# One solver iteration in units of one FFT pair of our own (issue 3), drift-cancelling.
+# One solver iteration in units of one FFT pair of our own, drift-cancelling.
 bench-iteration:
 	cargo bench --bench iteration_cost
 
-# Warm starts of a load sweep compared: scaled (the default), cold, extrapolated (issue 3).
+# Warm starts of a load sweep compared: scaled (the default), cold, extrapolated.
 bench-warm-start:
 	cargo bench --bench warm_start -- 2 256 512 1024
 

@@ -1,4 +1,4 @@
-//! Cost of one solver iteration in units of one FFT pair of our own (issue 3's target:
+//! Cost of one solver iteration in units of one FFT pair of our own (the target:
 //! ≤ 1.5), measured so that the machine's drift cancels: each round times the 30-load
 //! sweep (W/W0 log-spaced in [0.001, 0.06], tolerance 1e-8, warm-started, as
 //! `make bench-peers`) and, right after each load's solve, a few plain FFT pairs
@@ -43,7 +43,7 @@ fn main() {
         let op = ElasticOperator::new(grid, 1.0);
         let slope = surface::rms_slope(&grid, &heights);
         let loads = common::peers_loads();
-        // The plain iteration: the issue-3 target is its cost in FFT pairs.
+        // The plain iteration: the target is its cost in FFT pairs.
         let cfg = SolverConfig {
             tolerance: 1e-8,
             preconditioned: false,

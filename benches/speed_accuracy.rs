@@ -1,4 +1,4 @@
-//! Speed–accuracy chart (issue 7): `make speed-accuracy` writes
+//! Speed–accuracy chart: `make speed-accuracy` writes
 //! `figures/speed_accuracy.{png,svg,csv}`.
 //!
 //! (a) Solver tolerance 1e-4 … 1e-12 on one 512² surface (H = 0.8, λ_l/λ_s = 16,

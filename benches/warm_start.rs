@@ -1,5 +1,5 @@
-//! Warm starts of a load sweep compared (issue 3: "warm-start each step from the previous
-//! solution, scaled or extrapolated, your choice, measured"). The 30-load sweep of
+//! Warm starts of a load sweep compared: each step started from the previous solution,
+//! scaled or extrapolated, measured. The 30-load sweep of
 //! `make bench-peers` (H = 0.8, λ_l = n/4, λ_s = 8 px, W/W0 log-spaced in [0.001, 0.06],
 //! tolerance 1e-8) is solved with four starts for each load:
 //! - `scaled`: the previous solution scaled to the new load (what `Solver::solve` does);

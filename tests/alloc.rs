@@ -1,4 +1,4 @@
-//! No allocation inside the solver's iteration loop (issue 3): with a counting allocator,
+//! No allocation inside the solver's iteration loop: with a counting allocator,
 //! two solves with fresh solvers on the same two-thread pool, one taking many more
 //! iterations than the other, must allocate exactly as often. Its own test binary, so that
 //! no other test's allocations are counted (and one pool, so that no pool's threads are

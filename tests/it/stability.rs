@@ -1,4 +1,4 @@
-//! Stability where methods fail (issue 7): each case asserts the behaviour that
+//! Stability where methods fail: each case asserts the behaviour that
 //! docs/CONVENTIONS.md ("Stability where methods fail") states for it.
 
 use std::path::Path;
