@@ -16,9 +16,9 @@ build:
 	cargo build --release --locked
 
 test:
-	cargo fmt --check
-	cargo clippy --locked --all-targets -- -D warnings
-	cargo test --locked
+	cargo fmt --all --check
+	cargo clippy --locked --workspace --all-targets -- -D warnings
+	cargo test --locked --workspace
 	cargo test --locked --release --test it -- --ignored
 	$(MAKE) test-client
 
@@ -27,7 +27,7 @@ test-client: build
 	bash tests/client/run.sh
 
 fmt:
-	cargo fmt
+	cargo fmt --all
 
 bench: bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy
 

@@ -134,252 +134,313 @@ fn read_sample(job: &StatisticsJob, inputs: &Inputs) -> anyhow::Result<Sample> {
 }
 
 /// Ensemble statistics of one study.
+/// What the tables of one study are computed from.
+struct Study<'a> {
+    job: &'a StatisticsJob,
+    s: Sample,
+    /// `[load]`: the non-percolating cluster areas of every realization together.
+    pooled: Vec<Vec<u64>>,
+    ls2: f64,
+    pixels: f64,
+    loads: usize,
+    realizations: usize,
+}
+
+/// Ensemble statistics of one study.
 fn compute_statistics(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
     let s = read_sample(job, inputs)?;
-    let ls2 = job.lambda_s_px * job.lambda_s_px;
-    let pixels = (job.n * job.n) as f64;
     let loads = job.loads.len();
-    let realizations = inputs.len();
     let pooled: Vec<Vec<u64>> = (0..loads)
         .map(|l| s.areas.iter().flat_map(|r| r[l].iter().copied()).collect())
         .collect();
-
-    // Per-load summary (all clusters, percolating ones included) and dN/dA_c.
-    {
-        let per_load = |f: &dyn Fn(usize, usize) -> f64| -> Vec<(f64, f64)> {
-            (0..loads)
-                .map(|l| {
-                    let v: Vec<f64> = (0..realizations).map(|r| f(r, l)).collect();
-                    let (m, _, half) = stats::mean_band(&v);
-                    (m, half)
-                })
-                .collect()
-        };
-        let fraction = per_load(&|r, l| s.contact_px[r][l] as f64 / pixels);
-        let count = per_load(&|r, l| s.count[r][l] as f64);
-        let largest = per_load(&|r, l| s.largest[r][l] as f64 / ls2);
-        let ac_ls2: Vec<f64> = fraction.iter().map(|f| f.0 * pixels / ls2).collect();
-        let n_mean: Vec<f64> = count.iter().map(|c| c.0).collect();
-        let dn_dac = stats::derivative(&ac_ls2, &n_mean);
-        let perc: Vec<u32> = (0..loads)
-            .map(|l| {
-                (0..realizations)
-                    .filter(|&r| s.percolating[r][l] > 0)
-                    .count() as u32
-            })
-            .collect();
-        let first = |v: &[(f64, f64)]| v.iter().map(|x| x.0).collect::<Vec<_>>();
-        let second = |v: &[(f64, f64)]| v.iter().map(|x| x.1).collect::<Vec<_>>();
-        write(
-            dir,
-            "loads.parquet",
-            DataFrame::new(
-                loads,
-                vec![
-                    col("load_index", (0..loads as u32).collect::<Vec<_>>()),
-                    col("w_over_w0", job.loads.clone()),
-                    col("area_fraction_mean", first(&fraction)),
-                    col("area_fraction_ci95", second(&fraction)),
-                    col("n_clusters_mean", first(&count)),
-                    col("n_clusters_ci95", second(&count)),
-                    col("largest_area_over_ls2_mean", first(&largest)),
-                    col("largest_area_over_ls2_ci95", second(&largest)),
-                    col("dn_dac_per_ls2", dn_dac),
-                    col("realizations_percolating", perc),
-                ],
-            )?,
-        )?;
-    }
-
-    // PDF in logarithmic bins, common edges for the study.
-    let max_area = pooled.iter().flatten().copied().max().unwrap_or(0);
-    let pdf_rows;
-    {
-        // Edges from 1 px to the largest area (a single bin [1, 2] if all areas are 1 px;
-        // no rows if there is no cluster at all).
-        let edges = stats::log_edges(1.0, (max_area as f64).max(2.0), job.pdf_bins);
-        let (mut li, mut w, mut bin) = (Vec::new(), Vec::new(), Vec::new());
-        let (mut lo, mut hi, mut centre, mut width) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let (mut count, mut pooled_pdf, mut mean, mut half) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for l in (0..loads).filter(|_| max_area > 0) {
-            let bins = stats::log_binned_pdf(&pooled[l], &edges);
-            let per_real: Vec<Vec<stats::PdfBin>> = (0..realizations)
-                .map(|r| stats::log_binned_pdf(&s.areas[r][l], &edges))
-                .collect();
-            for (j, b) in bins.iter().enumerate() {
-                let v: Vec<f64> = per_real.iter().map(|p| p[j].density_per_px * ls2).collect();
-                let (m, _, h) = stats::mean_band(&v);
-                li.push(l as u32);
-                w.push(job.loads[l]);
-                bin.push(j as u32);
-                lo.push(b.lower_px / ls2);
-                hi.push(b.upper_px / ls2);
-                centre.push(b.centre_px / ls2);
-                width.push(b.width_px);
-                count.push(b.count);
-                pooled_pdf.push(b.density_per_px * ls2);
-                mean.push(m);
-                half.push(h);
-            }
-        }
-        pdf_rows = li.len();
-        write(
-            dir,
-            "pdf.parquet",
-            DataFrame::new(
-                pdf_rows,
-                vec![
-                    col("load_index", li),
-                    col("w_over_w0", w),
-                    col("bin", bin),
-                    col("lower_over_ls2", lo),
-                    col("upper_over_ls2", hi),
-                    col("centre_over_ls2", centre),
-                    col("width_px", width),
-                    col("count_pooled", count),
-                    col("pdf_pooled", pooled_pdf),
-                    col("pdf_mean", mean),
-                    col("pdf_ci95", half),
-                ],
-            )?,
-        )?;
-    }
-
-    // Exact CCDF, pooled (realization null) and per realization; on the pooled rows also
-    // the mean over realizations of their own CCDFs at the same areas, with its band
-    // (realizations without any cluster at that load have no CCDF and are left out).
-    {
-        let (mut li, mut w, mut real, mut area, mut area_ls2, mut ccdf) = (
-            Vec::new(),
-            Vec::new(),
-            Vec::<Option<u32>>::new(),
-            Vec::new(),
-            Vec::new(),
-            Vec::new(),
-        );
-        let (mut mean, mut half) = (Vec::<Option<f64>>::new(), Vec::<Option<f64>>::new());
-        for (l, pooled_l) in pooled.iter().enumerate() {
-            let sorted: Vec<Vec<u64>> = (0..realizations)
-                .filter(|&r| !s.areas[r][l].is_empty())
-                .map(|r| {
-                    let mut v = s.areas[r][l].clone();
-                    v.sort_unstable();
-                    v
-                })
-                .collect();
-            let sets = std::iter::once((None, pooled_l))
-                .chain((0..realizations).map(|r| (Some(r as u32), &s.areas[r][l])));
-            for (r, a) in sets {
-                for (k, p) in stats::ccdf_steps(a) {
-                    li.push(l as u32);
-                    w.push(job.loads[l]);
-                    real.push(r);
-                    area.push(k);
-                    area_ls2.push(k as f64 / ls2);
-                    ccdf.push(p);
-                    if r.is_none() {
-                        let v: Vec<f64> = sorted
-                            .iter()
-                            .map(|x| {
-                                (x.len() - x.partition_point(|&a| a <= k)) as f64 / x.len() as f64
-                            })
-                            .collect();
-                        let (m, _, h) = stats::mean_band(&v);
-                        mean.push(Some(m));
-                        half.push(Some(h));
-                    } else {
-                        mean.push(None);
-                        half.push(None);
-                    }
-                }
-            }
-        }
-        let rows = li.len();
-        write(
-            dir,
-            "ccdf.parquet",
-            DataFrame::new(
-                rows,
-                vec![
-                    col("load_index", li),
-                    col("w_over_w0", w),
-                    Column::new("realization".into(), real),
-                    col("area_px", area),
-                    col("area_over_ls2", area_ls2),
-                    col("ccdf", ccdf),
-                    Column::new("ccdf_mean".into(), mean),
-                    Column::new("ccdf_ci95".into(), half),
-                ],
-            )?,
-        )?;
-    }
-
-    // K, 𝒦 and the wear rate on the A* grid.
-    {
-        let mut cols_v: [Vec<f64>; 9] = Default::default();
-        let (mut li, mut w) = (Vec::new(), Vec::new());
-        for (l, pooled_l) in pooled.iter().enumerate() {
-            for &a_star in &job.a_star_over_ls2 {
-                let a_px = a_star * ls2;
-                let per: Vec<stats::WearAt> = (0..realizations)
-                    .map(|r| stats::wear_at(&s.areas[r][l], a_px))
-                    .collect();
-                let p = stats::wear_at(pooled_l, a_px);
-                let band = |f: &dyn Fn(&stats::WearAt) -> f64| {
-                    let v: Vec<f64> = per.iter().map(f).collect();
-                    let (m, _, h) = stats::mean_band(&v);
-                    (m, h)
-                };
-                let k = band(&|x| x.k_archard);
-                let kk = band(&|x| x.k_upscaled);
-                let rate = band(&|x| job.omega * x.area_above_px / pixels);
-                li.push(l as u32);
-                w.push(job.loads[l]);
-                for (c, v) in cols_v.iter_mut().zip([
-                    a_star,
-                    p.k_archard,
-                    k.0,
-                    k.1,
-                    p.k_upscaled,
-                    kk.0,
-                    kk.1,
-                    rate.0,
-                    rate.1,
-                ]) {
-                    c.push(v);
-                }
-            }
-        }
-        let names = [
-            "a_star_over_ls2",
-            "k_archard_pooled",
-            "k_archard_mean",
-            "k_archard_ci95",
-            "k_upscaled_pooled",
-            "k_upscaled_mean",
-            "k_upscaled_ci95",
-            "wear_rate_over_l2_mean",
-            "wear_rate_over_l2_ci95",
-        ];
-        let rows = li.len();
-        let mut columns = vec![col("load_index", li), col("w_over_w0", w)];
-        for (name, v) in names.iter().zip(cols_v) {
-            columns.push(col(name, v));
-        }
-        write(dir, "wear.parquet", DataFrame::new(rows, columns)?)?;
-    }
-
+    let study = Study {
+        job,
+        s,
+        pooled,
+        ls2: job.lambda_s_px * job.lambda_s_px,
+        pixels: (job.n * job.n) as f64,
+        loads,
+        realizations: inputs.len(),
+    };
+    write_loads(&study, dir)?;
+    let pdf_rows = write_pdf(&study, dir)?;
+    write_ccdf(&study, dir)?;
+    write_wear(&study, dir)?;
     // Exponents per load, pooled over realizations.
-    let fitted = write_alpha(job, dir, &pooled, ls2)?;
+    let fitted = write_alpha(job, dir, &study.pooled, study.ls2)?;
 
     Ok(json!({
-        "realizations": realizations,
+        "realizations": study.realizations,
         "pdf_rows": pdf_rows,
         "loads_with_exponent": fitted,
         "omega": job.omega,
     }))
+}
+
+/// Per-load summary (all clusters, percolating ones included) and dN/dA_c: `loads.parquet`.
+fn write_loads(study: &Study, dir: &Path) -> anyhow::Result<()> {
+    let Study {
+        job,
+        s,
+        ls2,
+        pixels,
+        loads,
+        realizations,
+        ..
+    } = study;
+    let (ls2, pixels, loads, realizations) = (*ls2, *pixels, *loads, *realizations);
+    let per_load = |f: &dyn Fn(usize, usize) -> f64| -> Vec<(f64, f64)> {
+        (0..loads)
+            .map(|l| {
+                let v: Vec<f64> = (0..realizations).map(|r| f(r, l)).collect();
+                let (m, _, half) = stats::mean_band(&v);
+                (m, half)
+            })
+            .collect()
+    };
+    let fraction = per_load(&|r, l| s.contact_px[r][l] as f64 / pixels);
+    let count = per_load(&|r, l| s.count[r][l] as f64);
+    let largest = per_load(&|r, l| s.largest[r][l] as f64 / ls2);
+    let ac_ls2: Vec<f64> = fraction.iter().map(|f| f.0 * pixels / ls2).collect();
+    let n_mean: Vec<f64> = count.iter().map(|c| c.0).collect();
+    let dn_dac = stats::derivative(&ac_ls2, &n_mean);
+    let perc: Vec<u32> = (0..loads)
+        .map(|l| {
+            (0..realizations)
+                .filter(|&r| s.percolating[r][l] > 0)
+                .count() as u32
+        })
+        .collect();
+    let first = |v: &[(f64, f64)]| v.iter().map(|x| x.0).collect::<Vec<_>>();
+    let second = |v: &[(f64, f64)]| v.iter().map(|x| x.1).collect::<Vec<_>>();
+    write(
+        dir,
+        "loads.parquet",
+        DataFrame::new(
+            loads,
+            vec![
+                col("load_index", (0..loads as u32).collect::<Vec<_>>()),
+                col("w_over_w0", job.loads.clone()),
+                col("area_fraction_mean", first(&fraction)),
+                col("area_fraction_ci95", second(&fraction)),
+                col("n_clusters_mean", first(&count)),
+                col("n_clusters_ci95", second(&count)),
+                col("largest_area_over_ls2_mean", first(&largest)),
+                col("largest_area_over_ls2_ci95", second(&largest)),
+                col("dn_dac_per_ls2", dn_dac),
+                col("realizations_percolating", perc),
+            ],
+        )?,
+    )?;
+    Ok(())
+}
+
+/// PDF in logarithmic bins, common edges for the study: `pdf.parquet`; returns its rows.
+fn write_pdf(study: &Study, dir: &Path) -> anyhow::Result<usize> {
+    let max_area = study.pooled.iter().flatten().copied().max().unwrap_or(0);
+    let Study {
+        job,
+        s,
+        pooled,
+        ls2,
+        loads,
+        realizations,
+        ..
+    } = study;
+    let (ls2, loads, realizations) = (*ls2, *loads, *realizations);
+    // Edges from 1 px to the largest area (a single bin [1, 2] if all areas are 1 px;
+    // no rows if there is no cluster at all).
+    let edges = stats::log_edges(1.0, (max_area as f64).max(2.0), job.pdf_bins);
+    let (mut li, mut w, mut bin) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut lo, mut hi, mut centre, mut width) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut count, mut pooled_pdf, mut mean, mut half) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for l in (0..loads).filter(|_| max_area > 0) {
+        let bins = stats::log_binned_pdf(&pooled[l], &edges);
+        let per_real: Vec<Vec<stats::PdfBin>> = (0..realizations)
+            .map(|r| stats::log_binned_pdf(&s.areas[r][l], &edges))
+            .collect();
+        for (j, b) in bins.iter().enumerate() {
+            let v: Vec<f64> = per_real.iter().map(|p| p[j].density_per_px * ls2).collect();
+            let (m, _, h) = stats::mean_band(&v);
+            li.push(l as u32);
+            w.push(job.loads[l]);
+            bin.push(j as u32);
+            lo.push(b.lower_px / ls2);
+            hi.push(b.upper_px / ls2);
+            centre.push(b.centre_px / ls2);
+            width.push(b.width_px);
+            count.push(b.count);
+            pooled_pdf.push(b.density_per_px * ls2);
+            mean.push(m);
+            half.push(h);
+        }
+    }
+    let pdf_rows = li.len();
+    write(
+        dir,
+        "pdf.parquet",
+        DataFrame::new(
+            pdf_rows,
+            vec![
+                col("load_index", li),
+                col("w_over_w0", w),
+                col("bin", bin),
+                col("lower_over_ls2", lo),
+                col("upper_over_ls2", hi),
+                col("centre_over_ls2", centre),
+                col("width_px", width),
+                col("count_pooled", count),
+                col("pdf_pooled", pooled_pdf),
+                col("pdf_mean", mean),
+                col("pdf_ci95", half),
+            ],
+        )?,
+    )?;
+    Ok(pdf_rows)
+}
+
+/// Exact CCDF, pooled (realization null) and per realization; on the pooled rows also the
+/// mean over realizations of their own CCDFs at the same areas, with its band (realizations
+/// without any cluster at that load have no CCDF and are left out): `ccdf.parquet`.
+fn write_ccdf(study: &Study, dir: &Path) -> anyhow::Result<()> {
+    let Study {
+        job,
+        s,
+        pooled,
+        ls2,
+        realizations,
+        ..
+    } = study;
+    let (ls2, realizations) = (*ls2, *realizations);
+    let (mut li, mut w, mut real, mut area, mut area_ls2, mut ccdf) = (
+        Vec::new(),
+        Vec::new(),
+        Vec::<Option<u32>>::new(),
+        Vec::new(),
+        Vec::new(),
+        Vec::new(),
+    );
+    let (mut mean, mut half) = (Vec::<Option<f64>>::new(), Vec::<Option<f64>>::new());
+    for (l, pooled_l) in pooled.iter().enumerate() {
+        let sorted: Vec<Vec<u64>> = (0..realizations)
+            .filter(|&r| !s.areas[r][l].is_empty())
+            .map(|r| {
+                let mut v = s.areas[r][l].clone();
+                v.sort_unstable();
+                v
+            })
+            .collect();
+        let sets = std::iter::once((None, pooled_l))
+            .chain((0..realizations).map(|r| (Some(r as u32), &s.areas[r][l])));
+        for (r, a) in sets {
+            for (k, p) in stats::ccdf_steps(a) {
+                li.push(l as u32);
+                w.push(job.loads[l]);
+                real.push(r);
+                area.push(k);
+                area_ls2.push(k as f64 / ls2);
+                ccdf.push(p);
+                if r.is_none() {
+                    let v: Vec<f64> = sorted
+                        .iter()
+                        .map(|x| (x.len() - x.partition_point(|&a| a <= k)) as f64 / x.len() as f64)
+                        .collect();
+                    let (m, _, h) = stats::mean_band(&v);
+                    mean.push(Some(m));
+                    half.push(Some(h));
+                } else {
+                    mean.push(None);
+                    half.push(None);
+                }
+            }
+        }
+    }
+    let rows = li.len();
+    write(
+        dir,
+        "ccdf.parquet",
+        DataFrame::new(
+            rows,
+            vec![
+                col("load_index", li),
+                col("w_over_w0", w),
+                Column::new("realization".into(), real),
+                col("area_px", area),
+                col("area_over_ls2", area_ls2),
+                col("ccdf", ccdf),
+                Column::new("ccdf_mean".into(), mean),
+                Column::new("ccdf_ci95".into(), half),
+            ],
+        )?,
+    )?;
+    Ok(())
+}
+
+/// K, 𝒦 and the wear rate on the A* grid: `wear.parquet`.
+fn write_wear(study: &Study, dir: &Path) -> anyhow::Result<()> {
+    let Study {
+        job,
+        s,
+        pooled,
+        ls2,
+        pixels,
+        realizations,
+        ..
+    } = study;
+    let (ls2, pixels, realizations) = (*ls2, *pixels, *realizations);
+    let mut cols_v: [Vec<f64>; 9] = Default::default();
+    let (mut li, mut w) = (Vec::new(), Vec::new());
+    for (l, pooled_l) in pooled.iter().enumerate() {
+        for &a_star in &job.a_star_over_ls2 {
+            let a_px = a_star * ls2;
+            let per: Vec<stats::WearAt> = (0..realizations)
+                .map(|r| stats::wear_at(&s.areas[r][l], a_px))
+                .collect();
+            let p = stats::wear_at(pooled_l, a_px);
+            let band = |f: &dyn Fn(&stats::WearAt) -> f64| {
+                let v: Vec<f64> = per.iter().map(f).collect();
+                let (m, _, h) = stats::mean_band(&v);
+                (m, h)
+            };
+            let k = band(&|x| x.k_archard);
+            let kk = band(&|x| x.k_upscaled);
+            let rate = band(&|x| job.omega * x.area_above_px / pixels);
+            li.push(l as u32);
+            w.push(job.loads[l]);
+            for (c, v) in cols_v.iter_mut().zip([
+                a_star,
+                p.k_archard,
+                k.0,
+                k.1,
+                p.k_upscaled,
+                kk.0,
+                kk.1,
+                rate.0,
+                rate.1,
+            ]) {
+                c.push(v);
+            }
+        }
+    }
+    let names = [
+        "a_star_over_ls2",
+        "k_archard_pooled",
+        "k_archard_mean",
+        "k_archard_ci95",
+        "k_upscaled_pooled",
+        "k_upscaled_mean",
+        "k_upscaled_ci95",
+        "wear_rate_over_l2_mean",
+        "wear_rate_over_l2_ci95",
+    ];
+    let rows = li.len();
+    let mut columns = vec![col("load_index", li), col("w_over_w0", w)];
+    for (name, v) in names.iter().zip(cols_v) {
+        columns.push(col(name, v));
+    }
+    write(dir, "wear.parquet", DataFrame::new(rows, columns)?)?;
+    Ok(())
 }
 
 /// One row per load and estimator; a fit that cannot be made leaves nulls and says why.
