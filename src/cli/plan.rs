@@ -4,6 +4,7 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 use serde::Serialize;
 use serde_json::json;
@@ -14,6 +15,8 @@ use wearcoef::pipeline::plan::{Instance, Plan};
 use wearcoef::pipeline::runner;
 use wearcoef::pipeline::store::Store;
 use wearcoef::pipeline::UsageError;
+
+use super::{load, StoreArgs};
 
 /// Totals of a plan, per stage and overall.
 #[derive(Debug, Serialize)]
@@ -96,7 +99,7 @@ pub fn print_plan(plan: &Plan, json_out: bool, out: Option<&PathBuf>) -> anyhow:
         "instances": plan.instances,
     });
     if let Some(path) = out {
-        crate::write_atomically(path, |tmp| {
+        super::write_atomically(path, |tmp| {
             std::fs::write(tmp, serde_json::to_vec_pretty(&doc)?)?;
             Ok(())
         })?;
@@ -154,7 +157,7 @@ pub fn parse_slice(s: &str) -> Result<(usize, usize), String> {
 }
 
 /// Run the instances of a plan file (optionally one level, optionally one slice of it).
-pub fn exec(
+pub fn exec_plan(
     plan_path: &std::path::Path,
     data: &std::path::Path,
     level: Option<usize>,
@@ -191,4 +194,66 @@ pub fn exec(
     let store = Store::new(data);
     let computed = runner::execute(&store, &chosen, jobs, quiet)?;
     Ok(json!({ "instances": chosen.len(), "computed": computed }))
+}
+
+#[derive(clap::Args)]
+pub struct PlanArgs {
+    pub targets: Vec<String>,
+    #[command(flatten)]
+    pub store: StoreArgs,
+    #[arg(long, default_value = "default")]
+    pub profile: String,
+    /// Print the whole plan as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the plan (JSON) to this file, for `wearcoef exec`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
+    let PlanArgs {
+        targets,
+        store,
+        profile,
+        json,
+        out,
+    } = args;
+    let pipeline = load(&store.config)?;
+    let origin = store.config.display().to_string();
+    let plan = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
+    print_plan(&plan, json, out.as_ref())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(clap::Args)]
+pub struct ExecArgs {
+    /// Plan written by `wearcoef plan --out`.
+    #[arg(long)]
+    pub plan: PathBuf,
+    #[arg(long, default_value = "data")]
+    pub data: PathBuf,
+    #[arg(long)]
+    pub level: Option<usize>,
+    #[arg(long, value_parser = parse_slice)]
+    pub slice: Option<(usize, usize)>,
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+pub fn exec(args: ExecArgs) -> anyhow::Result<ExitCode> {
+    let ExecArgs {
+        plan,
+        data,
+        level,
+        slice,
+        jobs,
+        quiet,
+    } = args;
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let done = exec_plan(&plan, &data, level, slice, jobs.max(1), quiet)?;
+    println!("{done}");
+    Ok(ExitCode::SUCCESS)
 }

@@ -297,6 +297,39 @@ fn study_ref(k: &StudyKeys, label: String, value: f64) -> StudyRef {
     }
 }
 
+/// One declared figure in one profile, with the studies' keys it draws from.
+struct FigureContext<'a> {
+    name: &'a str,
+    decl: &'a FigureDecl,
+    profile: &'a str,
+    keys: &'a [StudyKeys<'a>],
+}
+
+impl<'a> FigureContext<'a> {
+    fn find(&self, s: &str) -> anyhow::Result<&'a StudyKeys<'a>> {
+        self.keys.iter().find(|k| k.plan.name == s).ok_or_else(|| {
+            anyhow::anyhow!(
+                "figure {}: study {s} is not in profile {}",
+                self.name,
+                self.profile
+            )
+        })
+    }
+
+    /// The studies of `list` the figure draws in this profile.
+    fn used(&self, list: &[String]) -> anyhow::Result<Vec<&'a StudyKeys<'a>>> {
+        self.decl
+            .used(list, self.profile)
+            .into_iter()
+            .map(|s| self.find(s))
+            .collect()
+    }
+}
+
+fn names(ks: &[&StudyKeys]) -> Vec<String> {
+    ks.iter().map(|k| k.plan.name.clone()).collect()
+}
+
 /// The audit and figure instances of one declared figure.
 fn figure_instances(
     b: &mut Builder,
@@ -305,167 +338,197 @@ fn figure_instances(
     profile: &str,
     keys: &[StudyKeys],
 ) -> anyhow::Result<()> {
-    let find = |s: &str| -> anyhow::Result<&StudyKeys> {
-        keys.iter()
-            .find(|k| k.plan.name == s)
-            .ok_or_else(|| anyhow::anyhow!("figure {name}: study {s} is not in profile {profile}"))
+    let c = FigureContext {
+        name,
+        decl,
+        profile,
+        keys,
     };
-    let used = |list: &[String]| -> anyhow::Result<Vec<&StudyKeys>> {
-        decl.used(list, profile).into_iter().map(find).collect()
-    };
-    let names = |ks: &[&StudyKeys]| ks.iter().map(|k| k.plan.name.clone()).collect::<Vec<_>>();
-    let fig = Some(name);
     match decl.kind {
-        FigureKind::Fig6 => {
-            let model = b.add::<Analytic>(&AnalyticJob::fig6(), vec![], &[], None, None);
-            b.add::<Figures>(&FigureJob::Fig6, vec![model], &[], None, fig);
-        }
-        FigureKind::Fig2 => {
-            let k = find(decl.study.as_deref().unwrap_or_default())?;
-            let studies = [k.plan.name.clone()];
-            let maps: Vec<(usize, f64)> = k
-                .plan
-                .keep_pressure
-                .iter()
-                .map(|&i| (i, k.plan.loads[i]))
-                .collect();
-            let job = FigureJob::Fig2Maps {
-                maps: maps.clone(),
-                lambda_s_px: k.plan.surface.lambda_s_px,
-                a_star_over_ls2: crate::stages::figures::FIG2_A_STAR_OVER_LS2,
-            };
-            let inputs = vec![k.surfaces[0].clone(), k.contacts[0].clone()];
-            b.add::<Figures>(&job, inputs, &studies, None, fig);
-            let audit = b.add::<Audits>(
-                &AuditJob::realizations(),
-                k.clusters.clone(),
-                &studies,
-                None,
-                fig,
-            );
-            let job = FigureJob::Fig2ef {
-                marked_loads: maps.iter().map(|m| m.1).collect(),
-            };
-            b.add::<Figures>(&job, vec![k.statistics.clone(), audit], &studies, None, fig);
-        }
-        FigureKind::Fig3Fig4a => {
-            let ratio = |k: &StudyKeys| k.plan.surface.lambda_l_px / k.plan.surface.lambda_s_px;
-            let ratios = used(&decl.ratios)?;
-            let hurst = used(&decl.hurst)?;
-            let job = FigureJob::Fig3Fig4a {
-                ratios: ratios
-                    .iter()
-                    .map(|k| study_ref(k, format!("λ_l/λ_s = {}", ratio(k)), ratio(k)))
-                    .collect(),
-                hurst: hurst
-                    .iter()
-                    .map(|k| {
-                        let h = k.plan.surface.hurst;
-                        study_ref(k, format!("H = {h}"), h)
-                    })
-                    .collect(),
-                loads: decl.loads.clone(),
-                inset_load: decl.inset_load.unwrap_or_default(),
-            };
-            let inputs = ratios
-                .iter()
-                .chain(&hurst)
-                .map(|k| k.statistics.clone())
-                .collect();
-            let mut studies = names(&ratios);
-            for s in names(&hurst) {
-                if !studies.contains(&s) {
-                    studies.push(s);
-                }
-            }
-            b.add::<Figures>(&job, inputs, &studies, None, fig);
-        }
-        FigureKind::Fig45 => {
-            let k = find(decl.study.as_deref().unwrap_or_default())?;
-            let inputs = vec![k.statistics.clone(), k.analytic.clone()];
-            let studies = std::slice::from_ref(&k.plan.name);
-            b.add::<Figures>(&FigureJob::Fig45, inputs, studies, None, fig);
-        }
-        FigureKind::AppendixB1 | FigureKind::AppendixB2 => {
-            let b1 = decl.kind == FigureKind::AppendixB1;
-            let setting = |k: &StudyKeys| {
-                let s = &k.plan.surface;
-                if b1 {
-                    s.n as f64 / s.lambda_l_px
-                } else {
-                    s.lambda_s_px
-                }
-            };
-            let quantity = if b1 { "L/λ_l" } else { "λ_s/Δl" };
-            let mut studies = used(&decl.studies)?;
-            studies.sort_by(|a, b| setting(a).total_cmp(&setting(b)));
-            let refs: Vec<StudyRef> = studies
-                .iter()
-                .map(|k| study_ref(k, format!("{quantity} = {}", setting(k)), setting(k)))
-                .collect();
-            let audit = settings_audit(b, name, &studies, &refs);
-            let mut inputs: Vec<InputRef> = studies.iter().map(|k| k.statistics.clone()).collect();
-            inputs.push(audit);
-            let job = FigureJob::Appendix {
-                figure: name.to_string(),
-                quantity: quantity.to_string(),
-                b1,
-                settings: refs,
-            };
-            b.add::<Figures>(&job, inputs, &names(&studies), None, fig);
-        }
-        FigureKind::Convergence => {
-            let mut studies = used(&decl.studies)?;
-            // Reference last: the largest grid, and of equal grids the finer discretisation
-            // (the declared order breaks remaining ties).
-            studies.sort_by(|a, b| {
-                let (sa, sb) = (&a.plan.surface, &b.plan.surface);
-                (sa.n, sa.lambda_s_px)
-                    .partial_cmp(&(sb.n, sb.lambda_s_px))
-                    .expect("finite sizes")
-            });
-            let mut refs: Vec<StudyRef> = studies
-                .iter()
-                .map(|k| {
-                    let s = &k.plan.surface;
-                    let label = format!(
-                        "L/λ_l = {}, λ_s/Δl = {} (n = {})",
-                        s.n as f64 / s.lambda_l_px,
-                        s.lambda_s_px,
-                        s.n
-                    );
-                    study_ref(k, label, s.n as f64)
-                })
-                .collect();
-            // Two studies with the same sizes would share a label: tell them apart by name.
-            for i in 0..refs.len() {
-                if refs.iter().filter(|r| r.label == refs[i].label).count() > 1 {
-                    refs[i].label = format!("{} [{}]", refs[i].label, refs[i].study);
-                }
-            }
-            let hurst = studies[0].plan.surface.hurst;
-            let audit = settings_audit(b, name, &studies, &refs);
-            let mut inputs: Vec<InputRef> = studies.iter().map(|k| k.statistics.clone()).collect();
-            inputs.push(audit);
-            let job = FigureJob::Convergence {
-                figure: name.to_string(),
-                hurst,
-                settings: refs,
-            };
-            b.add::<Figures>(&job, inputs, &names(&studies), None, fig);
-        }
-        FigureKind::LoadResolution => {
-            let chosen = find(decl.chosen.as_deref().unwrap_or_default())?;
-            let fine = find(decl.fine.as_deref().unwrap_or_default())?;
-            let studies = names(&[fine, chosen]);
-            let inputs = vec![fine.statistics.clone(), chosen.statistics.clone()];
-            let audit = b.add::<Audits>(&AuditJob::load_resolution(), inputs, &studies, None, fig);
-            let job = FigureJob::LoadResolution {
-                figure: name.to_string(),
-            };
-            b.add::<Figures>(&job, vec![audit], &studies, None, fig);
+        FigureKind::Fig6 => fig6_instances(b, &c),
+        FigureKind::Fig2 => fig2_instances(b, &c),
+        FigureKind::Fig3Fig4a => fig3_instances(b, &c),
+        FigureKind::Fig45 => fig45_instances(b, &c),
+        FigureKind::AppendixB1 | FigureKind::AppendixB2 => appendix_instances(b, &c),
+        FigureKind::Convergence => convergence_instances(b, &c),
+        FigureKind::LoadResolution => load_resolution_instances(b, &c),
+    }
+}
+
+fn fig6_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let fig = Some(c.name);
+
+    let model = b.add::<Analytic>(&AnalyticJob::fig6(), vec![], &[], None, None);
+    b.add::<Figures>(&FigureJob::Fig6, vec![model], &[], None, fig);
+    Ok(())
+}
+
+fn fig2_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let k = c.find(decl.study.as_deref().unwrap_or_default())?;
+    let studies = [k.plan.name.clone()];
+    let maps: Vec<(usize, f64)> = k
+        .plan
+        .keep_pressure
+        .iter()
+        .map(|&i| (i, k.plan.loads[i]))
+        .collect();
+    let job = FigureJob::Fig2Maps {
+        maps: maps.clone(),
+        lambda_s_px: k.plan.surface.lambda_s_px,
+        a_star_over_ls2: crate::stages::figures::FIG2_A_STAR_OVER_LS2,
+    };
+    let inputs = vec![k.surfaces[0].clone(), k.contacts[0].clone()];
+    b.add::<Figures>(&job, inputs, &studies, None, fig);
+    let audit = b.add::<Audits>(
+        &AuditJob::realizations(),
+        k.clusters.clone(),
+        &studies,
+        None,
+        fig,
+    );
+    let job = FigureJob::Fig2ef {
+        marked_loads: maps.iter().map(|m| m.1).collect(),
+    };
+    b.add::<Figures>(&job, vec![k.statistics.clone(), audit], &studies, None, fig);
+    Ok(())
+}
+
+fn fig3_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let ratio = |k: &StudyKeys| k.plan.surface.lambda_l_px / k.plan.surface.lambda_s_px;
+    let ratios = c.used(&decl.ratios)?;
+    let hurst = c.used(&decl.hurst)?;
+    let job = FigureJob::Fig3Fig4a {
+        ratios: ratios
+            .iter()
+            .map(|k| study_ref(k, format!("λ_l/λ_s = {}", ratio(k)), ratio(k)))
+            .collect(),
+        hurst: hurst
+            .iter()
+            .map(|k| {
+                let h = k.plan.surface.hurst;
+                study_ref(k, format!("H = {h}"), h)
+            })
+            .collect(),
+        loads: decl.loads.clone(),
+        inset_load: decl.inset_load.unwrap_or_default(),
+    };
+    let inputs = ratios
+        .iter()
+        .chain(&hurst)
+        .map(|k| k.statistics.clone())
+        .collect();
+    let mut studies = names(&ratios);
+    for s in names(&hurst) {
+        if !studies.contains(&s) {
+            studies.push(s);
         }
     }
+    b.add::<Figures>(&job, inputs, &studies, None, fig);
+    Ok(())
+}
+
+fn fig45_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let k = c.find(decl.study.as_deref().unwrap_or_default())?;
+    let inputs = vec![k.statistics.clone(), k.analytic.clone()];
+    let studies = std::slice::from_ref(&k.plan.name);
+    b.add::<Figures>(&FigureJob::Fig45, inputs, studies, None, fig);
+    Ok(())
+}
+
+fn appendix_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let b1 = decl.kind == FigureKind::AppendixB1;
+    let setting = |k: &StudyKeys| {
+        let s = &k.plan.surface;
+        if b1 {
+            s.n as f64 / s.lambda_l_px
+        } else {
+            s.lambda_s_px
+        }
+    };
+    let quantity = if b1 { "L/λ_l" } else { "λ_s/Δl" };
+    let mut studies = c.used(&decl.studies)?;
+    studies.sort_by(|a, b| setting(a).total_cmp(&setting(b)));
+    let refs: Vec<StudyRef> = studies
+        .iter()
+        .map(|k| study_ref(k, format!("{quantity} = {}", setting(k)), setting(k)))
+        .collect();
+    let audit = settings_audit(b, c.name, &studies, &refs);
+    let mut inputs: Vec<InputRef> = studies.iter().map(|k| k.statistics.clone()).collect();
+    inputs.push(audit);
+    let job = FigureJob::Appendix {
+        figure: c.name.to_string(),
+        quantity: quantity.to_string(),
+        b1,
+        settings: refs,
+    };
+    b.add::<Figures>(&job, inputs, &names(&studies), None, fig);
+    Ok(())
+}
+
+fn convergence_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let mut studies = c.used(&decl.studies)?;
+    // Reference last: the largest grid, and of equal grids the finer discretisation
+    // (the declared order breaks remaining ties).
+    studies.sort_by(|a, b| {
+        let (sa, sb) = (&a.plan.surface, &b.plan.surface);
+        (sa.n, sa.lambda_s_px)
+            .partial_cmp(&(sb.n, sb.lambda_s_px))
+            .expect("finite sizes")
+    });
+    let mut refs: Vec<StudyRef> = studies
+        .iter()
+        .map(|k| {
+            let s = &k.plan.surface;
+            let label = format!(
+                "L/λ_l = {}, λ_s/Δl = {} (n = {})",
+                s.n as f64 / s.lambda_l_px,
+                s.lambda_s_px,
+                s.n
+            );
+            study_ref(k, label, s.n as f64)
+        })
+        .collect();
+    // Two studies with the same sizes would share a label: tell them apart by name.
+    for i in 0..refs.len() {
+        if refs.iter().filter(|r| r.label == refs[i].label).count() > 1 {
+            refs[i].label = format!("{} [{}]", refs[i].label, refs[i].study);
+        }
+    }
+    let hurst = studies[0].plan.surface.hurst;
+    let audit = settings_audit(b, c.name, &studies, &refs);
+    let mut inputs: Vec<InputRef> = studies.iter().map(|k| k.statistics.clone()).collect();
+    inputs.push(audit);
+    let job = FigureJob::Convergence {
+        figure: c.name.to_string(),
+        hurst,
+        settings: refs,
+    };
+    b.add::<Figures>(&job, inputs, &names(&studies), None, fig);
+    Ok(())
+}
+
+fn load_resolution_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let chosen = c.find(decl.chosen.as_deref().unwrap_or_default())?;
+    let fine = c.find(decl.fine.as_deref().unwrap_or_default())?;
+    let studies = names(&[fine, chosen]);
+    let inputs = vec![fine.statistics.clone(), chosen.statistics.clone()];
+    let audit = b.add::<Audits>(&AuditJob::load_resolution(), inputs, &studies, None, fig);
+    let job = FigureJob::LoadResolution {
+        figure: c.name.to_string(),
+    };
+    b.add::<Figures>(&job, vec![audit], &studies, None, fig);
     Ok(())
 }
 

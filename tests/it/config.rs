@@ -272,3 +272,74 @@ fn a_study_computes_the_loads_its_figures_ask_for() {
         .replace("hurst: [t], ", "");
     assert_eq!(field_of(&undrawn), "studies.t.loads");
 }
+
+/// The shipped pipeline: the studies drawn only in Figs. 3 and 4a compute exactly the loads
+/// that figure asks for, and the inset studies only the inset's load, in the quick, default
+/// and paper profiles; fig3_ll128 also feeds Figs. 4b and 5, so it sweeps.
+#[test]
+fn figure_3_studies_compute_only_the_loads_figure_3_draws() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+    let pipeline = Pipeline::load(&path).unwrap();
+    let fig3 = &pipeline.figures["fig3_fig4a"];
+    let inset = fig3.inset_load.unwrap();
+    for profile in ["quick", "default", "paper"] {
+        let plans = pipeline.plan(profile, "pipeline.yaml").unwrap();
+        let loads = |name: &str| {
+            plans
+                .iter()
+                .find(|s| s.name == name)
+                .unwrap_or_else(|| panic!("{profile}: no study {name}"))
+                .loads
+                .clone()
+        };
+        for name in ["fig3_ll8", "fig3_ll32"] {
+            assert_eq!(loads(name), fig3.loads, "{profile}: {name}");
+        }
+        for name in ["fig3_h06", "fig3_h07"] {
+            assert_eq!(loads(name), vec![inset], "{profile}: {name}");
+        }
+        assert!(
+            loads("fig3_ll128").len() > fig3.loads.len(),
+            "{profile}: fig3_ll128 sweeps"
+        );
+    }
+}
+
+/// The load-resolution profile's `lr128_chosen` is exactly the default profile's fig3_ll128
+/// (so its check is about the sweep Figs. 4b and 5 draw), and `lr128_fine` the same
+/// realizations at more loads over the same range.
+#[test]
+fn load_resolution_studies_are_the_default_fig3_ll128_sweep_and_a_finer_one() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+    let pipeline = Pipeline::load(&path).unwrap();
+    let default = pipeline.plan("default", "pipeline.yaml").unwrap();
+    let check = pipeline
+        .plan("load_resolution128", "pipeline.yaml")
+        .unwrap();
+    let find = |plans: &[wearcoef::config::StudyPlan], name: &str| {
+        plans.iter().find(|s| s.name == name).cloned().unwrap()
+    };
+    let drawn = find(&default, "fig3_ll128");
+    let chosen = find(&check, "lr128_chosen");
+    let fine = find(&check, "lr128_fine");
+    let same = |a: &wearcoef::config::StudyPlan, b: &wearcoef::config::StudyPlan| {
+        let strip = |s: &wearcoef::config::StudyPlan| wearcoef::config::StudyPlan {
+            name: String::new(),
+            profile: String::new(),
+            loads: Vec::new(),
+            ..s.clone()
+        };
+        strip(a) == strip(b)
+    };
+    assert!(same(&drawn, &chosen) && drawn.loads == chosen.loads);
+    assert!(same(&drawn, &fine));
+    assert!(fine.loads.len() > chosen.loads.len());
+    // The fine sweep lies inside the chosen one's range, so every fine load is judged.
+    assert!(chosen.loads[0] <= fine.loads[0]);
+    assert_eq!(chosen.loads.last(), fine.loads.last());
+    // The Fig. 3 loads are on the chosen grid or within 1.5 % of it.
+    for &t in &pipeline.figures["fig3_fig4a"].loads {
+        let nearest = chosen.loads[wearcoef::statistics::nearest_in_log(&chosen.loads, t).unwrap()];
+        assert!((nearest / t - 1.0).abs() < 0.015, "{t}: {nearest}");
+    }
+}

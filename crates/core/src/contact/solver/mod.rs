@@ -283,15 +283,7 @@ impl<'a> Solver<'a> {
         mean_pressure: f64,
         cfg: &SolverConfig,
     ) -> Result<SolveReport, ContactError> {
-        if !(mean_pressure.is_finite() && mean_pressure >= 0.0) {
-            return Err(ContactError::BadLoad(mean_pressure));
-        }
-        if !(cfg.tolerance > 0.0 && cfg.tolerance.is_finite()) || cfg.max_iterations == 0 {
-            return Err(ContactError::BadConfig(format!(
-                "tolerance {} must be finite and > 0, max_iterations {} must be ≥ 1",
-                cfg.tolerance, cfg.max_iterations
-            )));
-        }
+        check_request(mean_pressure, cfg)?;
         let len = self.pressure.len();
         if cfg.preconditioned && self.preconditioned.len() != len {
             self.preconditioned = vec![0.0; len];
@@ -307,43 +299,11 @@ impl<'a> Solver<'a> {
         };
 
         if target == 0.0 || self.flat {
-            self.pressure.fill(target);
-            // u = 0: w = −h.
-            let h = self.heights;
-            self.separation
-                .par_iter_mut()
-                .zip(h.par_iter())
-                .for_each(|(w, &h)| *w = -h);
-            self.finish_gap();
-            self.has_solution = target > 0.0;
-            self.separation_exact = true;
+            self.uniform_solution(target);
             report.error_history.push(0.0);
             return Ok(report);
         }
-
-        // Start: the previous solution scaled to the new load, or uniform pressure, with the
-        // gradient statistics of that state (every update below computes them in the pass
-        // that makes the state). After a converged solve `w = K p − h` is exact, and
-        // `K (s p) = s K p`, so the scaled start needs a pass, not a convolution.
-        let previous_total: f64 = self.chunked_sum(|p| p);
-        let warm = self.has_solution && previous_total > 0.0;
-        let scale = if warm {
-            target * len as f64 / previous_total
-        } else {
-            1.0
-        };
-        let mut stats = if warm && self.separation_exact {
-            self.sparse.clear();
-            self.sparse_update(scale, 0.0)
-        } else {
-            if warm {
-                self.pressure.par_iter_mut().for_each(|p| *p *= scale);
-            } else {
-                self.pressure.fill(target);
-            }
-            report.convolutions += 1;
-            self.exact_deflection(1.0, 0.0)
-        };
+        let mut stats = self.start(target, &mut report);
         self.has_solution = false;
         self.separation_exact = false;
 
@@ -459,31 +419,15 @@ impl<'a> Solver<'a> {
                 continue;
             }
             let scale = target * len as f64 / total;
-            if totals.changed == 0 && linear_steps + 1 < RESYNC {
-                // Nothing left or entered the set: p and u are both exact linear updates and
-                // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next
-                // exact step.
-                stats = linear_stats;
-                exact = false;
-                linear_steps += 1;
-            } else if totals.changed <= MAX_SPARSE
-                && linear_steps + 1 < RESYNC
-                && self.gather_changes()
-            {
-                stats = self.sparse_update(scale, shift);
-                exact = false;
-                linear_steps += 1;
-            } else if linear_steps + 1 < RESYNC && self.changes_listed() {
-                stats = self.fft_correction(scale, shift);
-                report.convolutions += 1;
-                exact = false;
-                linear_steps += 1;
-            } else {
-                stats = self.exact_deflection(scale, shift);
-                report.convolutions += 1;
-                exact = true;
-                linear_steps = 0;
-            }
+            stats = self.next_deflection(
+                &totals,
+                linear_stats,
+                scale,
+                shift,
+                &mut linear_steps,
+                &mut report,
+            );
+            exact = linear_steps == 0;
         }
 
         self.finish_gap();
@@ -492,5 +436,96 @@ impl<'a> Solver<'a> {
         // solution, `w = −h`).
         self.separation_exact = self.has_solution;
         Ok(report)
+    }
+}
+
+/// An error for a load or settings the solver cannot take.
+fn check_request(mean_pressure: f64, cfg: &SolverConfig) -> Result<(), ContactError> {
+    if !(mean_pressure.is_finite() && mean_pressure >= 0.0) {
+        return Err(ContactError::BadLoad(mean_pressure));
+    }
+    if !(cfg.tolerance > 0.0 && cfg.tolerance.is_finite()) || cfg.max_iterations == 0 {
+        return Err(ContactError::BadConfig(format!(
+            "tolerance {} must be finite and > 0, max_iterations {} must be ≥ 1",
+            cfg.tolerance, cfg.max_iterations
+        )));
+    }
+    Ok(())
+}
+
+impl Solver<'_> {
+    /// The exact solution at zero load or on a flat surface: uniform `p = target`, `u = 0`.
+    fn uniform_solution(&mut self, target: f64) {
+        self.pressure.fill(target);
+        // u = 0: w = −h.
+        let h = self.heights;
+        self.separation
+            .par_iter_mut()
+            .zip(h.par_iter())
+            .for_each(|(w, &h)| *w = -h);
+        self.finish_gap();
+        self.has_solution = target > 0.0;
+        self.separation_exact = true;
+    }
+
+    /// The start of a solve: the previous solution scaled to the new load, or uniform
+    /// pressure, with the gradient statistics of that state (every update computes them in
+    /// the pass that makes the state). After a converged solve `w = K p − h` is exact, and
+    /// `K (s p) = s K p`, so the scaled start needs a pass, not a convolution.
+    fn start(&mut self, target: f64, report: &mut SolveReport) -> GradientStats {
+        let len = self.pressure.len();
+        let previous_total: f64 = self.chunked_sum(|p| p);
+        let warm = self.has_solution && previous_total > 0.0;
+        let scale = if warm {
+            target * len as f64 / previous_total
+        } else {
+            1.0
+        };
+        if warm && self.separation_exact {
+            self.sparse.clear();
+            self.sparse_update(scale, 0.0)
+        } else {
+            if warm {
+                self.pressure.par_iter_mut().for_each(|p| *p *= scale);
+            } else {
+                self.pressure.fill(target);
+            }
+            report.convolutions += 1;
+            self.exact_deflection(1.0, 0.0)
+        }
+    }
+
+    /// The deflection after an update pass, the cheapest way that stays exact: the linear
+    /// update itself when no node changed, a direct correction for a few changed nodes, an
+    /// FFT correction for more, or an exact recomputation (every [`RESYNC`] steps, and when
+    /// a block changed more nodes than its list holds). `linear_steps` counts the updates
+    /// since the last exact one (0 after one).
+    fn next_deflection(
+        &mut self,
+        totals: &passes::UpdateTotals,
+        linear_stats: GradientStats,
+        scale: f64,
+        shift: f64,
+        linear_steps: &mut usize,
+        report: &mut SolveReport,
+    ) -> GradientStats {
+        let linear = *linear_steps + 1 < RESYNC;
+        let stats = if totals.changed == 0 && linear {
+            // Nothing left or entered the set: p and u are both exact linear updates and
+            // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next exact
+            // step.
+            linear_stats
+        } else if totals.changed <= MAX_SPARSE && linear && self.gather_changes() {
+            self.sparse_update(scale, shift)
+        } else if linear && self.changes_listed() {
+            report.convolutions += 1;
+            self.fft_correction(scale, shift)
+        } else {
+            report.convolutions += 1;
+            *linear_steps = 0;
+            return self.exact_deflection(scale, shift);
+        };
+        *linear_steps += 1;
+        stats
     }
 }

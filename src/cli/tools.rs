@@ -1,0 +1,349 @@
+//! Single-stage tools on plain files: `solve`, `model`, `clusters`, `surface`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::ValueEnum;
+use serde_json::json;
+
+use super::{write_atomically, InputError};
+use wearcoef::analytic::{ModelError, PlateauPowerLaw};
+use wearcoef::clusters::{self, Connectivity};
+use wearcoef::contact::solver::SolverConfig;
+use wearcoef::contact::sweep::sweep_heights;
+use wearcoef::grid::Grid;
+use wearcoef::spectral::Fft2;
+use wearcoef::surface::{self, Method, SurfaceParams};
+
+#[derive(clap::Args)]
+pub struct SolveArgs {
+    /// Heights (float64 .npy, square, taken as they are; periodic box of side 1).
+    #[arg(long)]
+    pub surface: PathBuf,
+    /// Loads W/W0, comma separated, solved in this order as one warm-started sweep
+    /// (W0 = E*·spectral rms slope·L²).
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub loads: Vec<f64>,
+    /// Tolerance on the complementarity error (docs/CONVENTIONS.md).
+    #[arg(long, default_value_t = 1e-8)]
+    pub tol: f64,
+    /// Iteration cap per load.
+    #[arg(long, default_value_t = 5000)]
+    pub max_iter: usize,
+    /// Effective modulus E* (pressures are written in its unit).
+    #[arg(long, default_value_t = 1.0)]
+    pub e_star: f64,
+    /// Use the plain Polonsky–Keer conjugate gradient instead of the default preconditioned
+    /// one (same solution; more iterations on large grids, one convolution each).
+    #[arg(long)]
+    pub plain_cg: bool,
+    /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.
+    #[arg(long)]
+    pub pressure_out: Option<PathBuf>,
+    /// Contact-map output: uint8 0/1, (n, n) for one load, (loads, n, n) for several.
+    #[arg(long)]
+    pub contact_out: Option<PathBuf>,
+    /// Print one JSON object per load, as a JSON array.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MethodArg {
+    Filter,
+    RandomPhase,
+}
+
+#[derive(clap::Args)]
+pub struct ModelArgs {
+    /// Power-law exponent α.
+    #[arg(long, allow_hyphen_values = true)]
+    pub alpha: f64,
+    /// End of the plateau A_s (> 0).
+    #[arg(long)]
+    pub a_s: f64,
+    /// Cut-off A_m (≥ A_s), or `inf` for the limit A_m → ∞.
+    #[arg(long)]
+    pub a_m: f64,
+    /// Critical area A* (≥ 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub a_star: f64,
+    /// Print `{"K", "K_upscaled"}` as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn model(args: ModelArgs) -> anyhow::Result<ExitCode> {
+    let ModelArgs {
+        alpha,
+        a_s,
+        a_m,
+        a_star,
+        json,
+    } = args;
+    let bad = |e: ModelError| InputError(e.to_string());
+    let model = PlateauPowerLaw::new(alpha, a_s, a_m).map_err(bad)?;
+    let k = model.k_archard(a_star).map_err(bad)?;
+    let kk = model.k_upscaled(a_star).map_err(bad)?;
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string(&json!({"K": k, "K_upscaled": kk}))?
+        );
+    } else {
+        println!("K = {k} (Archard, P(A > A*)), K_upscaled = {kk} (area fraction above A*)");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(clap::Args)]
+pub struct ClustersArgs {
+    /// Contact map: bool or uint8 0/1 `.npy` (rows, cols), or the project's bit-packed
+    /// uint8 (n, ceil(n/8)) from the contact stage.
+    #[arg(long)]
+    pub contact: PathBuf,
+    /// Neighbours that link pixels: 8 (edges and corners, the paper's) or 4 (edges).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(4..=8))]
+    pub connectivity: u32,
+    /// Print `{"n_clusters", "areas_px" (descending), "percolating"}` as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
+    let ClustersArgs {
+        contact,
+        connectivity,
+        json,
+    } = args;
+    let conn = Connectivity::from_neighbours(connectivity)
+        .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
+    let (rows, cols, map, format) = wearcoef::io::read_contact_map(&contact)?;
+    let labelling = clusters::label(&map, rows, cols, conn)
+        .map_err(|e| InputError(format!("{}: {e}", contact.display())))?;
+    let mut areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
+    areas.sort_unstable_by(|a, b| b.cmp(a));
+    let percolating = labelling.clusters.iter().any(|c| c.percolating());
+    if json {
+        let out = json!({
+            "n_clusters": labelling.clusters.len(),
+            "areas_px": areas,
+            "percolating": percolating,
+        });
+        println!("{}", serde_json::to_string(&out)?);
+    } else {
+        let in_contact: u64 = areas.iter().sum();
+        println!(
+            "{rows} × {cols} map ({format:?}), {connectivity}-connected: {} clusters, \
+             {in_contact} pixels in contact, largest {} px{}",
+            areas.len(),
+            areas.first().copied().unwrap_or(0),
+            if percolating {
+                ", a cluster wraps around the periodic box (percolating)"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(clap::Args)]
+pub struct SurfaceArgs {
+    /// Grid nodes per side (even).
+    #[arg(long)]
+    pub n: usize,
+    /// Largest wavelength λ_l in grid spacings.
+    #[arg(long)]
+    pub lambda_l_px: f64,
+    /// Smallest wavelength λ_s in grid spacings (≥ 2).
+    #[arg(long)]
+    pub lambda_s_px: f64,
+    /// Hurst exponent in (0, 1).
+    #[arg(long)]
+    pub hurst: f64,
+    /// Seed of the random stream.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Roll-off wavelength λ_r in grid spacings (flat PSD between λ_l and λ_r).
+    #[arg(long)]
+    pub rolloff_lambda_px: Option<f64>,
+    #[arg(long, value_enum, default_value_t = MethodArg::Filter)]
+    pub method: MethodArg,
+    /// Output file (float64 .npy, C order).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Print the realised statistics as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn surface(args: SurfaceArgs) -> anyhow::Result<ExitCode> {
+    let SurfaceArgs {
+        n,
+        lambda_l_px,
+        lambda_s_px,
+        hurst,
+        seed,
+        rolloff_lambda_px,
+        method,
+        output,
+        json,
+    } = args;
+    let params = SurfaceParams {
+        n,
+        hurst,
+        lambda_l_px,
+        lambda_s_px,
+        rolloff_lambda_px,
+        method: match method {
+            MethodArg::Filter => Method::Filter,
+            MethodArg::RandomPhase => Method::RandomPhase,
+        },
+        seed,
+    };
+    params.validate()?;
+    let fft = Fft2::new(n);
+    let mut scratch = fft.make_scratch();
+    let s = surface::generate(&params, &fft, &mut scratch)?;
+    write_atomically(&output, |tmp| {
+        Ok(wearcoef::io::write_heights(tmp, n, s.heights.clone())?)
+    })?;
+    if json {
+        let out = json!({
+            "n": n,
+            "hurst": hurst,
+            "lambda_l_px": lambda_l_px,
+            "lambda_s_px": lambda_s_px,
+            "rolloff_lambda_px": rolloff_lambda_px,
+            "method": params.method.as_str(),
+            "seed": seed,
+            "mean_height": s.stats.mean_height,
+            "rms_height": s.stats.rms_height,
+            "rms_slope": s.stats.rms_slope,
+            "hurst_fit": s.stats.hurst_fit,
+            "output": output.display().to_string(),
+        });
+        println!("{}", serde_json::to_string(&out)?);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `wearcoef solve`, run on a worker of its own rayon pool (RAYON_NUM_THREADS threads): the
+/// solver's parallel loops then start on a pool thread instead of being injected from the
+/// main thread and waited for (a wake-up and a sleep per loop, several per iteration), and
+/// every buffer is allocated by the same thread, so memory freed by one stage (the slope's
+/// transform, the operator's set-up) is reused by the next instead of sitting in another
+/// thread's allocator arena.
+pub fn solve(args: SolveArgs) -> anyhow::Result<ExitCode> {
+    rayon::ThreadPoolBuilder::new()
+        .build()?
+        .install(|| solve_on_pool(args))?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
+    if let Some((i, w)) = args
+        .loads
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+    {
+        return Err(InputError(format!(
+            "--loads: load {} is {w}; loads W/W0 must be finite and ≥ 0",
+            i + 1
+        ))
+        .into());
+    }
+    let (n, heights) = wearcoef::io::read_square_f64(&args.surface)?;
+    if n < 2 || n % 2 != 0 {
+        return Err(InputError(format!(
+            "{}: the grid side must be even and ≥ 2, got {n}",
+            args.surface.display()
+        ))
+        .into());
+    }
+    if !(args.e_star.is_finite() && args.e_star > 0.0) {
+        return Err(InputError(format!("--e-star {} must be finite and > 0", args.e_star)).into());
+    }
+    if !(args.tol.is_finite() && args.tol > 0.0) || args.max_iter == 0 {
+        return Err(InputError("--tol must be finite and > 0 and --max-iter ≥ 1".into()).into());
+    }
+    Grid::unit(n)?;
+    if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(InputError(format!(
+            "{}: height at row {}, column {} is {v}; heights must be finite",
+            args.surface.display(),
+            i / n,
+            i % n
+        ))
+        .into());
+    }
+    let cfg = SolverConfig {
+        tolerance: args.tol,
+        max_iterations: args.max_iter,
+        preconditioned: !args.plain_cg,
+        ..SolverConfig::default()
+    };
+    let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
+    let mut pressures = Vec::new();
+    let mut contacts = Vec::new();
+    let (_, results) = sweep_heights(
+        &heights,
+        n,
+        args.e_star,
+        &args.loads,
+        &cfg,
+        |_, solver, _| {
+            if keep_fields {
+                pressures.extend_from_slice(solver.pressure());
+                contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
+            }
+            Ok(())
+        },
+    )?;
+    let shape: Vec<usize> = if args.loads.len() == 1 {
+        vec![n, n]
+    } else {
+        vec![args.loads.len(), n, n]
+    };
+    if let Some(path) = &args.pressure_out {
+        write_atomically(path, |tmp| {
+            Ok(wearcoef::io::write_f64(tmp, &shape, pressures)?)
+        })?;
+    }
+    if let Some(path) = &args.contact_out {
+        write_atomically(path, |tmp| {
+            Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)
+        })?;
+    }
+    if args.json {
+        let rows: Vec<_> = results
+            .iter()
+            .map(|r| {
+                json!({
+                    "w_over_w0": r.w_over_w0,
+                    "mean_pressure": r.mean_pressure,
+                    "area_fraction": r.area_fraction,
+                    "n_contact_px": r.n_contact_px,
+                    "iterations": r.report.iterations,
+                    "convolutions": r.report.convolutions,
+                    "error": r.report.error,
+                    "converged": r.report.converged(),
+                    "seconds": r.seconds,
+                    "peak_rss_bytes": peak_rss_bytes(),
+                })
+            })
+            .collect();
+        println!("{}", serde_json::to_string(&rows)?);
+    }
+    Ok(())
+}
+
+/// The process's peak resident memory (`VmHWM` of /proc/self/status, Linux), if known.
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
