@@ -11,6 +11,7 @@ use serde_json::json;
 
 use wearcoef::config::Pipeline;
 use wearcoef::pipeline::cost::{machine_memory_bytes, CostModel};
+use wearcoef::pipeline::hash::instance_key;
 use wearcoef::pipeline::plan::{Instance, Plan};
 use wearcoef::pipeline::runner;
 use wearcoef::pipeline::store::Store;
@@ -190,6 +191,17 @@ pub fn exec_plan(
             ))
         })?;
         stage.check(&inst.params)?;
+        let keys: Vec<String> = inst.inputs.iter().map(|r| r.key.clone()).collect();
+        let key = instance_key(stage.name(), stage.version(), &inst.params, &keys);
+        if key != inst.key {
+            return Err(UsageError(format!(
+                "--plan {}: the {} instance {} does not match its parameters (they give {key}): the plan was edited or made by another version of wearcoef; make it anew with `wearcoef plan --out`",
+                plan_path.display(),
+                inst.stage,
+                inst.key
+            ))
+            .into());
+        }
     }
     let store = Store::new(data);
     let computed = runner::execute(&store, &chosen, jobs, quiet)?;

@@ -6,6 +6,7 @@ mod clusters;
 mod config;
 mod contact;
 mod layout;
+mod plan;
 mod powerlaw;
 mod stability;
 mod stages;
