@@ -25,11 +25,10 @@ pub struct Totals {
     pub instances: usize,
     pub cached: usize,
     pub levels: usize,
-    /// Estimated wall hours of the missing instances, run one after another with all of
-    /// `cores` cores each.
-    pub missing_hours: f64,
-    /// The same in core-hours (`missing_hours × cores`).
+    /// Estimated core-hours of the missing instances.
     pub missing_core_hours: f64,
+    /// The same in wall hours on this machine's `cores` cores (perfect use assumed).
+    pub missing_hours: f64,
     /// Core-hours of every instance, cached or not (the campaign from nothing).
     pub total_core_hours: f64,
     pub cores: usize,
@@ -49,7 +48,7 @@ pub struct StageTotals {
 }
 
 pub fn totals(plan: &Plan, cores: usize) -> Totals {
-    let core_hours = |i: &Instance| i.estimate.seconds * cores as f64 / 3600.0;
+    let core_hours = |i: &Instance| i.estimate.seconds / 3600.0;
     let mut per_stage: BTreeMap<String, StageTotals> = BTreeMap::new();
     for i in &plan.instances {
         let t = per_stage.entry(i.stage.clone()).or_default();
@@ -59,15 +58,16 @@ pub fn totals(plan: &Plan, cores: usize) -> Totals {
         t.largest_peak_bytes = t.largest_peak_bytes.max(i.estimate.peak_bytes);
     }
     let missing: Vec<&Instance> = plan.instances.iter().filter(|i| !i.cached).collect();
-    let missing_hours = missing.iter().map(|i| i.estimate.seconds).sum::<f64>() / 3600.0;
+    // (0.0 + …: an empty float sum is −0.0.)
+    let missing_core_hours = 0.0 + missing.iter().map(|i| core_hours(i)).sum::<f64>();
     let largest = plan.largest();
     Totals {
         instances: plan.instances.len(),
         cached: plan.instances.len() - missing.len(),
         levels: plan.levels(),
-        missing_hours,
-        missing_core_hours: missing_hours * cores as f64,
-        total_core_hours: plan.instances.iter().map(core_hours).sum(),
+        missing_core_hours,
+        missing_hours: missing_core_hours / cores as f64,
+        total_core_hours: 0.0 + plan.instances.iter().map(core_hours).sum::<f64>(),
         cores,
         largest_peak_bytes: largest.map_or(0, |i| i.estimate.peak_bytes),
         largest: largest.map(|i| format!("{} {}", i.stage, i.key)),

@@ -1,7 +1,7 @@
-//! Cost estimates of plan instances: wall seconds on one core-set of this machine and peak
-//! memory, from a model per stage whose coefficients are fitted to the timings that the
-//! store's manifests record (falling back to coefficients measured on the 2-core development
-//! machine when the store holds no instance of a stage).
+//! Cost estimates of plan instances: CPU seconds (core-seconds) and peak memory, from a model
+//! per stage whose coefficients are fitted to the CPU times that the store's manifests record
+//! (their wall times for entries of builds that did not record CPU time; coefficients
+//! measured on the 2-core development machine when the store holds no instance of a stage).
 //!
 //! The model (n: grid side, L: loads of a sweep):
 //! - surface: `c · n² log₂ n` seconds; `6 n²` doubles of memory (heights, spectrum, FFT rows).
@@ -23,7 +23,8 @@ use super::store::Store;
 /// What one instance is expected to cost.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
-    /// Wall seconds with all of this machine's cores.
+    /// CPU seconds over all threads (core-seconds; on c cores, about seconds/c of wall time
+    /// for an instance that parallelises well, as the solver does).
     pub seconds: f64,
     /// Peak resident bytes of the process while it runs this instance alone.
     pub peak_bytes: u64,
@@ -51,19 +52,21 @@ pub struct CostModel {
 const ANALYSIS_BYTES: u64 = 1 << 30;
 
 impl Default for CostModel {
-    /// Coefficients measured on the development machine (2 cores, AVX2), default profile.
+    /// Coefficients measured on the development machine (2 cores, AVX2) from a default-profile
+    /// store of 2026-11-24, whose instances ran two at a time on the 2 cores, so their wall
+    /// time is about one core's CPU time.
     fn default() -> Self {
         Self {
-            surface_per_n2logn: 2.0e-8,
-            contact_per_iteration_n2logn: 1.0e-9,
-            iterations_per_load_1024: 30.0,
-            iterations_exponent: 0.45,
-            clusters_per_load_n2: 2.0e-8,
+            surface_per_n2logn: 9.0e-9,
+            contact_per_iteration_n2logn: 6.7e-9,
+            iterations_per_load_1024: 54.0,
+            iterations_exponent: 0.43,
+            clusters_per_load_n2: 1.8e-8,
             per_instance: [
-                ("statistics", 1.0),
-                ("analytic", 0.05),
-                ("audits", 1.0),
-                ("figures", 1.0),
+                ("statistics", 1.1),
+                ("analytic", 0.005),
+                ("audits", 0.1),
+                ("figures", 0.1),
             ]
             .into_iter()
             .map(|(k, v)| (k.to_string(), v))
@@ -112,7 +115,7 @@ impl CostModel {
             };
             if let Some(w) = work.filter(|w| *w > 0.0) {
                 let e = sums.entry(stage).or_insert((0.0, 0.0, 0));
-                e.0 += m.wall_seconds;
+                e.0 += m.cpu_seconds.unwrap_or(m.wall_seconds);
                 e.1 += w;
                 e.2 += 1;
             }

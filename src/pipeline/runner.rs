@@ -213,7 +213,9 @@ fn build_all(
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
                         let Some(inst) = missing.get(i) else { break };
-                        out.push((i, pool.install(|| build(store, inst))));
+                        let before: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
+                        let built = pool.install(|| build(store, inst, &pool, before));
+                        out.push((i, built));
                         bar.inc(1);
                     }
                     Ok(out)
@@ -236,7 +238,28 @@ fn build_all(
         .collect())
 }
 
-fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
+/// CPU time of the calling thread (Linux `CLOCK_THREAD_CPUTIME_ID`), 0 if unavailable.
+fn thread_cpu_seconds() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `t` is a valid, writable timespec; the call only writes to it.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    if rc == 0 {
+        t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
+    } else {
+        0.0
+    }
+}
+
+/// Compute one instance on `pool` (whose threads had used `cpu_before` CPU seconds).
+fn build(
+    store: &Store,
+    inst: &Instance,
+    pool: &rayon::ThreadPool,
+    cpu_before: f64,
+) -> anyhow::Result<()> {
     let start = Instant::now();
     let stage = crate::pipeline::registry::find(&inst.stage).ok_or_else(|| {
         anyhow::anyhow!(
@@ -265,6 +288,8 @@ fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
                 inst.realization.map_or("-".to_string(), |r| r.to_string())
             )
         })?;
+    let wall_seconds = start.elapsed().as_secs_f64();
+    let cpu_after: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
     let manifest = Manifest {
         stage: inst.stage.clone(),
         version: stage.version(),
@@ -273,7 +298,8 @@ fn build(store: &Store, inst: &Instance) -> anyhow::Result<()> {
         inputs: keys,
         outputs: Default::default(),
         program: Program::current(),
-        wall_seconds: start.elapsed().as_secs_f64(),
+        wall_seconds,
+        cpu_seconds: Some((cpu_after - cpu_before).max(0.0)),
         results,
     };
     match entry.commit(manifest)? {

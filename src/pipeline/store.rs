@@ -82,6 +82,11 @@ pub struct Manifest {
     pub outputs: BTreeMap<String, OutputFile>,
     pub program: Program,
     pub wall_seconds: f64,
+    /// CPU seconds the instance used on all its threads (absent in entries of older
+    /// builds): what the cost model fits, since instances that run side by side share the
+    /// cores and each one's wall time counts the others'.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_seconds: Option<f64>,
     /// Stage-specific results (realised statistics, solver reports, ...).
     pub results: Value,
 }
