@@ -75,16 +75,4 @@ impl<'a> Inputs<'a> {
     pub fn table(&self, i: usize, stage: &str, file: &str) -> anyhow::Result<DataFrame> {
         crate::pipeline::table::read(&self.file(i, stage, file)?)
     }
-
-    /// Indices of the inputs from `stage`, in plan order.
-    pub fn indices_of(&self, stage: &str) -> Vec<usize> {
-        (0..self.len())
-            .filter(|&i| self.entries[i].0.stage == stage)
-            .collect()
-    }
-
-    /// The store the inputs live in (for stages that read an input's own inputs).
-    pub fn store(&self) -> &Store {
-        self.store
-    }
 }
