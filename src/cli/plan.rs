@@ -76,27 +76,35 @@ pub fn totals(plan: &Plan, cores: usize) -> Totals {
     }
 }
 
-/// Plan a profile against a store, with estimates.
+/// Plan a profile against a store, with estimates from the cost model fitted to it.
 pub fn make_plan(
     pipeline: &Pipeline,
     origin: &str,
     data: &std::path::Path,
     profile: &str,
     targets: &[String],
-) -> anyhow::Result<Plan> {
+) -> anyhow::Result<(Plan, CostModel)> {
     let store = Store::new(data);
     let mut plan = Plan::build(pipeline, origin, profile, targets)?;
-    plan.mark(&store, &CostModel::fit(&store)?)?;
-    Ok(plan)
+    let model = CostModel::fit(&store)?;
+    plan.mark(&store, &model)?;
+    Ok((plan, model))
 }
 
-/// Print a plan: the whole DAG as one JSON object, or a table of totals per stage.
-pub fn print_plan(plan: &Plan, json_out: bool, out: Option<&PathBuf>) -> anyhow::Result<()> {
+/// Print a plan: the whole DAG as one JSON object (with the cost model's coefficients and the
+/// stored instances each was fitted to), or a table of totals per stage.
+pub fn print_plan(
+    plan: &Plan,
+    model: &CostModel,
+    json_out: bool,
+    out: Option<&PathBuf>,
+) -> anyhow::Result<()> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let totals = totals(plan, cores);
     let doc = json!({
         "profile": plan.profile,
         "totals": totals,
+        "cost_model": model,
         "instances": plan.instances,
     });
     if let Some(path) = out {
@@ -233,8 +241,8 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
-    let plan = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
-    print_plan(&plan, json, out.as_ref())?;
+    let (plan, model) = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
+    print_plan(&plan, &model, json, out.as_ref())?;
     Ok(ExitCode::SUCCESS)
 }
 

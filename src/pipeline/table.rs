@@ -25,6 +25,15 @@ where
     Column::new(name.into(), values)
 }
 
+/// The two columns every per-load table starts with: `load_index` (0, 1, …) and
+/// `w_over_w0`.
+pub fn load_columns(loads: &[f64]) -> [Column; 2] {
+    [
+        col("load_index", (0..loads.len() as u32).collect::<Vec<_>>()),
+        col("w_over_w0", loads.to_vec()),
+    ]
+}
+
 /// A float column, nulls as NaN.
 pub fn f64_column(df: &DataFrame, name: &str) -> anyhow::Result<Vec<f64>> {
     Ok(df

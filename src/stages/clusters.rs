@@ -11,7 +11,7 @@ use serde_json::{json, Value};
 use super::contact::contact_file;
 use super::{Inputs, Stage};
 use crate::clusters::{self, Connectivity};
-use crate::pipeline::table::{col, write};
+use crate::pipeline::table::{col, load_columns, write};
 
 pub struct Clusters;
 
@@ -113,14 +113,16 @@ fn compute_clusters(job: &ClustersJob, inputs: &Inputs, dir: &Path) -> anyhow::R
         "loads.parquet",
         DataFrame::new(
             loads,
-            vec![
-                col("load_index", (0..loads as u32).collect::<Vec<_>>()),
-                col("w_over_w0", job.loads.clone()),
-                col("n_clusters", n_clusters),
-                col("area_fraction", fraction),
-                col("largest_area_over_ls2", largest),
-                col("n_percolating", n_perc),
-            ],
+            [
+                load_columns(&job.loads).to_vec(),
+                vec![
+                    col("n_clusters", n_clusters),
+                    col("area_fraction", fraction),
+                    col("largest_area_over_ls2", largest),
+                    col("n_percolating", n_perc),
+                ],
+            ]
+            .concat(),
         )?,
     )?;
     Ok(json!({

@@ -10,7 +10,7 @@ use serde_json::{json, Value};
 use super::{Inputs, Stage};
 use crate::contact::solver::SolverConfig;
 use crate::contact::sweep::{pack_contact, sweep_heights, LoadResult};
-use crate::pipeline::table::{col, write};
+use crate::pipeline::table::{col, load_columns, write};
 
 pub struct Contact;
 
@@ -92,28 +92,30 @@ fn loads_table(results: &[LoadResult]) -> PolarsResult<DataFrame> {
     };
     DataFrame::new(
         results.len(),
-        vec![
-            col("load_index", (0..results.len() as u32).collect::<Vec<_>>()),
-            col("w_over_w0", per(&|r| r.w_over_w0)),
-            col("mean_pressure", per(&|r| r.mean_pressure)),
-            col("area_fraction", per(&|r| r.area_fraction)),
-            col(
-                "n_contact_px",
-                results
-                    .iter()
-                    .map(|r| r.n_contact_px as u64)
-                    .collect::<Vec<_>>(),
-            ),
-            col("iterations", count(&|r| r.report.iterations)),
-            col("convolutions", count(&|r| r.report.convolutions)),
-            col("error", per(&|r| r.report.error)),
-            col(
-                "converged",
-                results
-                    .iter()
-                    .map(|r| r.report.converged())
-                    .collect::<Vec<_>>(),
-            ),
-        ],
+        [
+            load_columns(&per(&|r| r.w_over_w0)).to_vec(),
+            vec![
+                col("mean_pressure", per(&|r| r.mean_pressure)),
+                col("area_fraction", per(&|r| r.area_fraction)),
+                col(
+                    "n_contact_px",
+                    results
+                        .iter()
+                        .map(|r| r.n_contact_px as u64)
+                        .collect::<Vec<_>>(),
+                ),
+                col("iterations", count(&|r| r.report.iterations)),
+                col("convolutions", count(&|r| r.report.convolutions)),
+                col("error", per(&|r| r.report.error)),
+                col(
+                    "converged",
+                    results
+                        .iter()
+                        .map(|r| r.report.converged())
+                        .collect::<Vec<_>>(),
+                ),
+            ],
+        ]
+        .concat(),
     )
 }

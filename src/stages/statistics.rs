@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
-use crate::pipeline::table::{col, write};
+use crate::pipeline::table::{col, load_columns, write};
 use crate::powerlaw::{self, Estimator};
 use crate::statistics as stats;
 
@@ -218,18 +218,20 @@ fn write_loads(study: &Study, dir: &Path) -> anyhow::Result<()> {
         "loads.parquet",
         DataFrame::new(
             loads,
-            vec![
-                col("load_index", (0..loads as u32).collect::<Vec<_>>()),
-                col("w_over_w0", job.loads.clone()),
-                col("area_fraction_mean", first(&fraction)),
-                col("area_fraction_ci95", second(&fraction)),
-                col("n_clusters_mean", first(&count)),
-                col("n_clusters_ci95", second(&count)),
-                col("largest_area_over_ls2_mean", first(&largest)),
-                col("largest_area_over_ls2_ci95", second(&largest)),
-                col("dn_dac_per_ls2", dn_dac),
-                col("realizations_percolating", perc),
-            ],
+            [
+                load_columns(&job.loads).to_vec(),
+                vec![
+                    col("area_fraction_mean", first(&fraction)),
+                    col("area_fraction_ci95", second(&fraction)),
+                    col("n_clusters_mean", first(&count)),
+                    col("n_clusters_ci95", second(&count)),
+                    col("largest_area_over_ls2_mean", first(&largest)),
+                    col("largest_area_over_ls2_ci95", second(&largest)),
+                    col("dn_dac_per_ls2", dn_dac),
+                    col("realizations_percolating", perc),
+                ],
+            ]
+            .concat(),
         )?,
     )?;
     Ok(())
