@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy clean
+.PHONY: figures build test test-client test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -21,10 +21,24 @@ test:
 	cargo test --locked --workspace
 	cargo test --locked --release --test it -- --ignored
 	$(MAKE) test-client
+	$(MAKE) test-slurm
 
 # Real client: the quick profile end to end, every artifact opened with pandas, numpy, Pillow.
 test-client: build
 	bash tests/client/run.sh
+
+# A one-node Slurm cluster on this machine (installed if missing): the quick profile through
+# `wearcoef submit`, byte-identical to a local run, also after a cancelled task.
+test-slurm: build
+	bash tests/slurm/run.sh
+
+# The same cluster to try `wearcoef submit` by hand (docs/CLUSTER.md); state in SLURM_DIR.
+SLURM_DIR ?= /var/tmp/wearcoef-slurm
+slurm-start:
+	@bash scripts/slurm-local.sh start $(SLURM_DIR)
+
+slurm-stop:
+	bash scripts/slurm-local.sh stop $(SLURM_DIR)
 
 fmt:
 	cargo fmt --all

@@ -39,7 +39,12 @@ enum Command {
     /// (`--level`), or one slice of them (`--slice I/K`, the I-th of K, 0-based).
     Exec(cli::plan::ExecArgs),
 
-    /// Show what is present or missing for a profile.
+    /// Submit what is missing for a profile to Slurm: one job array per plan level, stage
+    /// and memory class (resources from the cost model), chained with afterok, each task
+    /// running `wearcoef exec` on its slice. --dry-run prints the scripts.
+    Submit(cli::submit::SubmitArgs),
+
+    /// Show what is present or missing for a profile, and the Slurm jobs of its campaigns.
     Status(cli::store::StatusArgs),
 
     /// Re-hash every artifact against its manifest; exit 1 on any mismatch.
@@ -90,6 +95,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Run(args) => cli::store::run(args),
         Command::Plan(args) => cli::plan::plan(args),
         Command::Exec(args) => cli::plan::exec(args),
+        Command::Submit(args) => cli::submit::submit(args),
         Command::Status(args) => cli::store::status(args),
         Command::Verify(args) => cli::store::verify(args),
         Command::Clean(args) => cli::store::clean(args),

@@ -1,5 +1,5 @@
 //! Command groups of the `wearcoef` binary: running and inspecting a store ([`store`]),
-//! plans and their execution ([`plan`]), single-stage tools on plain files ([`tools`]).
+//! plans and their execution ([`plan`]), Slurm campaigns ([`submit`]), single-stage tools on plain files ([`tools`]).
 
 use std::path::{Path, PathBuf};
 
@@ -9,6 +9,7 @@ use wearcoef::config::Pipeline;
 
 pub mod plan;
 pub mod store;
+pub mod submit;
 pub mod tools;
 
 #[derive(clap::Args, Clone)]

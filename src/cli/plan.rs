@@ -172,6 +172,7 @@ pub fn exec_plan(
     level: Option<usize>,
     slice: Option<(usize, usize)>,
     jobs: usize,
+    at_once: usize,
     quiet: bool,
 ) -> anyhow::Result<serde_json::Value> {
     let text = std::fs::read_to_string(plan_path)
@@ -212,8 +213,23 @@ pub fn exec_plan(
         }
     }
     let store = Store::new(data);
-    let computed = runner::execute(&store, &chosen, jobs, quiet)?;
-    Ok(json!({ "instances": chosen.len(), "computed": computed }))
+    let start = std::time::Instant::now();
+    let computed = runner::execute(&store, &chosen, jobs, at_once, quiet)?;
+    Ok(json!({
+        "instances": chosen.len(),
+        "computed": computed,
+        "wall_seconds": start.elapsed().as_secs_f64(),
+        "peak_rss_bytes": peak_rss_bytes(),
+    }))
+}
+
+/// The process's peak resident memory (`getrusage`), what a cluster's memory limit counts.
+fn peak_rss_bytes() -> Option<u64> {
+    // SAFETY: `usage` is a valid, writable rusage; the call only writes to it.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let rc = unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
+    // Linux reports kibibytes.
+    (rc == 0).then(|| usage.ru_maxrss as u64 * 1024)
 }
 
 #[derive(clap::Args)]
@@ -257,8 +273,13 @@ pub struct ExecArgs {
     pub level: Option<usize>,
     #[arg(long, value_parser = parse_slice)]
     pub slice: Option<(usize, usize)>,
+    /// Threads of each instance [default: number of cores].
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// Instances run side by side [default: --jobs]; 1 runs them one after the other, each
+    /// on all threads (what cluster tasks do: their memory is then one instance's).
+    #[arg(long)]
+    pub at_once: Option<usize>,
     #[arg(long)]
     pub quiet: bool,
 }
@@ -270,10 +291,20 @@ pub fn exec(args: ExecArgs) -> anyhow::Result<ExitCode> {
         level,
         slice,
         jobs,
+        at_once,
         quiet,
     } = args;
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let done = exec_plan(&plan, &data, level, slice, jobs.max(1), quiet)?;
+    let at_once = at_once.unwrap_or(jobs);
+    let done = exec_plan(
+        &plan,
+        &data,
+        level,
+        slice,
+        jobs.max(1),
+        at_once.max(1),
+        quiet,
+    )?;
     println!("{done}");
     Ok(ExitCode::SUCCESS)
 }

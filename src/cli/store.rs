@@ -7,6 +7,7 @@ use serde_json::json;
 
 use super::{load, InputError, StoreArgs};
 use wearcoef::pipeline::runner::{self, RunOptions};
+use wearcoef::pipeline::slurm;
 use wearcoef::pipeline::store::Store;
 
 #[derive(clap::Args)]
@@ -77,21 +78,96 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
     let lines = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
+    // Per stage: every instance once (studies may share one).
+    let per_stage =
+        runner::status_per_stage(&pipeline, &origin, &Store::new(&store.data), &profile)?;
+    let campaigns = super::submit::campaigns(&store.data, &profile)?;
+    let ids: Vec<String> = campaigns.iter().flat_map(|(_, c)| c.job_ids()).collect();
+    let states = if ids.is_empty() {
+        Default::default()
+    } else {
+        slurm::states(&ids)
+    };
+    let campaign_json: Vec<_> = campaigns
+        .iter()
+        .map(|(dir, c)| {
+            let arrays: Vec<_> = c
+                .arrays
+                .iter()
+                .flat_map(|a| {
+                    a.chunks.iter().map(|ch| {
+                        let id = ch.job_id.clone().unwrap_or_default();
+                        let st = states.get(&id).cloned().unwrap_or_default();
+                        json!({
+                            "array": a.spec.name,
+                            "level": a.spec.level,
+                            "job_id": id,
+                            "tasks": ch.chunk.len,
+                            "states": st.counts(),
+                            "finished_from": st.finished_from,
+                        })
+                    })
+                })
+                .collect();
+            json!({"dir": dir.display().to_string(), "created": c.created, "arrays": arrays})
+        })
+        .collect();
     if json {
         println!(
             "{}",
-            serde_json::to_string(&json!({"profile": profile, "stages": lines}))?
+            serde_json::to_string(&json!({
+                "profile": profile,
+                "stages": lines,
+                "per_stage": per_stage,
+                "campaigns": campaign_json,
+            }))?
         );
-    } else {
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!("{:<10} {:>8} {:>8}", "stage", "present", "missing");
+    for l in &per_stage {
+        println!("{:<10} {:>8} {:>8}", l.stage, l.present, l.missing);
+    }
+    println!();
+    println!(
+        "{:<10} {:<24} {:>8} {:>8}",
+        "stage", "study", "present", "missing"
+    );
+    for l in &lines {
         println!(
             "{:<10} {:<24} {:>8} {:>8}",
-            "stage", "study", "present", "missing"
+            l.stage, l.study, l.present, l.missing
         );
-        for l in &lines {
-            println!(
-                "{:<10} {:<24} {:>8} {:>8}",
-                l.stage, l.study, l.present, l.missing
-            );
+    }
+    for (dir, c) in &campaigns {
+        println!(
+            "\ncampaign {} ({} instances submitted)",
+            dir.display(),
+            c.instances
+        );
+        for a in &c.arrays {
+            for ch in &a.chunks {
+                let id = ch.job_id.clone().unwrap_or_default();
+                let st = states.get(&id).cloned().unwrap_or_default();
+                let mut counts: Vec<String> = st
+                    .counts()
+                    .into_iter()
+                    .map(|(s, n)| format!("{n} {s}"))
+                    .collect();
+                let unknown = ch.chunk.len.saturating_sub(st.tasks.len());
+                if unknown > 0 {
+                    counts.push(format!(
+                        "{unknown} left the queue (no record: see the store above)"
+                    ));
+                }
+                println!(
+                    "  job {:<8} {:<24} {:>5} tasks: {}",
+                    id,
+                    a.spec.name,
+                    ch.chunk.len,
+                    counts.join(", ")
+                );
+            }
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -12,7 +12,9 @@ use serde::Deserialize;
 
 use crate::surface::{Method, SurfaceParams};
 
+mod cluster;
 mod figures;
+pub use cluster::ClusterConfig;
 pub use figures::{FigureDecl, FigureKind};
 
 /// A configuration error: a YAML syntax/schema problem or an invalid value.
@@ -55,6 +57,9 @@ pub struct Pipeline {
     /// Figure name → what it draws (see [`FigureDecl`]).
     #[serde(default)]
     pub figures: BTreeMap<String, FigureDecl>,
+    /// How `wearcoef submit` sizes Slurm arrays (defaults when absent).
+    #[serde(default)]
+    pub cluster: ClusterConfig,
 }
 
 /// Elastic constants.
@@ -261,6 +266,7 @@ impl Pipeline {
                 }
             }
         }
+        self.cluster.validate(origin)?;
         for (name, fig) in &self.figures {
             fig.validate(name, origin, &self.studies, &self.profiles)?;
         }

@@ -1,7 +1,10 @@
 //! The cached stage graph around the stages of [`crate::stages`]: content keys ([`hash`]),
 //! the artifact store ([`store`]), Parquet helpers ([`table`]), the plan ([`plan`]) with its
-//! cost model ([`cost`]), the local executor ([`runner`]) and the catalog ([`catalog`]).
+//! cost model ([`cost`]), the local executor ([`runner`]), the catalog ([`catalog`]), and
+//! the cluster executor: a plan cut into job arrays ([`campaign`]) submitted to Slurm
+//! ([`slurm`]).
 
+pub mod campaign;
 pub mod catalog;
 pub mod cost;
 pub mod hash;
@@ -9,6 +12,7 @@ pub mod inputs;
 pub mod plan;
 pub mod registry;
 pub mod runner;
+pub mod slurm;
 pub mod store;
 pub mod table;
 

@@ -78,7 +78,7 @@ pub fn run(
     }
     store.remove_stale_temporaries()?;
     let reused = plan.instances.iter().filter(|i| i.cached).count();
-    let computed = execute(store, &plan.instances, opts.jobs, opts.quiet)?;
+    let computed = execute(store, &plan.instances, opts.jobs, opts.jobs, opts.quiet)?;
 
     let catalog_dir = store.root().join(&opts.profile);
     export_figures(store, &plan.instances, &opts.profile)?;
@@ -97,14 +97,17 @@ pub fn run(
 /// Compute the instances of `instances` that the store lacks, level by level (every input
 /// of a level is on a lower one), each level's instances in parallel. An instance whose
 /// inputs are neither in the store nor among `instances` fails with an error naming the
-/// missing input. Returns how many were computed.
+/// missing input. At most `at_once` instances run side by side, each on a pool of `jobs`
+/// threads. Returns how many were computed.
 pub fn execute(
     store: &Store,
     instances: &[Instance],
     jobs: usize,
+    at_once: usize,
     quiet: bool,
 ) -> anyhow::Result<usize> {
     let jobs = jobs.max(1);
+    let at_once = at_once.max(1);
     let levels = instances.iter().map(|i| i.level + 1).max().unwrap_or(0);
     let mut computed = 0;
     for level in 0..levels {
@@ -119,7 +122,7 @@ pub fn execute(
         }
         let label = stage_list(&missing);
         let bar = progress(missing.len(), &label, quiet);
-        let results = build_all(store, &missing, jobs, &bar)?;
+        let results = build_all(store, &missing, jobs, at_once, &bar)?;
         bar.finish_and_clear();
         for r in results {
             r?;
@@ -186,7 +189,7 @@ fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {
     bar
 }
 
-/// Compute `missing` with `min(jobs, instances)` workers, each with its own rayon pool of
+/// Compute `missing` with `min(at_once, instances)` workers, each with its own rayon pool of
 /// `jobs` threads for the instance's inner parallelism (so a lone last instance still uses
 /// every core; while several run, the OS shares the cores between them). Separate pools keep
 /// one instance's parallel loops from running another instance while they wait, so each
@@ -195,10 +198,11 @@ fn build_all(
     store: &Store,
     missing: &[&Instance],
     jobs: usize,
+    at_once: usize,
     bar: &ProgressBar,
 ) -> anyhow::Result<Vec<anyhow::Result<()>>> {
     use std::sync::atomic::{AtomicUsize, Ordering};
-    let workers = jobs.min(missing.len()).max(1);
+    let workers = at_once.min(missing.len()).max(1);
     let threads_each = jobs;
     let next = AtomicUsize::new(0);
     let mut results: Vec<Option<anyhow::Result<()>>> = (0..missing.len()).map(|_| None).collect();
@@ -404,6 +408,34 @@ pub fn status(
             }
             lines.push(line);
         }
+    }
+    Ok(lines)
+}
+
+/// Presence of every instance of a profile per stage (each instance once).
+pub fn status_per_stage(
+    pipeline: &Pipeline,
+    origin: &str,
+    store: &Store,
+    profile: &str,
+) -> anyhow::Result<Vec<StatusLine>> {
+    let plan = Plan::build(pipeline, origin, profile, &[])?;
+    let mut lines = Vec::new();
+    for stage in crate::pipeline::registry::names() {
+        let mut line = StatusLine {
+            stage: stage.to_string(),
+            study: String::new(),
+            present: 0,
+            missing: 0,
+        };
+        for inst in plan.instances.iter().filter(|i| i.stage == stage) {
+            if store.lookup(&inst.stage, &inst.key)?.is_some() {
+                line.present += 1;
+            } else {
+                line.missing += 1;
+            }
+        }
+        lines.push(line);
     }
     Ok(lines)
 }

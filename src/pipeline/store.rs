@@ -3,14 +3,18 @@
 //! Layout under the data directory `D`:
 //! - `D/cache/<stage>/<key>/`: one complete stage instance: its output files and
 //!   `manifest.json` (written last, inside a temporary directory).
-//! - `D/cache/<stage>/.tmp-<key>-<pid>-<nanos>/`: an instance being written. It is renamed
-//!   to `<key>/` only when complete, so a killed process leaves nothing that looks complete;
-//!   leftovers of dead processes are removed by the next run or by `clean`.
+//! - `D/cache/<stage>/.tmp-<key>-<host>-<pid>-<nanos>/`: an instance being written. It is
+//!   renamed to `<key>/` only when complete, so a killed process leaves nothing that looks
+//!   complete; leftovers of dead processes of the same host are removed by the next run or
+//!   by `clean --corrupt` (on a shared file system other hosts' are left alone).
 //! - `D/<profile>/index.parquet`, `index.csv`: the catalogs.
 //!
-//! Two processes may build the same instance at once: each writes its own temporary
-//! directory; the first rename wins and the other discards its copy (instances are pure
-//! functions of their key, so both copies are identical).
+//! Two processes may build the same instance at once, on one machine or on several nodes
+//! sharing the store: each writes its own temporary directory; the first rename wins and the
+//! other discards its copy (instances are pure functions of their key, so both copies are
+//! identical). `rename(2)` of a directory onto an existing non-empty one fails on local and
+//! network file systems alike, so a stored entry is never replaced. Only the local runner
+//! writes catalogs; `wearcoef exec` (the cluster's workers) writes entries alone.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -196,7 +200,11 @@ impl Store {
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.as_nanos())
             .unwrap_or(0);
-        let dir = stage_dir.join(format!(".tmp-{key}-{}-{nanos}", std::process::id()));
+        let dir = stage_dir.join(format!(
+            ".tmp-{key}-{}-{}-{nanos}",
+            host_name(),
+            std::process::id()
+        ));
         std::fs::create_dir(&dir).map_err(io_err(&dir))?;
         Ok(TempEntry {
             dir,
@@ -205,28 +213,45 @@ impl Store {
         })
     }
 
-    /// Remove temporary directories left by processes that no longer run.
+    /// Remove temporary directories left by processes of this host that no longer run.
+    /// Those of other hosts (a store on a shared file system) are left alone: their
+    /// processes cannot be seen from here. They never look like entries (their names start
+    /// with a dot) and are listed by [`Store::temporaries`].
     pub fn remove_stale_temporaries(&self) -> Result<usize, StoreError> {
         let mut removed = 0;
-        for stage_dir in list_dirs(&self.cache_dir())? {
-            for dir in list_dirs(&stage_dir)? {
-                let name = dir
-                    .file_name()
-                    .and_then(|s| s.to_str())
-                    .unwrap_or_default()
-                    .to_string();
-                if let Some(rest) = name.strip_prefix(".tmp-") {
-                    let pid = rest.split('-').nth(1).and_then(|p| p.parse::<u32>().ok());
-                    let alive =
-                        pid.is_some_and(|p| Path::new("/proc").join(p.to_string()).exists());
-                    if !alive {
-                        std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
-                        removed += 1;
-                    }
-                }
+        let here = host_name();
+        for (dir, host, pid) in self.temporaries()? {
+            let local = host.is_empty() || host == here;
+            let alive = pid.is_some_and(|p| Path::new("/proc").join(p.to_string()).exists());
+            if local && !alive {
+                std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
+                removed += 1;
             }
         }
         Ok(removed)
+    }
+
+    /// Every temporary directory of the store, with the host and pid that wrote it (host
+    /// empty for directories of builds that did not record it).
+    pub fn temporaries(&self) -> Result<Vec<(PathBuf, String, Option<u32>)>, StoreError> {
+        let mut out = Vec::new();
+        for stage_dir in list_dirs(&self.cache_dir())? {
+            for dir in list_dirs(&stage_dir)? {
+                let name = file_name(&dir);
+                let Some(rest) = name.strip_prefix(".tmp-") else {
+                    continue;
+                };
+                // <key>-<host>-<pid>-<nanos>; the host may contain '-', the key does not.
+                let mut parts = rest.rsplitn(3, '-');
+                let (_nanos, pid, head) = (parts.next(), parts.next(), parts.next());
+                let pid = pid.and_then(|p| p.parse::<u32>().ok());
+                let host = head
+                    .and_then(|h| h.split_once('-'))
+                    .map_or(String::new(), |(_, host)| host.to_string());
+                out.push((dir, host, pid));
+            }
+        }
+        Ok(out)
     }
 
     /// All complete entries as (stage, key, directory).
@@ -277,6 +302,13 @@ impl Store {
         }
         Ok(())
     }
+}
+
+/// This machine's host name (`/proc/sys/kernel/hostname`), "" if unknown.
+pub fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .unwrap_or_default()
 }
 
 fn file_name(p: &Path) -> String {
