@@ -70,6 +70,12 @@ if ! command -v slurmctld >/dev/null || ! command -v slurmd >/dev/null \
         slurmctld slurmd slurm-client munge >/dev/null
 fi
 
+running() { [[ -s $1 ]] && kill -0 "$(cat "$1")" 2>/dev/null; }
+if running "$dir/slurmctld.pid" && running "$dir/slurmd.pid"; then
+    echo "export SLURM_CONF=$dir/slurm.conf"   # already up
+    exit 0
+fi
+
 # munge: key, socket, pid, log and seed under DIR; the socket's directory must be o+x.
 mkdir -p "$dir/munge" "$dir/spool/ctld" "$dir/spool/d" "$dir/log"
 chmod 0711 "$dir" "$dir/munge"
@@ -78,12 +84,23 @@ if [[ ! -s $dir/munge/munge.key ]]; then
 fi
 chmod 0400 "$dir/munge/munge.key"
 socket="$dir/munge/munge.socket"
-if ! { [[ -s $dir/munge/munged.pid ]] && kill -0 "$(cat "$dir/munge/munged.pid")" 2>/dev/null; }; then
+if ! running "$dir/munge/munged.pid"; then
     munged --force --key-file="$dir/munge/munge.key" --socket="$socket" \
         --pid-file="$dir/munge/munged.pid" --log-file="$dir/munge/munged.log" \
         --seed-file="$dir/munge/munged.seed"
 fi
 
+# Two free TCP ports (so that several such clusters, e.g. a test's and a user's, can run at
+# once), unless SLURM_LOCAL_PORT gives the first of two.
+if [[ -n ${SLURM_LOCAL_PORT:-} ]]; then
+    ctld_port=$SLURM_LOCAL_PORT; d_port=$((SLURM_LOCAL_PORT + 1))
+else
+    read -r ctld_port d_port < <(python3 -c '
+import socket
+s = [socket.socket() for _ in range(2)]
+for x in s: x.bind(("127.0.0.1", 0))
+print(*(x.getsockname()[1] for x in s))')
+fi
 host=$(hostname -s)
 cpus=$(nproc)
 # Leave 1 GiB to the system; RealMemory must not exceed what slurmd measures.
@@ -97,8 +114,8 @@ SlurmdUser=root
 AuthType=auth/munge
 CredType=cred/munge
 AuthInfo=socket=$socket
-SlurmctldPort=16817
-SlurmdPort=16818
+SlurmctldPort=$ctld_port
+SlurmdPort=$d_port
 StateSaveLocation=$dir/spool/ctld
 SlurmdSpoolDir=$dir/spool/d
 SlurmctldPidFile=$dir/slurmctld.pid

@@ -309,14 +309,14 @@ fn submit_all(record: &mut Campaign) -> anyhow::Result<()> {
 
 fn print_summary(record: &Campaign, dir: &Path) {
     println!(
-        "{:<24} {:>6} {:>9} {:>5} {:>9} {:>11}  job ids",
+        "{:<32} {:>6} {:>9} {:>5} {:>9} {:>11}  job ids",
         "array", "tasks", "instances", "cpus", "mem MiB", "time"
     );
     for a in &record.arrays {
         let r = a.spec.resources;
         let ids: Vec<String> = a.chunks.iter().filter_map(|c| c.job_id.clone()).collect();
         println!(
-            "{:<24} {:>6} {:>9} {:>5} {:>9} {:>11}  {}",
+            "{:<32} {:>6} {:>9} {:>5} {:>9} {:>11}  {}",
             a.spec.name,
             a.spec.tasks,
             a.spec.instances,

@@ -1,6 +1,7 @@
 //! Talking to Slurm through its commands (`sbatch`, `scancel`, `squeue`, `sacct`, `sinfo`,
 //! `scontrol`), which find the cluster as they always do (`SLURM_CONF` or the site's
-//! configuration). Nothing here polls: each function runs one command and returns.
+//! configuration). Nothing here polls: each function runs one command and returns; queries
+//! give up after 10 s (an unreachable controller makes Slurm's clients retry for a minute).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -11,11 +12,40 @@ use serde::Serialize;
 
 use super::campaign::NodeLimits;
 
+/// How long a query may take: Slurm's clients retry for about a minute when the controller
+/// or the configuration cannot be reached, and a query only informs (`None` is a valid
+/// answer).
+const QUERY_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+
+/// Stdout of a successful query, `None` on failure or after [`QUERY_TIMEOUT`].
 fn output(cmd: &mut Command) -> Option<String> {
-    let out = cmd.output().ok()?;
-    out.status
-        .success()
-        .then(|| String::from_utf8_lossy(&out.stdout).into_owned())
+    use std::io::Read;
+    let mut child = cmd
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .ok()?;
+    let mut stdout = child.stdout.take()?;
+    // Read on a thread so that a large answer cannot block the child on a full pipe.
+    let reader = std::thread::spawn(move || {
+        let mut text = String::new();
+        stdout.read_to_string(&mut text).map(|_| text)
+    });
+    let deadline = std::time::Instant::now() + QUERY_TIMEOUT;
+    let status = loop {
+        match child.try_wait().ok()? {
+            Some(status) => break status,
+            None if std::time::Instant::now() >= deadline => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return None;
+            }
+            None => std::thread::sleep(std::time::Duration::from_millis(20)),
+        }
+    };
+    let text = reader.join().ok()?.ok()?;
+    status.success().then_some(text)
 }
 
 /// Whether `sbatch` can be run at all.

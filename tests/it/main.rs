@@ -11,6 +11,7 @@ mod powerlaw;
 mod stability;
 mod stages;
 mod store;
+mod submit;
 mod surface;
 
 use std::path::{Path, PathBuf};

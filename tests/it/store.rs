@@ -121,6 +121,15 @@ fn status_reports_present_and_missing() {
         missing, 19,
         "5 surfaces, 5 sweeps, 5 cluster tables, 2 statistics, 2 fitted models"
     );
+    // Per stage, every instance once: those two as well.
+    let per_stage: u64 = before["per_stage"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["missing"].as_u64().unwrap())
+        .sum();
+    assert_eq!(per_stage, 21);
+    assert_eq!(before["campaigns"], serde_json::json!([]));
     run_json(&dir, &["a"]);
     let after = stdout_json(&run_in(&dir, &["status", "--profile", "t", "--json"]));
     let lines = after["stages"].as_array().unwrap();
@@ -455,5 +464,37 @@ fn a_sweep_that_does_not_converge_stops_the_stage_and_stores_nothing() {
         stored, 0,
         "no contact entry may be stored for a failed sweep"
     );
+    assert!(run_in(&dir, &["verify"]).status.success());
+}
+
+/// On a store shared by several machines, only this host's temporaries of dead processes
+/// are removed: another host's may belong to a task still running there.
+#[test]
+fn clean_removes_only_this_hosts_dead_temporaries() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    let stage = dir.join("data/cache/surface");
+    std::fs::create_dir_all(&stage).unwrap();
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .unwrap()
+        .trim()
+        .to_string();
+    // A pid that has just ended.
+    let mut child = std::process::Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let key = "a".repeat(64);
+    let here = stage.join(format!(".tmp-{key}-{host}-{dead}-1"));
+    let there = stage.join(format!(".tmp-{key}-node-017.cluster-{dead}-1"));
+    let alive = stage.join(format!(".tmp-{key}-{host}-{}-1", std::process::id()));
+    for d in [&here, &there, &alive] {
+        std::fs::create_dir(d).unwrap();
+        std::fs::write(d.join("heights.npy"), b"partial").unwrap();
+    }
+    let out = run_in(&dir, &["clean", "--corrupt"]);
+    assert!(out.status.success());
+    assert!(!here.exists(), "this host's dead temporary is removed");
+    assert!(there.exists(), "another host's is left alone");
+    assert!(alive.exists(), "a live process's is left alone");
+    // None of them looks like an entry.
     assert!(run_in(&dir, &["verify"]).status.success());
 }
