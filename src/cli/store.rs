@@ -77,10 +77,10 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
-    let lines = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
-    // Per stage: every instance once (studies may share one).
-    let per_stage =
-        runner::status_per_stage(&pipeline, &origin, &Store::new(&store.data), &profile)?;
+    let runner::Status {
+        per_stage,
+        per_study: lines,
+    } = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
     let campaigns = super::submit::campaigns(&store.data, &profile)?;
     let ids: Vec<String> = campaigns.iter().flat_map(|(_, c)| c.job_ids()).collect();
     let states = if ids.is_empty() {

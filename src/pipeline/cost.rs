@@ -5,10 +5,18 @@
 //!
 //! The model (n: grid side, L: loads of a sweep):
 //! - surface: `c · n² log₂ n` seconds; `6 n²` doubles of memory (heights, spectrum, FFT rows).
-//! - contact: `c · I · n² log₂ n` seconds, with `I` the iterations of the sweep, predicted as
-//!   `L · a · (n/1024)^b` iterations per load (`a`, `b` fitted in log-log to the stored
-//!   sweeps); `7.5 n²` doubles of memory (the solver measures at most 7.1 n² doubles in
-//!   `make bench-peers`, plus the heights read from file).
+//! - contact: `c · I · n² log₂ n` seconds, with `I` the iterations of the sweep; `7.5 n²`
+//!   doubles of memory (the solver measures at most 7.1 n² doubles in `make bench-peers`,
+//!   plus the heights read from file). The iterations depend on the spectrum and on the loads
+//!   (how far each load is from the one before), so they are predicted from the stored sweeps
+//!   of the same *family* when there are any: the same spectrum in grid spacings (H, λ_l, λ_s,
+//!   generator, roll-off), loads and tolerance, on any box size and seed. Within a family,
+//!   `ln I = ln A + b ln n` is fitted to the sweeps of its two largest grid sizes (the
+//!   iterations grow faster with n on bigger grids; b is the global one when the family has
+//!   one size). Without a stored family: `L · a · (n/1024)^b` iterations
+//!   (`a`, `b` fitted in log-log to all stored sweeps' iterations per load). To calibrate a
+//!   big campaign, run its studies first at small box sizes (profile `paper_size_calibration`
+//!   does this for `paper_size`; docs/CLUSTER.md).
 //! - clusters: `c · L · n²` seconds; `4 n²` u32 words per map being labelled and the map.
 //! - statistics, analytic, audits, figures: the mean seconds of the stored instances of the
 //!   stage; memory bounded by 1 GiB (the whole default run peaks below that).
@@ -40,12 +48,70 @@ pub struct CostModel {
     /// Iterations per load at n = 1024, and the exponent of their growth with n.
     pub iterations_per_load_1024: f64,
     pub iterations_exponent: f64,
+    /// Per sweep family: the fit `I = A · n^b` of its stored sweeps' iterations.
+    pub families: BTreeMap<String, FamilyFit>,
     /// Seconds per load per n² of a clusters instance.
     pub clusters_per_load_n2: f64,
     /// Mean seconds of the other stages' instances.
     pub per_instance: BTreeMap<String, f64>,
     /// Stored instances the fit used, per stage.
     pub samples: BTreeMap<String, usize>,
+}
+
+/// The iterations of the stored sweeps of one family against their grid side (the sweeps of
+/// its two largest sides).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct FamilyFit {
+    /// `ln A` and `b` of `I = A · n^b`.
+    pub ln_a: f64,
+    pub exponent: f64,
+    /// Whether `b` was fitted to this family (two or more grid sizes) or is the global one.
+    pub own_exponent: bool,
+    /// Stored sweeps and their grid sides.
+    pub sweeps: usize,
+    pub sides: Vec<f64>,
+}
+
+/// The family of a sweep: its surface's spectrum in grid spacings, generator and roll-off,
+/// and its loads and tolerance; everything that sets the iterations but the box size (n) and
+/// the seed. `None` when the surface's parameters are unknown.
+pub fn sweep_family(contact: &Value, surface: Option<&Value>) -> Option<String> {
+    let s = surface?;
+    let pick = |v: &Value, keys: &[&str]| -> Vec<Value> {
+        keys.iter()
+            .map(|k| v.get(*k).cloned().unwrap_or(Value::Null))
+            .collect()
+    };
+    let family = serde_json::json!([
+        pick(
+            s,
+            &[
+                "hurst",
+                "lambda_l_px",
+                "lambda_s_px",
+                "method",
+                "rolloff_lambda_px"
+            ]
+        ),
+        pick(contact, &["loads_w_over_w0", "tolerance"]),
+    ]);
+    Some(family.to_string())
+}
+
+/// Least-squares line through `(x, y)`: `(intercept, slope)`, slope `None` when the x do not
+/// spread.
+fn line(points: &[(f64, f64)]) -> (f64, Option<f64>) {
+    let k = points.len() as f64;
+    let mx = points.iter().map(|p| p.0).sum::<f64>() / k;
+    let my = points.iter().map(|p| p.1).sum::<f64>() / k;
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    if sxx > 1e-6 {
+        let b = sxy / sxx;
+        (my - b * mx, Some(b))
+    } else {
+        (my, None)
+    }
 }
 
 /// Bytes of analysis stages (statistics, analytic, audits, figures).
@@ -62,6 +128,7 @@ impl Default for CostModel {
             iterations_per_load_1024: 54.0,
             iterations_exponent: 0.43,
             clusters_per_load_n2: 1.8e-8,
+            families: BTreeMap::new(),
             per_instance: [
                 ("statistics", 1.1),
                 ("analytic", 0.005),
@@ -97,6 +164,7 @@ impl CostModel {
         let mut model = Self::default();
         let mut sums: BTreeMap<String, (f64, f64, usize)> = BTreeMap::new();
         let mut iterations: Vec<(f64, f64)> = Vec::new();
+        let mut by_family: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
         for (stage, key, _) in store.entries()? {
             let Ok(Some(m)) = store.lookup(&stage, &key) else {
                 continue;
@@ -106,6 +174,15 @@ impl CostModel {
                 "contact" => match (num(&m.results, "n"), num(&m.results, "total_iterations")) {
                     (Some(n), Some(it)) if it > 0.0 => {
                         iterations.push((n, it / loads_of(&m.params)));
+                        let surface = m
+                            .inputs
+                            .first()
+                            .and_then(|k| store.lookup("surface", k).ok().flatten());
+                        if let Some(f) =
+                            sweep_family(&m.params, surface.as_ref().map(|s| &s.params))
+                        {
+                            by_family.entry(f).or_default().push((n.ln(), it.ln()));
+                        }
                         Some(it * n2logn(n))
                     }
                     _ => None,
@@ -144,14 +221,60 @@ impl CostModel {
                 pts.iter().map(|p| p.0).sum::<f64>() / k,
                 pts.iter().map(|p| p.1).sum::<f64>() / k,
             );
-            let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-            let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-            if sxx > 1e-6 {
-                model.iterations_exponent = (sxy / sxx).clamp(0.0, 1.0);
+            if let (_, Some(b)) = line(&pts) {
+                model.iterations_exponent = b.clamp(0.0, 1.0);
             }
             model.iterations_per_load_1024 = (my - model.iterations_exponent * mx).exp();
         }
+        for (family, all) in by_family {
+            // The two largest grid sizes only: the iterations grow faster with n on bigger
+            // grids (λ_l/λ_s = 128, three loads: n^0.43 from 1024 to 2048, n^0.63 to 4096,
+            // n^0.80 to 8192), and the fit serves to extrapolate upwards.
+            let mut sizes: Vec<f64> = all.iter().map(|p| p.0).collect();
+            sizes.sort_by(|a, b| b.total_cmp(a));
+            sizes.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+            let keep = &sizes[..sizes.len().min(2)];
+            let pts: Vec<(f64, f64)> = all
+                .iter()
+                .copied()
+                .filter(|p| keep.iter().any(|k| (p.0 - k).abs() < 1e-9))
+                .collect();
+            let (_, own) = line(&pts);
+            // A family's own slope, within what CG on this operator can do (iterations grow
+            // with n, at most linearly); else the global one through the family's mean.
+            let exponent = own.map_or(model.iterations_exponent, |b| b.clamp(0.0, 1.5));
+            let k = pts.len() as f64;
+            let (mx, my) = (
+                pts.iter().map(|p| p.0).sum::<f64>() / k,
+                pts.iter().map(|p| p.1).sum::<f64>() / k,
+            );
+            let mut sides: Vec<f64> = pts.iter().map(|p| p.0.exp().round()).collect();
+            sides.sort_by(f64::total_cmp);
+            sides.dedup();
+            model.families.insert(
+                family,
+                FamilyFit {
+                    ln_a: my - exponent * mx,
+                    exponent,
+                    own_exponent: own.is_some(),
+                    sweeps: pts.len(),
+                    sides,
+                },
+            );
+        }
         Ok(model)
+    }
+
+    /// Iterations of a sweep of `n × n` whose job is `params` on a surface with parameters
+    /// `surface`: from its family's fit when the store holds that family, else from the
+    /// global iterations per load.
+    pub fn sweep_iterations(&self, params: &Value, surface: Option<&Value>, n: f64) -> f64 {
+        sweep_family(params, surface)
+            .and_then(|f| self.families.get(&f))
+            .map_or_else(
+                || loads_of(params) * self.iterations_per_load(n),
+                |fit| (fit.ln_a + fit.exponent * n.ln()).exp(),
+            )
     }
 
     /// Iterations per load of a sweep on an `n × n` grid.
@@ -159,9 +282,9 @@ impl CostModel {
         self.iterations_per_load_1024 * (n / 1024.0).powf(self.iterations_exponent)
     }
 
-    /// The estimate of an instance of `stage` with job `params`; `input_n` is the grid side
-    /// of its first input's surface (for a contact sweep).
-    pub fn estimate(&self, stage: &str, params: &Value, input_n: Option<f64>) -> Estimate {
+    /// The estimate of an instance of `stage` with job `params`; `surface` holds the
+    /// parameters of its first input when that is a surface (for a contact sweep).
+    pub fn estimate(&self, stage: &str, params: &Value, surface: Option<&Value>) -> Estimate {
         let doubles = |k: f64, n: f64| (k * n * n * 8.0) as u64;
         let p = params;
         match stage {
@@ -173,8 +296,8 @@ impl CostModel {
                 }
             }
             "contact" => {
-                let n = input_n.unwrap_or(0.0);
-                let iterations = loads_of(p) * self.iterations_per_load(n);
+                let n = surface.and_then(|s| num(s, "n")).unwrap_or(0.0);
+                let iterations = self.sweep_iterations(p, surface, n);
                 Estimate {
                     seconds: self.contact_per_iteration_n2logn * iterations * n2logn(n),
                     peak_bytes: doubles(7.5, n),
@@ -201,4 +324,95 @@ pub fn machine_memory_bytes() -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::store::{Manifest, Program};
+    use serde_json::json;
+
+    fn put(store: &Store, stage: &str, key: &str, params: Value, inputs: &[&str], results: Value) {
+        let entry = store.begin(stage, key).unwrap();
+        entry
+            .commit(Manifest {
+                stage: stage.into(),
+                version: 1,
+                key: key.into(),
+                params,
+                inputs: inputs.iter().map(|s| s.to_string()).collect(),
+                outputs: Default::default(),
+                program: Program::current(),
+                wall_seconds: 1.0,
+                cpu_seconds: Some(1.0),
+                results,
+            })
+            .unwrap();
+    }
+
+    fn surface(n: u32, lambda_s_px: f64) -> Value {
+        json!({"hurst": 0.8, "lambda_l_px": 1024.0, "lambda_s_px": lambda_s_px,
+               "method": "filter", "n": n, "rolloff_lambda_px": null, "seed": n})
+    }
+
+    fn sweep(loads: &[f64]) -> Value {
+        json!({"e_star": 1.0, "keep_pressure": [], "loads_w_over_w0": loads,
+               "max_iterations": 5000, "tolerance": 1e-10})
+    }
+
+    /// Sweeps of one family at two sizes give that family's own power law in n; a sweep of
+    /// a family the store lacks falls back to the global iterations per load.
+    #[test]
+    fn iterations_follow_the_sweeps_own_family() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::new(dir.path());
+        let three = [0.005, 0.02, 0.06];
+        // 512 is not among the two largest sizes: left out of the fit.
+        let sizes = [(512u32, 40.0), (1024, 185.0), (2048, 275.0)];
+        for (k, (n, it)) in sizes.into_iter().enumerate() {
+            let s = format!("s{k}");
+            put(&store, "surface", &s, surface(n, 8.0), &[], json!({}));
+            put(
+                &store,
+                "contact",
+                &format!("c{k}"),
+                sweep(&three),
+                &[&s],
+                json!({"n": n, "total_iterations": it}),
+            );
+        }
+        // Another family (λ_s = 16 px): one size, 16 loads.
+        put(&store, "surface", "s9", surface(512, 16.0), &[], json!({}));
+        put(
+            &store,
+            "contact",
+            "c9",
+            sweep(&[0.01; 16]),
+            &["s9"],
+            json!({"n": 512, "total_iterations": 640.0}),
+        );
+        let model = CostModel::fit(&store).unwrap();
+        let b = (275.0f64 / 185.0).ln() / 2f64.ln();
+        let predicted = model.sweep_iterations(&sweep(&three), Some(&surface(8192, 8.0)), 8192.0);
+        let expected = 275.0 * 4f64.powf(b);
+        assert!(
+            (predicted - expected).abs() < 1e-6 * expected,
+            "{predicted} vs {expected}"
+        );
+        // The same loads on another spectrum: no family, the global law.
+        let other = model.sweep_iterations(&sweep(&three), Some(&surface(8192, 4.0)), 8192.0);
+        let global = 3.0 * model.iterations_per_load(8192.0);
+        assert_eq!(other, global);
+        assert!(other != predicted);
+        // The one-size family uses the global exponent through its own point.
+        let fit = model
+            .families
+            .values()
+            .find(|f| f.sides == [512.0])
+            .unwrap();
+        assert!(!fit.own_exponent);
+        assert_eq!(fit.exponent, model.iterations_exponent);
+        let at_512 = (fit.ln_a + fit.exponent * 512f64.ln()).exp();
+        assert!((at_512 - 640.0).abs() < 1e-9 * 640.0);
+    }
 }

@@ -174,16 +174,16 @@ impl Plan {
 
     /// Record which instances the store holds, and estimate each one's cost from `model`.
     pub fn mark(&mut self, store: &Store, model: &super::cost::CostModel) -> anyhow::Result<()> {
-        let sides: BTreeMap<String, f64> = self
+        let surfaces: BTreeMap<String, Value> = self
             .instances
             .iter()
             .filter(|i| i.stage == Surface::NAME)
-            .filter_map(|i| Some((i.key.clone(), i.params.get("n")?.as_f64()?)))
+            .map(|i| (i.key.clone(), i.params.clone()))
             .collect();
         for inst in &mut self.instances {
             inst.cached = store.lookup(&inst.stage, &inst.key)?.is_some();
-            let input_n = inst.inputs.first().and_then(|r| sides.get(&r.key)).copied();
-            inst.estimate = model.estimate(&inst.stage, &inst.params, input_n);
+            let surface = inst.inputs.first().and_then(|r| surfaces.get(&r.key));
+            inst.estimate = model.estimate(&inst.stage, &inst.params, surface);
         }
         Ok(())
     }

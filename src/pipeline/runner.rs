@@ -377,65 +377,63 @@ pub struct StatusLine {
     pub missing: usize,
 }
 
+/// What is present or missing for a profile: per stage (each instance once), and per stage
+/// and study (an instance shared by studies counts in each).
+#[derive(Debug, Clone, Serialize)]
+pub struct Status {
+    pub per_stage: Vec<StatusLine>,
+    pub per_study: Vec<StatusLine>,
+}
+
+/// Count the instances of `stage` (of `study`, when given) that the store holds.
+fn status_line(
+    store: &Store,
+    plan: &Plan,
+    stage: &str,
+    study: Option<&str>,
+) -> anyhow::Result<StatusLine> {
+    let mut line = StatusLine {
+        stage: stage.to_string(),
+        study: study.unwrap_or_default().to_string(),
+        present: 0,
+        missing: 0,
+    };
+    for inst in plan
+        .instances
+        .iter()
+        .filter(|i| i.stage == stage && study.is_none_or(|s| i.studies.iter().any(|x| x == s)))
+    {
+        if store.lookup(&inst.stage, &inst.key)?.is_some() {
+            line.present += 1;
+        } else {
+            line.missing += 1;
+        }
+    }
+    Ok(line)
+}
+
 /// What is present or missing for a profile.
 pub fn status(
     pipeline: &Pipeline,
     origin: &str,
     store: &Store,
     profile: &str,
-) -> anyhow::Result<Vec<StatusLine>> {
-    let plans = pipeline.plan(profile, origin)?;
+) -> anyhow::Result<Status> {
+    let studies = pipeline.plan(profile, origin)?;
     let plan = Plan::build(pipeline, origin, profile, &[])?;
-    let mut lines: Vec<StatusLine> = Vec::new();
+    let mut status = Status {
+        per_stage: Vec::new(),
+        per_study: Vec::new(),
+    };
     for stage in crate::pipeline::registry::names() {
-        for study in &plans {
-            let mut line = StatusLine {
-                stage: stage.to_string(),
-                study: study.name.clone(),
-                present: 0,
-                missing: 0,
-            };
-            for inst in plan
-                .instances
-                .iter()
-                .filter(|i| i.stage == stage && i.studies.contains(&study.name))
-            {
-                if store.lookup(&inst.stage, &inst.key)?.is_some() {
-                    line.present += 1;
-                } else {
-                    line.missing += 1;
-                }
-            }
-            lines.push(line);
+        status
+            .per_stage
+            .push(status_line(store, &plan, stage, None)?);
+        for study in &studies {
+            status
+                .per_study
+                .push(status_line(store, &plan, stage, Some(&study.name))?);
         }
     }
-    Ok(lines)
-}
-
-/// Presence of every instance of a profile per stage (each instance once).
-pub fn status_per_stage(
-    pipeline: &Pipeline,
-    origin: &str,
-    store: &Store,
-    profile: &str,
-) -> anyhow::Result<Vec<StatusLine>> {
-    let plan = Plan::build(pipeline, origin, profile, &[])?;
-    let mut lines = Vec::new();
-    for stage in crate::pipeline::registry::names() {
-        let mut line = StatusLine {
-            stage: stage.to_string(),
-            study: String::new(),
-            present: 0,
-            missing: 0,
-        };
-        for inst in plan.instances.iter().filter(|i| i.stage == stage) {
-            if store.lookup(&inst.stage, &inst.key)?.is_some() {
-                line.present += 1;
-            } else {
-                line.missing += 1;
-            }
-        }
-        lines.push(line);
-    }
-    Ok(lines)
+    Ok(status)
 }
