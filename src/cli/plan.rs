@@ -189,8 +189,8 @@ pub fn exec_plan(
         .filter(|i| level.is_none_or(|l| i.level == l))
         .collect();
     if let Some((i, k)) = slice {
-        let per = chosen.len().div_ceil(k);
-        chosen = chosen.into_iter().skip(i * per).take(per).collect();
+        let range = wearcoef::pipeline::plan::slice_range(chosen.len(), i, k);
+        chosen = chosen.drain(range).collect();
     }
     for inst in &chosen {
         let stage = wearcoef::pipeline::registry::find(&inst.stage).ok_or_else(|| {

@@ -102,13 +102,7 @@ pub fn arrays(
     }
     let mut out = Vec::new();
     for ((level, parallel, class), instances) in groups {
-        let mut stages: Vec<&str> = Vec::new();
-        for i in &instances {
-            if !stages.contains(&i.stage.as_str()) {
-                stages.push(&i.stage);
-            }
-        }
-        let stage = stages.join("+");
+        let stage = super::runner::stage_list(instances.iter().map(|i| i.stage.as_str()));
         let mut cpus = if parallel { cluster.solve_cpus } else { 1 };
         if let Some(n) = node {
             cpus = cpus.min(n.cpus.max(1));
@@ -122,9 +116,12 @@ pub fn arrays(
         };
         let tasks = instances.len().div_ceil(per_task);
         // Slices as `wearcoef exec --slice I/K` cuts them.
-        let per_slice = instances.len().div_ceil(tasks);
-        let task_seconds = instances
-            .chunks(per_slice)
+        let slices: Vec<&[Instance]> = (0..tasks)
+            .map(|t| &instances[super::plan::slice_range(instances.len(), t, tasks)])
+            .collect();
+        let per_slice = slices.iter().map(|c| c.len()).max().unwrap_or(0);
+        let task_seconds = slices
+            .iter()
             .map(|c| c.iter().map(|i| i.estimate.seconds).sum::<f64>() / f64::from(cpus))
             .fold(0.0, f64::max);
         // A task runs its instances one after the other, each on all its CPUs.

@@ -59,6 +59,13 @@ impl Instance {
     }
 }
 
+/// The instances of the `i`-th of `k` contiguous slices of `len` (`wearcoef exec --slice
+/// I/K`): slices of `⌈len/k⌉`, the last ones shorter or empty.
+pub fn slice_range(len: usize, i: usize, k: usize) -> std::ops::Range<usize> {
+    let per = len.div_ceil(k.max(1));
+    (i * per).min(len)..((i + 1) * per).min(len)
+}
+
 /// The instances of one profile.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Plan {

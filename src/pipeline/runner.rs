@@ -120,7 +120,7 @@ pub fn execute(
         if missing.is_empty() {
             continue;
         }
-        let label = stage_list(&missing);
+        let label = stage_list(missing.iter().map(|i| i.stage.as_str()));
         let bar = progress(missing.len(), &label, quiet);
         let results = build_all(store, &missing, jobs, at_once, &bar)?;
         bar.finish_and_clear();
@@ -133,11 +133,11 @@ pub fn execute(
 }
 
 /// The stages of a batch, in order of first appearance (`contact+clusters`).
-fn stage_list(batch: &[&Instance]) -> String {
+pub fn stage_list<'a>(stages: impl IntoIterator<Item = &'a str>) -> String {
     let mut names: Vec<&str> = Vec::new();
-    for i in batch {
-        if !names.contains(&i.stage.as_str()) {
-            names.push(&i.stage);
+    for s in stages {
+        if !names.contains(&s) {
+            names.push(s);
         }
     }
     names.join("+")
