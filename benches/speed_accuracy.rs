@@ -24,7 +24,7 @@ use wearcoef::clusters::{label, Connectivity};
 use wearcoef::contact::elastic::ElasticOperator;
 use wearcoef::contact::solver::SolverConfig;
 use wearcoef::contact::sweep::sweep;
-use wearcoef::figures::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
+use wearcoef::figures::plot::{Layout, LinePlot, Marker, Panels, Series, YAxis};
 use wearcoef::grid::Grid;
 use wearcoef::powerlaw::fit_plateau_power_law;
 use wearcoef::spectral::Fft2;
@@ -266,7 +266,6 @@ fn main() {
             true,
             YAxis::Log,
         );
-        p.legend = LegendAt::LowerLeft;
         let part_rows: Vec<&Row> = rows.iter().filter(|r| r.part == part).collect();
         let metrics: Vec<&str> = part_rows
             .first()
@@ -281,7 +280,7 @@ fn main() {
                 })
                 .collect();
             p.series.push(Series {
-                markers: true,
+                marker: Some(Marker::ALL[c % Marker::ALL.len()]),
                 ..Series::line(m.to_string(), pts, c)
             });
         }
@@ -296,7 +295,7 @@ fn main() {
             })
             .collect();
         p.series.push(Series {
-            markers: true,
+            marker: Some(Marker::Circle),
             width: 0,
             rgb: Some((0, 0, 0)),
             ..Series::line("default setting", marked, 0)

@@ -1,7 +1,7 @@
 //! Figs. B.1 and B.2 (the CCDF of cluster areas as the box size or the discretisation
 //! varies) and their convergence audit.
 
-use super::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
+use super::plot::{Dash, Layout, LinePlot, Marker, Panels, Series, YAxis};
 use super::StudyRef;
 use super::{tolerance_line, CcdfTable, Drawn};
 use crate::pipeline::inputs::Inputs;
@@ -27,12 +27,11 @@ pub fn appendix(
         for (s, table) in settings.iter().zip(&tables) {
             let mut plot = LinePlot::new(
                 format!("Fig. B.1: {}", s.label),
-                "A / λ_s²",
+                "A/λ_s^2",
                 "P(A > a)",
                 true,
                 YAxis::Log,
             );
-            plot.legend = LegendAt::LowerLeft;
             let loads = table.loads();
             for (j, &(load_index, _)) in loads.iter().enumerate() {
                 for (r_i, &r) in table.realizations().iter().enumerate() {
@@ -50,10 +49,10 @@ pub fn appendix(
             }
             for (j, &(load_index, w)) in loads.iter().enumerate() {
                 plot.series.push(Series {
-                    rgb: Some((214, 39, 40)),
-                    tint: 0.5 * (loads.len() - 1 - j) as f64 / loads.len().max(2) as f64,
+                    rgb: Some((213, 94, 0)),
+                    tint: 0.6 * (loads.len() - 1 - j) as f64 / (loads.len().max(2) - 1) as f64,
                     ..Series::line(
-                        format!("ensemble mean, W/W0 = {w:.3}"),
+                        format!("ensemble mean, W/W_0 = {w:.3}"),
                         table.curve(load_index, None, true),
                         3,
                     )
@@ -65,13 +64,12 @@ pub fn appendix(
         let loads = tables.first().map(CcdfTable::loads).unwrap_or_default();
         for &(load_index, w) in &loads {
             let mut plot = LinePlot::new(
-                format!("Fig. B.2: W/W0 = {w:.3}"),
-                "A / λ_s²",
+                format!("Fig. B.2: W/W_0 = {w:.3}"),
+                "A/λ_s^2",
                 "P(A > a), ensemble mean",
                 true,
                 YAxis::Log,
             );
-            plot.legend = LegendAt::LowerLeft;
             for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
                 plot.series.push(Series::line(
                     s.label.clone(),
@@ -117,15 +115,16 @@ pub(super) fn push_convergence_curves(
     x: impl Fn(&ConvergenceRow) -> f64,
     color: usize,
 ) {
+    let marker = Some(Marker::ALL[color % Marker::ALL.len()]);
     ks.series.push(Series {
-        markers: true,
+        marker,
         ..Series::line(label, rows.iter().map(|r| (x(r), r.ks)).collect(), color)
     });
     ks.series.push(Series {
-        dashed: true,
-        width: 1,
-        // A single point of a dashed line would not show.
-        markers: rows.len() == 1,
+        dash: Dash::Dotted,
+        width: 2,
+        // A single point of a dotted line would not show.
+        marker: (rows.len() == 1).then_some(Marker::Cross),
         ..Series::line(
             critical_label,
             rows.iter().map(|r| (x(r), r.critical)).collect(),
@@ -133,7 +132,7 @@ pub(super) fn push_convergence_curves(
         )
     });
     da.series.push(Series {
-        markers: true,
+        marker,
         ..Series::line(
             label,
             rows.iter()
@@ -152,22 +151,27 @@ fn convergence_plots(
     settings: &[StudyRef],
     table: &ConvergenceTable,
 ) -> Panels {
+    // figB1 → Fig. B.1
+    let title = match figure.strip_prefix("figB") {
+        Some(n) => format!("Fig. B.{n}"),
+        None => figure.to_string(),
+    };
     let mut ks = LinePlot::new(
-        format!("{figure}: KS distance to the finest"),
+        format!("{title}: KS distance to the finest"),
         name,
         "KS distance",
         false,
         YAxis::Linear,
     );
     let mut da = LinePlot::new(
-        format!("{figure}: α − α(finest)"),
+        format!("{title}: α − α(finest)"),
         name,
         "α − α(finest), plateau + power-law MLE",
         false,
         YAxis::Linear,
     );
     let mut real = LinePlot::new(
-        format!("{figure}: first r realizations vs all"),
+        format!("{title}: first r realizations vs all"),
         "realizations r",
         "max KS distance over loads",
         false,
@@ -189,7 +193,7 @@ fn convergence_plots(
             .filter(|r| r.kind == "setting" && r.w_over_w0 == w)
             .collect();
         let critical = if c == 0 { "95 % critical value" } else { "" };
-        let label = format!("W/W0 = {w:.3}");
+        let label = format!("W/W_0 = {w:.3}");
         push_convergence_curves(&mut ks, &mut da, &label, critical, &rows, |r| r.setting, c);
     }
     if let (Some(lo), Some(hi)) = (settings.first(), settings.last()) {
@@ -199,7 +203,7 @@ fn convergence_plots(
     for (c, s) in settings.iter().enumerate() {
         let by_r = table.max_ks_by_realizations(s.value);
         real.series.push(Series {
-            markers: true,
+            marker: Some(Marker::ALL[c % Marker::ALL.len()]),
             ..Series::line(s.label.clone(), by_r, c + 4)
         });
     }

@@ -3,7 +3,7 @@
 //! and the realization curves, all from the settings audit.
 
 use super::appendix::push_convergence_curves;
-use super::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
+use super::plot::{Layout, LinePlot, Marker, Panels, Series, YAxis};
 use super::StudyRef;
 use super::{tolerance_line, CcdfTable, Drawn};
 use crate::pipeline::inputs::Inputs;
@@ -36,14 +36,14 @@ pub fn convergence(
     let title = format!("λ_l/λ_s = 128, H = {hurst}");
     let mut ks = LinePlot::new(
         format!("{title}: KS distance to {}", reference.label),
-        "W/W0",
-        "KS distance (pooled A/λ_s²)",
+        "W/W_0",
+        "KS distance (pooled A/λ_s^2)",
         true,
         YAxis::Linear,
     );
     let mut da = LinePlot::new(
         format!("{title}: α − α(reference)"),
-        "W/W0",
+        "W/W_0",
         "α − α(reference), plateau + power-law MLE",
         true,
         YAxis::Linear,
@@ -81,12 +81,11 @@ pub fn convergence(
         .collect::<anyhow::Result<Vec<_>>>()?;
     let mut ccdf = LinePlot::new(
         format!("{title}: ensemble CCDF at the largest load"),
-        "A / λ_s²",
+        "A/λ_s^2",
         "P(A > a), ensemble mean",
         true,
         YAxis::Log,
     );
-    ccdf.legend = LegendAt::LowerLeft;
     for (c, (s, t)) in settings.iter().zip(&tables).enumerate() {
         let Some(&(load_index, w)) = t.loads().last() else {
             continue;
@@ -95,7 +94,7 @@ pub fn convergence(
         ccdf.series.push(Series {
             rgb: is_reference.then_some((0, 0, 0)),
             ..Series::line(
-                format!("{}, W/W0 = {w:.3}", s.label),
+                format!("{}, W/W_0 = {w:.3}", s.label),
                 t.curve(load_index, None, true),
                 c,
             )
@@ -113,7 +112,7 @@ pub fn convergence(
             (r.study == s.label).then_some(r.realizations as f64)
         });
         real.series.push(Series {
-            markers: true,
+            marker: Some(Marker::ALL[c % Marker::ALL.len()]),
             ..Series::line(s.label.clone(), by_r, c)
         });
     }

@@ -1,7 +1,7 @@
 //! Fig. 2: the surface and contact maps of one realization (2a–d), contact area, largest
 //! cluster and dN/dA_c over the sweep (2e–f), and the realization audit of 2e–f.
 
-use super::plot::{viridis, ColorBar, LegendAt, LinePlot, RasterPlot, Series, YAxis};
+use super::plot::{viridis, ColorBar, LinePlot, Marker, RasterPlot, Series, YAxis};
 use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label, Connectivity};
 use crate::pipeline::inputs::Inputs;
@@ -21,29 +21,28 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     let dn = f64_column(df, "dn_dac_per_ls2")?;
     let mut e = LinePlot::new(
         "Fig. 2e: contact area and largest cluster",
-        "W / W0",
-        "A_c / L²  and  largest A / λ_s²",
+        "W/W_0",
+        "A_c/L^2  and  largest A/λ_s^2",
         true,
         YAxis::Log,
     );
-    e.legend = LegendAt::LowerRight;
     e.x_marks = marked_loads.to_vec();
     e.series = vec![
         Series::line(
-            "A_c / L² (ensemble mean)",
+            "A_c/L^2 (ensemble mean)",
             w.iter().copied().zip(ac).collect(),
             0,
         ),
         Series::line(
-            "largest cluster A / λ_s² (ensemble mean)",
+            "largest cluster A/λ_s^2 (ensemble mean)",
             w.iter().copied().zip(largest).collect(),
             1,
         ),
     ];
     let mut f = LinePlot::new(
         "Fig. 2f: growth of the cluster count",
-        "W / W0",
-        "dN / d(A_c/λ_s²)",
+        "W/W_0",
+        "dN/d(A_c/λ_s^2)",
         true,
         YAxis::Linear,
     );
@@ -100,15 +99,15 @@ pub fn fig2_maps(
         Drawn::Raster(
             RasterPlot {
                 title: "Fig. 2a: rough surface (realization 0)".into(),
-                x_label: "x / L".into(),
-                y_label: "y / L".into(),
+                x_label: "x/L".into(),
+                y_label: "y/L".into(),
                 rows: n,
                 cols: n,
                 rgb,
                 colorbar: Some(ColorBar {
                     lo,
                     hi,
-                    label: "height h / L (rms slope 1)".into(),
+                    label: "height h/L (rms slope 1)".into(),
                 }),
                 legend: Vec::new(),
             },
@@ -141,9 +140,9 @@ pub fn fig2_maps(
             format!("fig2{panel}"),
             Drawn::Raster(
                 RasterPlot {
-                    title: format!("Fig. 2{panel}: contact clusters at W/W0 = {w:.3}"),
-                    x_label: "x / L".into(),
-                    y_label: "y / L".into(),
+                    title: format!("Fig. 2{panel}: contact clusters at W/W_0 = {w:.3}"),
+                    x_label: "x/L".into(),
+                    y_label: "y/L".into(),
                     rows,
                     cols,
                     rgb,
@@ -152,7 +151,7 @@ pub fn fig2_maps(
                         ("A ≤ A*".into(), Some(SMALL_CLUSTER)),
                         ("A > A*".into(), Some(LARGE_CLUSTER)),
                         ("out of contact".into(), Some(OUT_OF_CONTACT)),
-                        ("A* = 2 λ_s²".into(), None),
+                        (format!("A* = {a_star_over_ls2} λ_s^2"), None),
                     ],
                 },
                 NpyData::U8(vec![rows, cols], class),
@@ -199,7 +198,6 @@ fn fig2_convergence(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
         false,
         YAxis::Log,
     );
-    plot.legend = LegendAt::UpperRight;
     plot.x_integer = true;
     let labels = [
         "A_c (Fig. 2e)",
@@ -207,14 +205,17 @@ fn fig2_convergence(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
         "N (Fig. 2f: dN/dA_c)",
     ];
     for (c, (q, label)) in [0usize, 2, 1].iter().zip(labels).enumerate() {
-        plot.series.push(Series::line(
-            label,
-            rows.iter()
-                .filter(|x| x.1[*q] > 0.0)
-                .map(|x| (x.0, x.1[*q]))
-                .collect(),
-            c,
-        ));
+        plot.series.push(Series {
+            marker: Some(Marker::ALL[c]),
+            ..Series::line(
+                label,
+                rows.iter()
+                    .filter(|x| x.1[*q] > 0.0)
+                    .map(|x| (x.0, x.1[*q]))
+                    .collect(),
+                c,
+            )
+        });
     }
     plot.series.push(Series {
         width: 1,

@@ -3,7 +3,7 @@
 
 use polars::prelude::*;
 
-use super::plot::{Layout, LegendAt, LinePlot, Panels, Series, YAxis};
+use super::plot::{Dash, Fractions, Layout, LinePlot, Marker, Panels, Series, YAxis};
 use super::StudyRef;
 use super::{pick_loads, rows_at, CcdfTable, Drawn};
 use crate::pipeline::inputs::Inputs;
@@ -72,7 +72,7 @@ fn fitted_power_law(
             (k / ls2, weight * k.powf(-a) / z * ls2)
         })
         .collect();
-    let text = format!("fitted α = {a:.2}, 95 % CI [{:.2}, {:.2}]", lo[i], hi[i]);
+    let text = format!("α = {a:.2}, 95 % CI [{:.2}, {:.2}]", lo[i], hi[i]);
     Ok(Some((points, text)))
 }
 
@@ -90,19 +90,20 @@ pub fn fig34a(
     let stats = |i: usize, file: &str| inputs.table(i, "statistics", file);
     let mut main = LinePlot::new(
         "Fig. 3: cluster-area PDF, H = 0.8",
-        "A / λ_s²",
-        "p(A / λ_s²)",
+        "A/λ_s^2",
+        "p(A/λ_s^2)",
         true,
         YAxis::Log,
     );
     let mut ccdf_plot = LinePlot::new(
         "Fig. 4a: K(A*) = P(A > A*), H = 0.8",
-        "A* / λ_s²",
+        "A*/λ_s^2",
         "P(A > A*)",
         true,
         YAxis::Log,
     );
-    ccdf_plot.legend = LegendAt::LowerLeft;
+    // The fits of the studies told apart by colour and by dash.
+    let fit_dashes = [Dash::Dashed, Dash::Dotted, Dash::LongDashed];
     for (c, study) in ratios.iter().enumerate() {
         let pdf = stats(c, "pdf.parquet")?;
         let alpha = stats(c, "alpha.parquet")?;
@@ -118,13 +119,13 @@ pub fn fig34a(
             let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
             let (points, clusters) = pdf_points(&pdf, load_index)?;
             let label = if last {
-                format!("{} (W/W0 = {load_list}, light → dark)", study.label)
+                format!("{} (W/W_0 = {load_list}, light → dark)", study.label)
             } else {
                 String::new()
             };
             main.series.push(Series {
                 tint,
-                markers: true,
+                marker: Some(Marker::ALL[c % Marker::ALL.len()]),
                 width: 1,
                 ..Series::line(label.clone(), points, c)
             });
@@ -137,8 +138,8 @@ pub fn fig34a(
                     fitted_power_law(&alpha, load_index, clusters, study.lambda_s_px)?
                 {
                     main.series.push(Series {
-                        dashed: true,
-                        rgb: Some((0, 0, 0)),
+                        dash: fit_dashes[c % fit_dashes.len()],
+                        width: 3,
                         ..Series::line(format!("{} fit: {text}", study.label), fit, c)
                     });
                 }
@@ -149,15 +150,15 @@ pub fn fig34a(
     if hurst.is_empty() {
         out.push(("fig3".to_string(), Drawn::Line(main)));
     } else {
-        let mut inset = LinePlot::new("λ_l/λ_s = 128", "A / λ_s²", "p(A / λ_s²)", true, YAxis::Log);
+        let mut inset = LinePlot::new("λ_l/λ_s = 128", "A/λ_s^2", "p(A/λ_s^2)", true, YAxis::Log);
         for (c, study) in hurst.iter().enumerate() {
             let pdf = stats(ratios.len() + c, "pdf.parquet")?;
             if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[inset_load]).first() {
                 let (points, _) = pdf_points(&pdf, load_index)?;
                 inset.series.push(Series {
-                    markers: true,
+                    marker: Some(Marker::ALL[(c + 3) % Marker::ALL.len()]),
                     width: 1,
-                    ..Series::line(format!("{} (W/W0 = {w:.3})", study.label), points, c + 3)
+                    ..Series::line(format!("{} (W/W_0 = {w:.3})", study.label), points, c + 3)
                 });
             }
         }
@@ -165,8 +166,9 @@ pub fn fig34a(
             "fig3".to_string(),
             Drawn::Panels(Panels {
                 plots: vec![main, inset],
+                // Lower left of the axes, where the PDFs (decreasing) leave room.
                 layout: Layout::Inset {
-                    rect: (0.12, 0.55, 0.38, 0.33),
+                    rect: Fractions(0.0, 0.5, 0.46, 0.5),
                 },
             }),
         ));

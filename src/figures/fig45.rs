@@ -3,7 +3,7 @@
 
 use polars::prelude::*;
 
-use super::plot::{LegendAt, LinePlot, Series, YAxis};
+use super::plot::{Dash, LinePlot, Marker, Series, YAxis};
 use super::{tolerance_line, Drawn};
 use crate::pipeline::inputs::Inputs;
 use crate::pipeline::table::{bool_column, f64_column, str_column};
@@ -26,19 +26,21 @@ pub fn fig6(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
     thresholds.dedup();
     let mut plot = LinePlot::new(
         format!("Fig. 6: power-law model, α = {alpha}"),
-        "A_m / A_s",
-        "K_PL (solid), up-scaled K_PL (dashed)",
+        "A_m/A_s",
+        "K_{PL} (solid), 𝒦_{PL} (dashed)",
         true,
         YAxis::Linear,
     );
-    for (name, values, dashed) in [("K_PL", &k, false), ("up-scaled K_PL", &kk, true)] {
+    // The model's coefficients are probabilities.
+    plot.y_bounds = Some((0.0, 1.0));
+    for (name, values, dash) in [("K_{PL}", &k, Dash::Solid), ("𝒦_{PL}", &kk, Dash::Dashed)] {
         for (c, &t) in thresholds.iter().enumerate() {
             let points: Vec<(f64, f64)> = (0..s.len())
                 .filter(|&i| s[i] == t && m[i].is_finite() && m[i] >= t)
                 .map(|i| (m[i], values[i]))
                 .collect();
             plot.series.push(Series {
-                dashed,
+                dash,
                 ..Series::line(format!("{name}, A*/A_s = {t}"), points, c)
             });
         }
@@ -50,12 +52,14 @@ pub fn fig6(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
 const FIG4B_LINEAR_UP_TO: f64 = 1e-5;
 
 /// One series per threshold of `value` against W/W0 from a table with columns
-/// `a_star_over_ls2` and `w_over_w0`.
+/// `a_star_over_ls2` and `w_over_w0`: simulated values as markers joined by a thin line (a
+/// marker shape per threshold), the fitted model as dashed lines in the same colours under one
+/// legend entry.
 fn per_threshold(
     df: &DataFrame,
     value: &str,
     label: &str,
-    dashed: bool,
+    fitted: bool,
 ) -> anyhow::Result<Vec<Series>> {
     let a = f64_column(df, "a_star_over_ls2")?;
     let w = f64_column(df, "w_over_w0")?;
@@ -63,28 +67,30 @@ fn per_threshold(
     let mut out: Vec<Series> = FIG45_A_STAR
         .iter()
         .enumerate()
-        .map(|(c, &t)| Series {
-            dashed,
-            ..Series::line(
-                if dashed {
-                    String::new()
-                } else {
-                    format!("{label}, A*/λ_s² = {t}")
-                },
-                (0..a.len())
-                    .filter(|&i| a[i] == t)
-                    .map(|i| (w[i], v[i]))
-                    .collect(),
-                c,
-            )
+        .map(|(c, &t)| {
+            let points = (0..a.len())
+                .filter(|&i| a[i] == t)
+                .map(|i| (w[i], v[i]))
+                .collect();
+            if fitted {
+                Series {
+                    dash: Dash::Dashed,
+                    ..Series::line(String::new(), points, c)
+                }
+            } else {
+                Series {
+                    marker: Some(Marker::ALL[c % Marker::ALL.len()]),
+                    width: 1,
+                    ..Series::line(format!("{label}, A* = {t} λ_s^2"), points, c)
+                }
+            }
         })
         .collect();
-    if dashed {
-        // One legend entry for all the dashed curves (same colours as the simulated ones).
+    if fitted {
         out.push(Series {
-            dashed: true,
-            rgb: Some((0, 0, 0)),
-            ..Series::line(format!("{label} (dashed, colour = A*)"), Vec::new(), 0)
+            dash: Dash::Dashed,
+            rgb: Some((90, 90, 90)),
+            ..Series::line(format!("{label} (colour: A*)"), Vec::new(), 0)
         });
     }
     Ok(out)
@@ -97,28 +103,17 @@ fn per_threshold(
 pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
     let wear = &inputs.table(0, "statistics", "wear.parquet")?;
     let model = &inputs.table(1, "analytic", "model.parquet")?;
-    let mut k = per_threshold(wear, "k_archard_pooled", "K_num", false)?;
-    k.extend(per_threshold(model, "k_pl", "K_PL fit", true)?);
-    let mut kk = per_threshold(wear, "k_upscaled_pooled", "up-scaled K_num", false)?;
-    kk.extend(per_threshold(
-        model,
-        "k_upscaled_pl",
-        "up-scaled K_PL fit",
-        true,
-    )?);
-    let rate = per_threshold(wear, "wear_rate_over_l2_mean", "R / L²", false)?;
+    let mut k = per_threshold(wear, "k_archard_pooled", "K", false)?;
+    k.extend(per_threshold(model, "k_pl", "K_{PL} fit", true)?);
+    let mut kk = per_threshold(wear, "k_upscaled_pooled", "𝒦", false)?;
+    kk.extend(per_threshold(model, "k_upscaled_pl", "𝒦_{PL} fit", true)?);
+    let rate = per_threshold(wear, "wear_rate_over_l2_mean", "R/L^2", false)?;
     let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
-        let mut p = LinePlot::new(title, "W / W0", y, true, y_axis);
+        let mut p = LinePlot::new(title, "W/W_0", y, true, y_axis);
         p.series = series;
-        match y_axis {
-            YAxis::Log => p.legend = LegendAt::LowerRight,
-            YAxis::LinLog { .. } => p.legend = LegendAt::MiddleLeft,
-            YAxis::Linear => {
-                // Fig. 5a: the curves fill the width between 0 and 1, so the legend gets
-                // its own band above them.
-                p.legend = LegendAt::UpperLeft;
-                p.y_headroom = 0.45;
-            }
+        if y_axis == YAxis::Linear {
+            // 𝒦 = A_c*/A_c is a fraction of the contact area.
+            p.y_bounds = Some((0.0, 1.0));
         }
         Drawn::Line(p)
     };
@@ -127,7 +122,7 @@ pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
             "fig4b".into(),
             plot(
                 "Fig. 4b: Archard's wear coefficient, λ_l/λ_s = 128",
-                "K = P(A > A*)  (linear below 1e-5)",
+                "K = P(A > A*)  (linear below 10^{−5})",
                 YAxis::LinLog {
                     threshold: FIG4B_LINEAR_UP_TO,
                 },
@@ -138,7 +133,7 @@ pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
             "fig5a".into(),
             plot(
                 "Fig. 5a: up-scaled wear coefficient, λ_l/λ_s = 128",
-                "A_c* / A_c",
+                "𝒦 = A_c^*/A_c",
                 YAxis::Linear,
                 kk,
             ),
@@ -147,7 +142,7 @@ pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
             "fig5b".into(),
             plot(
                 "Fig. 5b: wear rate (ω = 1/3), λ_l/λ_s = 128",
-                "R / L²",
+                "R/L^2",
                 YAxis::Log,
                 rate,
             ),
@@ -170,12 +165,11 @@ pub fn load_resolution(inputs: &Inputs, figure: &str) -> anyhow::Result<Vec<(Str
     let judged: Vec<usize> = (0..w.len()).filter(|&i| !at_transition[i]).collect();
     let mut plot = LinePlot::new(
         "Figs. 4b, 5: fewer loads interpolated vs the finer sweep",
-        "W / W0",
+        "W/W_0",
         "|interpolated − value| / 95 % half-width (max over A*)",
         true,
         YAxis::Linear,
     );
-    plot.legend = LegendAt::UpperRight;
     for (c, &(_, _, name, legend)) in FIG45_CURVES.iter().enumerate() {
         let mut points: Vec<(f64, f64)> = Vec::new();
         for &load in &fine_loads {
@@ -190,7 +184,7 @@ pub fn load_resolution(inputs: &Inputs, figure: &str) -> anyhow::Result<Vec<(Str
             }
         }
         plot.series.push(Series {
-            markers: true,
+            marker: Some(Marker::ALL[c % Marker::ALL.len()]),
             ..Series::line(legend, points, c)
         });
     }

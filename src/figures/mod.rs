@@ -180,9 +180,9 @@ pub fn write(drawn: Vec<(String, Drawn)>, dir: &Path) -> anyhow::Result<Value> {
 pub fn tolerance_line(tolerance: f64, x0: f64, x1: f64) -> Series {
     Series {
         rgb: Some((0, 0, 0)),
-        dashed: true,
+        dash: plot::Dash::Dashed,
         ..Series::line(
-            format!("tolerance {tolerance}"),
+            format!("tolerance {}", plot::number(tolerance)),
             vec![(x0, tolerance), (x1, tolerance)],
             0,
         )

@@ -7,6 +7,7 @@
 pub mod campaign;
 pub mod catalog;
 pub mod cost;
+pub mod gallery;
 pub mod hash;
 pub mod inputs;
 pub mod plan;

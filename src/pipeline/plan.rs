@@ -508,7 +508,11 @@ fn convergence_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<(
     // Two studies with the same sizes would share a label: tell them apart by name.
     for i in 0..refs.len() {
         if refs.iter().filter(|r| r.label == refs[i].label).count() > 1 {
-            refs[i].label = format!("{} [{}]", refs[i].label, refs[i].study);
+            refs[i].label = format!(
+                "{} [{}]",
+                refs[i].label,
+                crate::figures::plot::text::escape(&refs[i].study)
+            );
         }
     }
     let hurst = studies[0].plan.surface.hurst;

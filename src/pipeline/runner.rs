@@ -81,7 +81,13 @@ pub fn run(
     let computed = execute(store, &plan.instances, opts.jobs, opts.jobs, opts.quiet)?;
 
     let catalog_dir = store.root().join(&opts.profile);
-    export_figures(store, &plan.instances, &opts.profile)?;
+    // A partial plan (targets) exports its figures but leaves the gallery's record alone.
+    super::gallery::export(
+        store,
+        &plan.instances,
+        &opts.profile,
+        opts.targets.is_empty(),
+    )?;
     let rows = catalog_rows(store, &plan.instances)?;
     catalog::write(&catalog_dir, &rows)?;
     Ok(RunSummary {
@@ -141,36 +147,6 @@ pub fn stage_list<'a>(stages: impl IntoIterator<Item = &'a str>) -> String {
         }
     }
     names.join("+")
-}
-
-/// Directory the figures of `profile` are copied to: `figures/<profile>/` beside the data
-/// directory.
-pub fn figures_dir(store: &Store, profile: &str) -> std::path::PathBuf {
-    store
-        .root()
-        .parent()
-        .unwrap_or(std::path::Path::new(""))
-        .join("figures")
-        .join(profile)
-}
-
-/// Copy every stored figure file (images and their data) of the profile to
-/// [`figures_dir`], each through a temporary file renamed into place.
-fn export_figures(store: &Store, all: &[Instance], profile: &str) -> anyhow::Result<()> {
-    let out = figures_dir(store, profile);
-    for inst in all.iter().filter(|i| i.stage == "figures") {
-        let Some(manifest) = store.lookup(&inst.stage, &inst.key)? else {
-            continue;
-        };
-        std::fs::create_dir_all(&out)?;
-        for file in manifest.outputs.keys() {
-            let src = store.read_output(&manifest, file)?;
-            let tmp = out.join(format!(".{file}.tmp-{}", std::process::id()));
-            std::fs::copy(&src, &tmp)?;
-            std::fs::rename(&tmp, out.join(file))?;
-        }
-    }
-    Ok(())
 }
 
 fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {

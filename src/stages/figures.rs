@@ -60,7 +60,7 @@ pub enum FigureJob {
 
 impl Stage for Figures {
     const NAME: &'static str = "figures";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
     type Job = FigureJob;
 
     fn compute(job: &FigureJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

@@ -8,6 +8,7 @@ Exit status 0 when every check passes; otherwise each failure is printed and the
 
 import json
 import os
+import re
 import sys
 import xml.etree.ElementTree as ET
 
@@ -393,6 +394,14 @@ def main(data_dir, profile):
             root = ET.parse(r.path).getroot()
             check(root.tag.endswith("svg") and root.get("width") == str(sizes[stem][0]),
                   f"{r.path}: not an SVG of width {sizes[stem][0]}")
+            # Publication style: every label as a reader sees it, no markup (K_PL, λ_s,
+            # A^2) and no e-notation (1e-4) left.
+            for t in root.iter():
+                if t.tag.endswith("text") and t.text:
+                    label = t.text.strip()
+                    check("_" not in label and "^" not in label
+                          and not re.search(r"\de[-+]?\d", label),
+                          f"{r.path}: label '{label}'")
         elif ext == ".csv":
             df = pd.read_csv(r.path)
             check(len(df) > 0 and df.iloc[:, -1].notna().any(), f"{r.path}: no data")

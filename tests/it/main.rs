@@ -5,6 +5,7 @@ mod cli;
 mod clusters;
 mod config;
 mod contact;
+mod galleries;
 mod layout;
 mod plan;
 mod powerlaw;

@@ -302,6 +302,31 @@ fn png_size(bytes: &[u8]) -> (u32, u32) {
     (be(&bytes[16..20]), be(&bytes[20..24]))
 }
 
+/// The text elements of an SVG: (text, font size).
+fn svg_texts(svg: &str) -> Vec<(String, f64)> {
+    let mut out = Vec::new();
+    let mut rest = svg;
+    while let Some(i) = rest.find("<text") {
+        let tag_end = i + rest[i..].find('>').unwrap();
+        let tag = &rest[i..tag_end];
+        let size = tag
+            .split("font-size=\"")
+            .nth(1)
+            .and_then(|s| s.split('"').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0.0);
+        let end = tag_end + rest[tag_end..].find("</text>").unwrap();
+        let text = rest[tag_end + 1..end]
+            .trim()
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&amp;", "&");
+        out.push((text, size));
+        rest = &rest[end..];
+    }
+    out
+}
+
 #[test]
 fn figures_are_valid_images_with_their_data_copied_beside_the_data_directory() {
     let (_t, dir) = built_small_pipeline();
@@ -311,11 +336,34 @@ fn figures_are_valid_images_with_their_data_copied_beside_the_data_directory() {
     assert_eq!(png_size(&png), (960, 720));
     let svg = std::fs::read_to_string(out.join("fig6.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-    assert!(svg.contains("A_m / A_s"), "axis label in the SVG");
+    // The axis label "A_m/A_s" drawn with its subscripts as separate, smaller text.
+    let texts = svg_texts(&svg);
+    let at = texts.iter().position(|t| t.0 == "A").expect("label 'A'");
+    assert_eq!(texts[at + 1].0, "m");
+    assert!(texts[at + 1].1 < texts[at].1, "subscript smaller");
+    // Every label of every figure: no markup left and no e-notation.
+    let mut svgs = 0;
+    for entry in std::fs::read_dir(&out).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "svg") {
+            svgs += 1;
+            for (t, _) in svg_texts(&std::fs::read_to_string(&path).unwrap()) {
+                let e_notation = t.as_bytes().windows(3).any(|w| {
+                    w[0].is_ascii_digit() && w[1] == b'e' && (w[2] == b'-' || w[2].is_ascii_digit())
+                });
+                assert!(
+                    !t.contains('_') && !t.contains('^') && !e_notation,
+                    "{}: label '{t}'",
+                    path.display()
+                );
+            }
+        }
+    }
+    assert!(svgs >= 1, "{svgs} figures");
     // The plotted data: 5 thresholds × 2 coefficients, points with A_m ≥ A* only.
     let csv = std::fs::read_to_string(out.join("fig6.csv")).unwrap();
     let mut lines = csv.lines();
-    assert!(lines.next().unwrap().starts_with("series,A_m / A_s,"));
+    assert!(lines.next().unwrap().starts_with("series,Aₘ/Aₛ,"));
     let rows: Vec<&str> = lines.collect();
     assert!(rows.len() > 500, "{} rows", rows.len());
     for r in &rows {

@@ -6,7 +6,11 @@ use plotters::style::colors::colormaps::ViridisRGB;
 
 use std::path::Path;
 
-use super::{plot_err, tick, write_scene, DrawResult, RASTER_SIZE_PX};
+use super::text::{self, Align, TextLook};
+use super::{
+    number, plot_err, snap_zero, write_scene, DrawResult, AXIS_LABEL_PX, LEGEND_PX, RASTER_SIZE_PX,
+    TICK_PX, TITLE_PX,
+};
 
 /// A colour bar beside a raster: values `lo … hi` mapped through viridis.
 #[derive(Clone, Debug)]
@@ -71,9 +75,15 @@ impl RasterPlot {
     pub(super) fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
         let (w, _) = root.dim_in_pixel();
         let (main, side) = root.split_horizontally(w - 160);
-        let main = main
-            .titled(&self.title, ("sans-serif", 26))
-            .map_err(plot_err)?;
+        let (mw0, _) = main.dim_in_pixel();
+        text::draw(
+            &main,
+            &self.title,
+            (mw0 as i32 / 2, 10),
+            Align::Middle,
+            TextLook::new(TITLE_PX),
+        )?;
+        let (_, main) = main.split_vertically(44);
         // Margins chosen so that the image area is square (pixels of the map are square).
         let (margin, x_area, y_area, top) = (18u32, 60u32, 80u32, 10u32);
         let (mw, mh) = main.dim_in_pixel();
@@ -96,15 +106,35 @@ impl RasterPlot {
             .disable_mesh()
             .x_labels(6)
             .y_labels(6)
-            .x_label_formatter(&tick)
-            .y_label_formatter(&tick)
-            .x_desc(&self.x_label)
-            .y_desc(&self.y_label)
-            .label_style(("sans-serif", 18))
-            .axis_desc_style(("sans-serif", 20))
+            .x_label_formatter(&|v| number(*v))
+            .y_label_formatter(&|v| number(*v))
+            .label_style(("sans-serif", TICK_PX))
             .draw()
             .map_err(plot_err)?;
         let (xr, yr) = chart.plotting_area().get_pixel_range();
+        let (mx, my) = main.get_pixel_range();
+        let base = root.get_base_pixel();
+        text::draw(
+            root,
+            &self.x_label,
+            (
+                (xr.start + xr.end) / 2 - base.0,
+                yr.end - base.1 + (TICK_PX * 1.9) as i32,
+            ),
+            Align::Middle,
+            TextLook::new(AXIS_LABEL_PX),
+        )?;
+        text::draw(
+            root,
+            &self.y_label,
+            (mx.start - base.0 + 8, (yr.start + yr.end) / 2 - base.1),
+            Align::Middle,
+            TextLook {
+                upwards: true,
+                ..TextLook::new(AXIS_LABEL_PX)
+            },
+        )?;
+        let _ = my;
         let (pw, ph) = ((xr.end - xr.start) as u32, (yr.end - yr.start) as u32);
         let buffer = self.resampled(pw, ph);
         let element =
@@ -123,8 +153,13 @@ impl RasterPlot {
                     .map_err(plot_err)?;
             }
             let tx = if color.is_some() { x + 26 } else { x };
-            root.draw(&Text::new(label.clone(), (tx, y), ("sans-serif", 18)))
-                .map_err(plot_err)?;
+            text::draw(
+                root,
+                label,
+                (tx, y + 3),
+                Align::Start,
+                TextLook::new(LEGEND_PX),
+            )?;
             y += 30;
         }
         if let Some(bar) = &self.colorbar {
@@ -133,7 +168,7 @@ impl RasterPlot {
                 .margin_bottom((main.dim_in_pixel().1 as i32 - yr.end).max(0))
                 .margin_right(10)
                 .y_label_area_size(0)
-                .right_y_label_area_size(90);
+                .right_y_label_area_size(100);
             let mut chart = cb
                 .build_cartesian_2d(0.0..1.0, bar.lo..bar.hi)
                 .map_err(plot_err)?;
@@ -142,12 +177,22 @@ impl RasterPlot {
                 .disable_mesh()
                 .disable_x_axis()
                 .y_labels(8)
-                .y_label_formatter(&tick)
-                .y_desc(&bar.label)
-                .label_style(("sans-serif", 16))
-                .axis_desc_style(("sans-serif", 18))
+                .y_label_formatter(&|v| number(snap_zero(*v, bar.hi - bar.lo)))
+                .label_style(("sans-serif", LEGEND_PX))
                 .draw()
                 .map_err(plot_err)?;
+            let (_, sy) = chart.plotting_area().get_pixel_range();
+            let (sx, _) = side.get_pixel_range();
+            text::draw(
+                root,
+                &bar.label,
+                (sx.end - base.0 - 24, (sy.start + sy.end) / 2 - base.1),
+                Align::Middle,
+                TextLook {
+                    upwards: true,
+                    ..TextLook::new(AXIS_LABEL_PX * 0.9)
+                },
+            )?;
             let steps = 256;
             let span = bar.hi - bar.lo;
             chart

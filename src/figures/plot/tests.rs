@@ -1,3 +1,7 @@
+use plotters::coord::ranged1d::Ranged;
+
+use super::legend::{covered_pixels, free_spot};
+use super::ticks::{log_key_points, padded, LinLogCoord, Ticks};
 use super::*;
 
 #[test]
@@ -26,12 +30,78 @@ fn linear_then_log_axis_is_continuous_and_monotonic() {
 }
 
 #[test]
-fn count_axes_label_whole_numbers_only() {
-    assert_eq!(axis_tick(&2.0, true), "2");
-    assert_eq!(axis_tick(&20.0, true), "20");
-    assert_eq!(axis_tick(&1.5, true), "");
-    assert_eq!(axis_tick(&1.5, false), "1.5");
-    assert_eq!(axis_tick(&0.001, false), "0.001");
+fn tick_labels_are_numbers_and_powers_of_ten_without_e_notation() {
+    assert_eq!(Ticks::Integer.label(2.0), "2");
+    assert_eq!(Ticks::Integer.label(20.0), "20");
+    assert_eq!(Ticks::Integer.label(1.5), "");
+    assert_eq!(Ticks::Plain.label(1.5), "1.5");
+    assert_eq!(Ticks::Plain.label(0.001), "0.001");
+    assert_eq!(Ticks::Plain.label(-0.25), "−0.25");
+    assert_eq!(Ticks::Plain.label(5e-6), "5×10⁻⁶");
+    assert_eq!(Ticks::Plain.label(2.5e5), "2.5×10⁵");
+    assert_eq!(Ticks::Plain.label(1e-4), "10⁻⁴");
+    // Decades: powers labelled, the minor ticks between them not.
+    assert_eq!(Ticks::Decades.label(1e-4), "10⁻⁴");
+    assert_eq!(Ticks::Decades.label(1.0), "10⁰");
+    assert_eq!(Ticks::Decades.label(1e12), "10¹²");
+    assert_eq!(Ticks::Decades.label(3e-4), "");
+    assert_eq!(Ticks::OneTwoFive.label(0.02), "0.02");
+    assert_eq!(Ticks::OneTwoFive.label(0.03), "");
+    assert_eq!(Ticks::Powers.label(0.0), "0");
+    assert_eq!(Ticks::Powers.label(5e-6), "5×10⁻⁶");
+    assert_eq!(Ticks::Powers.label(1e-3), "10⁻³");
+    assert_eq!(Ticks::log(1e-5, 2e-3), Ticks::Decades);
+    assert_eq!(Ticks::log(0.01, 0.1), Ticks::OneTwoFive);
+    assert_eq!(Ticks::log(0.011, 0.3), Ticks::OneTwoFive);
+    assert_eq!(Ticks::log(0.025, 0.07), Ticks::Plain);
+    assert_eq!(
+        log_key_points(0.025, 0.07),
+        vec![0.03, 0.04, 0.05, 0.06, 0.07]
+    );
+    assert_eq!(log_key_points(0.5, 20.0).len(), 5 + 9 + 2);
+    assert_eq!(number(snap_zero(-1.39e-17, 0.2)), "0");
+    assert_eq!(number(snap_zero(1e-6, 1e-5)), "10⁻⁶");
+    // Rounding that carries the mantissa to 10 moves the exponent.
+    assert_eq!(number(9.9999e-6), "10⁻⁵");
+}
+
+#[test]
+fn log_axes_snap_to_nearby_powers_of_ten() {
+    let (lo, hi) = padded(1.3e-3, 0.8, true);
+    assert_eq!((lo, hi), (1e-3, 1.0));
+    // Data just above a power of ten keeps its margin rather than gain a decade.
+    let (lo, _) = padded(1.1e-3, 0.8, true);
+    assert!((lo - 1.1e-3 / 1.15).abs() < 1e-15);
+    // Far from a power: only the margin.
+    let (lo, hi) = padded(4e-3, 0.4, true);
+    assert!((lo - 4e-3 / 1.15).abs() < 1e-15 && (hi - 0.46).abs() < 1e-12);
+}
+
+#[test]
+fn the_legend_goes_where_no_data_is() {
+    // A curve along the top edge: the upper corners are taken, the lower right is free.
+    let curve = vec![(0, 5), (400, 5)];
+    let px = covered_pixels(&[curve], 2.0);
+    assert_eq!(
+        free_spot(400, 300, (100, 60), &px, &[], 10),
+        Some((290, 230))
+    );
+    // A diagonal from lower left to upper right leaves the upper left free.
+    let diag = covered_pixels(&[vec![(0, 300), (400, 0)]], 2.0);
+    assert_eq!(
+        free_spot(400, 300, (100, 60), &diag, &[], 10),
+        Some((10, 10))
+    );
+    // An inset in the lower right moves it to the lower left.
+    assert_eq!(
+        free_spot(400, 300, (100, 60), &px, &[(250, 150, 400, 300)], 10),
+        Some((10, 230))
+    );
+    // Data everywhere: nowhere inside.
+    let full: Vec<(i32, i32)> = (0..40)
+        .flat_map(|i| (0..30).map(move |j| (10 * i, 10 * j)))
+        .collect();
+    assert_eq!(free_spot(400, 300, (100, 60), &full, &[], 10), None);
 }
 
 #[test]

@@ -1,0 +1,356 @@
+//! Drawing a [`LinePlot`]: title, axes, curves, marks, axis labels and legend.
+
+use std::path::Path;
+
+use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
+use plotters::coord::ranged1d::{Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::legend::{covered_pixels, free_spot, Fractions, LegendBox, Rect};
+use super::style::{draw_marker, draw_path, Dash};
+use super::text::{self, Align, TextLook};
+use super::ticks::{log_key_points, padded, snap_zero, LinLogCoord, Ticks};
+use super::{
+    finite_on, plot_err, write_scene, DrawResult, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX,
+    SIZE_PX, TICK_PX, TITLE_PX,
+};
+
+impl LinePlot {
+    /// Finite points (positive on logarithmic axes) of every series.
+    fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let keep = finite_on(self.x_log, self.y_axis);
+        self.series
+            .iter()
+            .flat_map(|s| s.points.iter().copied())
+            .filter(move |p| keep(p))
+    }
+
+    fn extent(&self, pick: impl Fn((f64, f64)) -> f64) -> anyhow::Result<(f64, f64)> {
+        let (lo, hi) = self
+            .points()
+            .map(pick)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            });
+        anyhow::ensure!(
+            lo.is_finite(),
+            "plot '{}' has no finite point",
+            text::plain(&self.title)
+        );
+        Ok((lo, hi))
+    }
+
+    /// The y range clipped to the quantity's bounds.
+    fn bounded(&self, (lo, hi): (f64, f64)) -> (f64, f64) {
+        match self.y_bounds {
+            Some((b0, b1)) => (lo.max(b0), hi.min(b1)),
+            None => (lo, hi),
+        }
+    }
+
+    /// Write `<stem>.png` and `<stem>.svg` in `dir`.
+    pub fn write(&self, dir: &Path, stem: &str) -> DrawResult {
+        write_scene(dir, stem, SIZE_PX, self)
+    }
+
+    /// Draw into `area` with text scaled by `scale`.
+    /// `avoid`: rectangles the legend must not cover (e.g. an inset), as fractions (left, top,
+    /// width, height) of the axes. Returns the axes' rectangle in pixels of `area`.
+    pub(super) fn draw_on<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        scale: f64,
+        avoid: &[Fractions],
+    ) -> anyhow::Result<Rect> {
+        let (x0, x1) = self.extent(|p| p.0)?;
+        let (x0, x1) = padded(x0, x1, self.x_log);
+        let (y0, y1) = self.extent(|p| p.1)?;
+        let x_ticks = if self.x_integer {
+            Ticks::Integer
+        } else if self.x_log {
+            Ticks::log(x0, x1)
+        } else {
+            Ticks::Plain
+        };
+        let xr = x0..x1;
+        let log_x = || -> WithKeyPoints<LogCoord<f64>> {
+            xr.clone()
+                .log_scale()
+                .with_key_points(log_key_points(x0, x1))
+        };
+        let lin_x = || -> RangedCoordf64 { xr.clone().into() };
+        match self.y_axis {
+            YAxis::Log => {
+                let (y0, y1) = self.bounded(padded(y0, y1, true));
+                let yr = || -> WithKeyPoints<LogCoord<f64>> {
+                    (y0..y1).log_scale().with_key_points(log_key_points(y0, y1))
+                };
+                let yt = Ticks::log(y0, y1);
+                if self.x_log {
+                    self.draw_chart(area, scale, log_x, yr, (x_ticks, yt), (y0, y1), avoid)
+                } else {
+                    self.draw_chart(area, scale, lin_x, yr, (x_ticks, yt), (y0, y1), avoid)
+                }
+            }
+            YAxis::Linear => {
+                let (y0, y1) = self.bounded(padded(y0, y1, false));
+                let yr = || -> RangedCoordf64 { (y0..y1).into() };
+                let ticks = (x_ticks, Ticks::Plain);
+                if self.x_log {
+                    self.draw_chart(area, scale, log_x, yr, ticks, (y0, y1), avoid)
+                } else {
+                    self.draw_chart(area, scale, lin_x, yr, ticks, (y0, y1), avoid)
+                }
+            }
+            YAxis::LinLog { threshold } => {
+                anyhow::ensure!(
+                    threshold > 0.0,
+                    "linear-log axis needs a positive threshold"
+                );
+                let hi = (y1 * 1.5).max(threshold * 2.0);
+                let yr = || LinLogCoord { threshold, hi };
+                let ticks = (x_ticks, Ticks::Powers);
+                if self.x_log {
+                    self.draw_chart(area, scale, log_x, yr, ticks, (0.0, hi), avoid)
+                } else {
+                    self.draw_chart(area, scale, lin_x, yr, ticks, (0.0, hi), avoid)
+                }
+            }
+        }
+    }
+
+    /// Draw with the axes `x()` and `y()` (the y axis spanning `y_span`): title, axes with
+    /// their labels, the curves, marks and legend.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_chart<DB, X, Y>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        scale: f64,
+        x: impl Fn() -> X,
+        y: impl Fn() -> Y,
+        ticks: (Ticks, Ticks),
+        y_span: (f64, f64),
+        avoid: &[Fractions],
+    ) -> anyhow::Result<Rect>
+    where
+        DB: DrawingBackend,
+        X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let px = |v: f64| (v * scale).round().max(1.0) as i32;
+        let (w, _) = area.dim_in_pixel();
+        let title_h = if self.title.is_empty() {
+            px(12.0)
+        } else {
+            text::draw(
+                area,
+                &self.title,
+                (w as i32 / 2, px(10.0)),
+                Align::Middle,
+                TextLook::new(TITLE_PX * scale),
+            )?;
+            px(TITLE_PX * 1.9)
+        };
+        let (_, body) = area.split_vertically(title_h);
+        let entries: Vec<&Series> = self.series.iter().filter(|s| !s.label.is_empty()).collect();
+        let legend = LegendBox::measure(area, &entries, scale);
+        let x_area = px(TICK_PX + AXIS_LABEL_PX * 1.6 + 18.0);
+        let y_area = px(TICK_PX * 4.0 + AXIS_LABEL_PX * 1.4 + 12.0);
+        let build = |a: &DrawingArea<DB, Shift>| {
+            ChartBuilder::on(a)
+                .margin_top(px(4.0))
+                .margin_right(px(26.0))
+                .margin_left(px(6.0))
+                .margin_bottom(px(4.0))
+                .x_label_area_size(x_area)
+                .y_label_area_size(y_area)
+                .build_cartesian_2d(x(), y())
+                .map_err(plot_err)
+        };
+        let keep = finite_on(self.x_log, self.y_axis);
+        let marker_r = px(4.0).max(2);
+        let margin = px(10.0);
+        // Curves in pixels of the plotting area.
+        let curves_of = |chart: &ChartContext<DB, Cartesian2d<X, Y>>| {
+            let base = chart.plotting_area().strip_coord_spec().get_base_pixel();
+            let to_px = |p: &(f64, f64)| {
+                let (a, b) = chart.backend_coord(p);
+                (a - base.0, b - base.1)
+            };
+            let curves: Vec<Vec<(i32, i32)>> = self
+                .series
+                .iter()
+                .map(|s| s.points.iter().filter(|p| keep(p)).map(to_px).collect())
+                .collect();
+            let marks: Vec<Vec<(i32, i32)>> = self
+                .x_marks
+                .iter()
+                .map(|&xm| vec![to_px(&(xm, y_span.0)), to_px(&(xm, y_span.1))])
+                .collect();
+            (curves, marks)
+        };
+        // The legend inside the axes where it covers nothing, else below them.
+        let spot = if entries.is_empty() || self.legend == LegendAt::Below {
+            None
+        } else {
+            let probe = build(&body)?;
+            let (curves, marks) = curves_of(&probe);
+            let all: Vec<Vec<(i32, i32)>> = curves.into_iter().chain(marks).collect();
+            let pixels = covered_pixels(&all, 2.0);
+            let (pw, ph) = probe.plotting_area().dim_in_pixel();
+            let blocked: Vec<Rect> = avoid.iter().map(|f| f.within(pw, ph)).collect();
+            free_spot(
+                pw as i32,
+                ph as i32,
+                legend.size(entries.len(), 1),
+                &pixels,
+                &blocked,
+                margin,
+            )
+        };
+        let (chart_area, below) = if entries.is_empty() || spot.is_some() {
+            (body, None)
+        } else {
+            let (bw, bh) = body.dim_in_pixel();
+            let usable = bw as i32 - 2 * margin;
+            let columns = (1..=entries.len())
+                .rev()
+                .find(|&c| legend.size(entries.len(), c).0 <= usable)
+                .unwrap_or(1);
+            let lh = legend.size(entries.len(), columns).1 + margin;
+            let (top, bottom) = body.split_vertically(bh as i32 - lh);
+            (top, Some((bottom, columns)))
+        };
+        let mut chart = build(&chart_area)?;
+        let (xt, yt) = ticks;
+        // Logarithmic axes bring their own ticks (log_key_points); linear ones about 7.
+        let hint = 7;
+        let (xs, ys) = (x().range(), y_span);
+        let x_label = |v: &f64| xt.label(snap_zero(*v, xs.end - xs.start));
+        let y_label = |v: &f64| yt.label(snap_zero(*v, ys.1 - ys.0));
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(hint)
+            .y_labels(hint)
+            .x_label_formatter(&x_label)
+            .y_label_formatter(&y_label)
+            .set_all_tick_mark_size(px(6.0))
+            .label_style(("sans-serif", TICK_PX * scale))
+            .axis_style(BLACK.stroke_width(1))
+            .draw()
+            .map_err(plot_err)?;
+        let plot = chart.plotting_area().strip_coord_spec();
+        let (pw, ph) = plot.dim_in_pixel();
+        // Box the axes (top and right edges).
+        plot.draw(&PathElement::new(
+            vec![(0, 0), (pw as i32 - 1, 0), (pw as i32 - 1, ph as i32 - 1)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(plot_err)?;
+        let (curves, marks) = curves_of(&chart);
+        for m in marks {
+            draw_path(
+                &plot,
+                m,
+                Dash::Dashed,
+                RGBColor(150, 150, 150).stroke_width(1),
+            )?;
+        }
+        for (s, pts) in self.series.iter().zip(curves) {
+            let color = s.rgb_color();
+            if s.width > 0 && pts.len() > 1 {
+                draw_path(&plot, pts.clone(), s.dash, color.stroke_width(s.width))?;
+            }
+            if let Some(m) = s.marker {
+                for &p in &pts {
+                    draw_marker(&plot, m, p, marker_r, color)?;
+                }
+            }
+        }
+        // Axis labels, outside the tick labels.
+        let base = area.get_base_pixel();
+        let (prx, pry) = plot.get_pixel_range();
+        let (ax, ay) = chart_area.get_pixel_range();
+        let label_px = AXIS_LABEL_PX * scale;
+        text::draw(
+            area,
+            &self.x_label,
+            (
+                (prx.start + prx.end) / 2 - base.0,
+                ay.end - base.1 - px(4.0) - (1.05 * label_px) as i32,
+            ),
+            Align::Middle,
+            TextLook::new(label_px),
+        )?;
+        text::draw(
+            area,
+            &self.y_label,
+            (
+                ax.start - base.0 + px(4.0) + (0.15 * label_px) as i32,
+                (pry.start + pry.end) / 2 - base.1,
+            ),
+            Align::Middle,
+            TextLook {
+                upwards: true,
+                ..TextLook::new(label_px)
+            },
+        )?;
+        match (spot, below) {
+            (Some(at), _) => legend.draw(&plot, &entries, 1, at, marker_r)?,
+            (None, Some((strip, columns))) => {
+                let (sw, _) = strip.dim_in_pixel();
+                let (lw, _) = legend.size(entries.len(), columns);
+                legend.draw(
+                    &strip,
+                    &entries,
+                    columns,
+                    ((sw as i32 - lw) / 2, 0),
+                    marker_r,
+                )?
+            }
+            _ => {}
+        }
+        Ok((
+            prx.start - base.0,
+            pry.start - base.1,
+            prx.end - base.0,
+            pry.end - base.1,
+        ))
+    }
+
+    /// Rows `panel, series, x, y` of the plotted data.
+    pub(super) fn data_rows(
+        &self,
+        panel: &str,
+        out: &mut csv::Writer<std::fs::File>,
+    ) -> DrawResult {
+        for s in &self.series {
+            let label = text::flat(&s.label);
+            for (x, y) in &s.points {
+                out.write_record([panel, &label, &x.to_string(), &y.to_string()])?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The plotted data as CSV (`series, <x label>, <y label>`), beside the images.
+    pub fn write_data(&self, path: &Path) -> DrawResult {
+        let mut w = csv::Writer::from_path(path)?;
+        w.write_record([
+            "series".to_string(),
+            text::flat(&self.x_label),
+            text::flat(&self.y_label),
+        ])?;
+        for s in &self.series {
+            let label = text::flat(&s.label);
+            for (x, y) in &s.points {
+                w.write_record([label.clone(), x.to_string(), y.to_string()])?;
+            }
+        }
+        w.flush()?;
+        Ok(())
+    }
+}

@@ -1,0 +1,63 @@
+//! Committed galleries (`figures/<profile>/`) against what their profiles would build now:
+//! compared by instance keys (content hashes of the jobs), not pixels.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use wearcoef::config::Pipeline;
+use wearcoef::pipeline::gallery::{expected, Provenance, PROVENANCE};
+use wearcoef::pipeline::plan::Plan;
+
+/// Without the files each figure wrote (the plan does not know them).
+fn keys_only(mut p: Provenance) -> Provenance {
+    for f in &mut p.figures {
+        f.files.clear();
+    }
+    p
+}
+
+#[test]
+fn committed_galleries_match_what_their_profiles_would_draw() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let pipeline = Pipeline::load(&repo.join("pipeline.yaml")).unwrap();
+    let mut checked = 0;
+    for entry in std::fs::read_dir(repo.join("figures")).unwrap() {
+        let dir = entry.unwrap().path();
+        let record = dir.join(PROVENANCE);
+        if !record.is_file() {
+            continue;
+        }
+        let committed: Provenance =
+            serde_json::from_str(&std::fs::read_to_string(&record).unwrap()).unwrap();
+        let profile = dir.file_name().unwrap().to_string_lossy().into_owned();
+        assert_eq!(committed.profile, profile, "{}", record.display());
+        let plan = Plan::build(&pipeline, "pipeline.yaml", &profile, &[]).unwrap();
+        let now = expected(&plan.instances, &profile);
+        assert_eq!(
+            keys_only(committed.clone()),
+            now,
+            "figures/{profile} is stale: `make figures PROFILE={profile}` and commit it"
+        );
+        // The gallery holds exactly the files its figures wrote, and all of them.
+        let listed: BTreeSet<String> = committed
+            .figures
+            .iter()
+            .flat_map(|f| f.files.iter().cloned())
+            .collect();
+        let present: BTreeSet<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n != PROVENANCE && !n.starts_with('.'))
+            .collect();
+        assert_eq!(
+            present, listed,
+            "figures/{profile}: files against its record"
+        );
+        assert!(
+            committed.figures.iter().all(|f| !f.files.is_empty()),
+            "figures/{profile}: a declared figure drew nothing"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 1, "no committed gallery has a {PROVENANCE}");
+}
