@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy clean
+.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -21,11 +21,17 @@ test:
 	cargo test --locked --workspace
 	cargo test --locked --release --test it -- --ignored
 	$(MAKE) test-client
+	$(MAKE) test-report
 	$(MAKE) test-slurm
 
 # Real client: the quick profile end to end, every artifact opened with pandas, numpy, Pillow.
 test-client: build
 	bash tests/client/run.sh
+
+# The committed report figures/default/index.html in headless Chromium (installed if missing):
+# every image decodes; a copy with a truncated image must fail.
+test-report:
+	bash tests/report/run.sh
 
 # A one-node Slurm cluster on this machine (installed if missing): the quick profile through
 # `wearcoef submit`, byte-identical to a local run, also after a cancelled task.

@@ -33,7 +33,7 @@ pub fn appendix(
                 YAxis::Log,
             );
             let loads = table.loads();
-            for (j, &(load_index, _)) in loads.iter().enumerate() {
+            for (j, &(load_index, w)) in loads.iter().enumerate() {
                 for (r_i, &r) in table.realizations().iter().enumerate() {
                     let label = if j == 0 && r_i == 0 {
                         "each realization"
@@ -43,6 +43,9 @@ pub fn appendix(
                     plot.series.push(Series {
                         rgb: Some((170, 170, 170)),
                         width: 1,
+                        name: format!("realization {r}"),
+                        study: Some(s.study.clone()),
+                        w_over_w0: Some(w),
                         ..Series::line(label, table.curve(load_index, Some(r), false), 0)
                     });
                 }
@@ -51,6 +54,8 @@ pub fn appendix(
                 plot.series.push(Series {
                     rgb: Some((213, 94, 0)),
                     tint: 0.6 * (loads.len() - 1 - j) as f64 / (loads.len().max(2) - 1) as f64,
+                    study: Some(s.study.clone()),
+                    w_over_w0: Some(w),
                     ..Series::line(
                         format!("ensemble mean, W/W_0 = {w:.3}"),
                         table.curve(load_index, None, true),
@@ -71,11 +76,11 @@ pub fn appendix(
                 YAxis::Log,
             );
             for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
-                plot.series.push(Series::line(
-                    s.label.clone(),
-                    table.curve(load_index, None, true),
-                    c,
-                ));
+                plot.series.push(Series {
+                    study: Some(s.study.clone()),
+                    w_over_w0: Some(w),
+                    ..Series::line(s.label.clone(), table.curve(load_index, None, true), c)
+                });
             }
             plots.push(plot);
         }
@@ -125,6 +130,7 @@ pub(super) fn push_convergence_curves(
         width: 2,
         // A single point of a dotted line would not show.
         marker: (rows.len() == 1).then_some(Marker::Cross),
+        name: format!("95 % critical value, {label}"),
         ..Series::line(
             critical_label,
             rows.iter().map(|r| (x(r), r.critical)).collect(),

@@ -93,6 +93,8 @@ pub fn convergence(
         let is_reference = c + 1 == settings.len();
         ccdf.series.push(Series {
             rgb: is_reference.then_some((0, 0, 0)),
+            study: Some(s.study.clone()),
+            w_over_w0: Some(w),
             ..Series::line(
                 format!("{}, W/W_0 = {w:.3}", s.label),
                 t.curve(load_index, None, true),
@@ -107,6 +109,7 @@ pub fn convergence(
         false,
         YAxis::Linear,
     );
+    real.x_integer = true;
     for (c, s) in settings.iter().enumerate() {
         let by_r = table.max_ks("realizations", &|r| {
             (r.study == s.label).then_some(r.realizations as f64)

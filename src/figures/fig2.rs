@@ -56,6 +56,7 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
         Series {
             rgb: Some((0, 0, 0)),
             width: 1,
+            name: "zero".into(),
             ..Series::line("", vec![(w[0], 0.0), (w[w.len() - 1], 0.0)], 0)
         },
     ];

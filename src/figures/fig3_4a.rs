@@ -114,8 +114,14 @@ pub fn fig34a(
             .map(|l| format!("{:.3}", l.1))
             .collect::<Vec<_>>()
             .join(", ");
-        for (j, &(load_index, _)) in picked.iter().enumerate() {
+        for (j, &(load_index, w)) in picked.iter().enumerate() {
             let last = j + 1 == picked.len();
+            let about = Series {
+                name: format!("{} (W/W_0 = {w:.3})", study.label),
+                study: Some(study.study.clone()),
+                w_over_w0: Some(w),
+                ..Series::default()
+            };
             let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
             let (points, clusters) = pdf_points(&pdf, load_index)?;
             let label = if last {
@@ -127,11 +133,17 @@ pub fn fig34a(
                 tint,
                 marker: Some(Marker::ALL[c % Marker::ALL.len()]),
                 width: 1,
-                ..Series::line(label.clone(), points, c)
+                label: label.clone(),
+                points,
+                color: c,
+                ..about.clone()
             });
             ccdf_plot.series.push(Series {
                 tint,
-                ..Series::line(label, ccdf.curve(load_index, None, false), c)
+                label,
+                points: ccdf.curve(load_index, None, false),
+                color: c,
+                ..about.clone()
             });
             if last {
                 if let Some((fit, text)) =
@@ -140,7 +152,10 @@ pub fn fig34a(
                     main.series.push(Series {
                         dash: fit_dashes[c % fit_dashes.len()],
                         width: 3,
-                        ..Series::line(format!("{} fit: {text}", study.label), fit, c)
+                        label: format!("{} fit: {text}", study.label),
+                        points: fit,
+                        color: c,
+                        ..about.clone()
                     });
                 }
             }
@@ -158,6 +173,8 @@ pub fn fig34a(
                 inset.series.push(Series {
                     marker: Some(Marker::ALL[(c + 3) % Marker::ALL.len()]),
                     width: 1,
+                    study: Some(study.study.clone()),
+                    w_over_w0: Some(w),
                     ..Series::line(format!("{} (W/W_0 = {w:.3})", study.label), points, c + 3)
                 });
             }

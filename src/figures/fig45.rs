@@ -75,12 +75,15 @@ fn per_threshold(
             if fitted {
                 Series {
                     dash: Dash::Dashed,
+                    name: format!("{label}, A* = {t} λ_s^2"),
+                    a_star_over_ls2: Some(t),
                     ..Series::line(String::new(), points, c)
                 }
             } else {
                 Series {
                     marker: Some(Marker::ALL[c % Marker::ALL.len()]),
                     width: 1,
+                    a_star_over_ls2: Some(t),
                     ..Series::line(format!("{label}, A* = {t} λ_s^2"), points, c)
                 }
             }

@@ -95,8 +95,13 @@ pub fn expected(all: &[Instance], profile: &str) -> Provenance {
 /// Copy every stored figure file of the profile to [`dir`], each through a temporary file
 /// renamed into place. With `record` (a whole profile, not some targets), also write
 /// `provenance.json` and remove figure files the profile no longer draws, so the gallery
-/// holds exactly its declared figures.
-pub fn export(store: &Store, all: &[Instance], profile: &str, record: bool) -> anyhow::Result<()> {
+/// holds exactly its declared figures; returns the record then.
+pub fn export(
+    store: &Store,
+    all: &[Instance],
+    profile: &str,
+    record: bool,
+) -> anyhow::Result<Option<Provenance>> {
     let out = dir(store, profile);
     let mut provenance = expected(all, profile);
     let mut written: BTreeSet<String> = BTreeSet::new();
@@ -116,7 +121,7 @@ pub fn export(store: &Store, all: &[Instance], profile: &str, record: bool) -> a
         fig.files.sort();
     }
     if !record || !out.is_dir() {
-        return Ok(());
+        return Ok(None);
     }
     for entry in std::fs::read_dir(&out)? {
         let path = entry?.path();
@@ -134,7 +139,7 @@ pub fn export(store: &Store, all: &[Instance], profile: &str, record: bool) -> a
     let tmp = out.join(format!(".{PROVENANCE}.tmp-{}", std::process::id()));
     std::fs::write(&tmp, text)?;
     std::fs::rename(&tmp, out.join(PROVENANCE))?;
-    Ok(())
+    Ok(Some(provenance))
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ pub mod hash;
 pub mod inputs;
 pub mod plan;
 pub mod registry;
+pub mod report;
 pub mod runner;
 pub mod slurm;
 pub mod store;

@@ -10,6 +10,7 @@ use serde_json::Value;
 
 use super::catalog::{self, Row};
 use super::cost::{machine_memory_bytes, CostModel};
+use super::gallery;
 use super::plan::{Instance, Plan};
 use super::store::{CommitOutcome, Manifest, Program, Store};
 use crate::config::Pipeline;
@@ -81,13 +82,18 @@ pub fn run(
     let computed = execute(store, &plan.instances, opts.jobs, opts.jobs, opts.quiet)?;
 
     let catalog_dir = store.root().join(&opts.profile);
-    // A partial plan (targets) exports its figures but leaves the gallery's record alone.
-    super::gallery::export(
-        store,
-        &plan.instances,
-        &opts.profile,
-        opts.targets.is_empty(),
-    )?;
+    // A partial plan (targets) exports its figures but leaves the gallery's record and
+    // report alone.
+    let record = opts.targets.is_empty();
+    if let Some(provenance) = gallery::export(store, &plan.instances, &opts.profile, record)? {
+        let descriptions: std::collections::BTreeMap<String, String> = pipeline
+            .figures_of(&opts.profile)
+            .into_iter()
+            .map(|(name, decl)| (name.to_string(), decl.description.clone()))
+            .collect();
+        let dir = gallery::dir(store, &opts.profile);
+        super::report::write(store, &dir, &provenance, &descriptions)?;
+    }
     let rows = catalog_rows(store, &plan.instances)?;
     catalog::write(&catalog_dir, &rows)?;
     Ok(RunSummary {

@@ -82,6 +82,11 @@ FIG6_ROWS = 5 * (121 + 1)
 failures = []
 
 
+# Columns of a figure's data file (src/figures/plot/mod.rs, DATA_COLUMNS).
+DATA_COLUMNS = ["panel", "series", "study", "w_over_w0", "a_star_over_ls2",
+                "x_quantity", "x", "y_quantity", "y"]
+
+
 def check(cond, message):
     if not cond:
         failures.append(message)
@@ -403,8 +408,10 @@ def main(data_dir, profile):
                           and not re.search(r"\de[-+]?\d", label),
                           f"{r.path}: label '{label}'")
         elif ext == ".csv":
-            df = pd.read_csv(r.path)
-            check(len(df) > 0 and df.iloc[:, -1].notna().any(), f"{r.path}: no data")
+            df = pd.read_csv(r.path, keep_default_na=False)
+            check(list(df.columns) == DATA_COLUMNS, f"{r.path}: columns {list(df.columns)}")
+            check(len(df) > 0 and (df["series"] != "").all(),
+                  f"{r.path}: no data, or a row without its curve")
         elif r.file == "fig45_load_resolution.parquet":
             check_schema(r.path, LOAD_RESOLUTION)
             parquet_files += 1

@@ -360,14 +360,17 @@ fn figures_are_valid_images_with_their_data_copied_beside_the_data_directory() {
         }
     }
     assert!(svgs >= 1, "{svgs} figures");
-    // The plotted data: 5 thresholds × 2 coefficients, points with A_m ≥ A* only.
-    let csv = std::fs::read_to_string(out.join("fig6.csv")).unwrap();
-    let mut lines = csv.lines();
-    assert!(lines.next().unwrap().starts_with("series,Aₘ/Aₛ,"));
-    let rows: Vec<&str> = lines.collect();
+    // The plotted data: 5 thresholds × 2 coefficients, points with A_m ≥ A* only, one row
+    // per point with its curve and axes named.
+    let mut csv = csv::Reader::from_path(out.join("fig6.csv")).unwrap();
+    let header: Vec<String> = csv.headers().unwrap().iter().map(String::from).collect();
+    assert_eq!(header, wearcoef::figures::plot::DATA_COLUMNS);
+    let rows: Vec<csv::StringRecord> = csv.records().map(|r| r.unwrap()).collect();
     assert!(rows.len() > 500, "{} rows", rows.len());
     for r in &rows {
-        let y: f64 = r.rsplit(',').next().unwrap().parse().unwrap();
+        assert!(!r[1].is_empty(), "a row without its curve: {r:?}");
+        assert_eq!(&r[5], "Aₘ/Aₛ");
+        let y: f64 = r[8].parse().unwrap();
         assert!((0.0..=1.0).contains(&y));
     }
 }

@@ -14,7 +14,7 @@ use super::text::{self, Align, TextLook};
 use super::ticks::{log_key_points, padded, snap_zero, LinLogCoord, Ticks};
 use super::{
     finite_on, plot_err, write_scene, DrawResult, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX,
-    SIZE_PX, TICK_PX, TITLE_PX,
+    DATA_COLUMNS, SIZE_PX, TICK_PX, TITLE_PX,
 };
 
 impl LinePlot {
@@ -327,29 +327,38 @@ impl LinePlot {
         panel: &str,
         out: &mut csv::Writer<std::fs::File>,
     ) -> DrawResult {
+        let opt = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
+        let (xq, yq) = (text::flat(&self.x_label), text::flat(&self.y_label));
         for s in &self.series {
-            let label = text::flat(&s.label);
+            let series = text::flat(if s.label.is_empty() {
+                &s.name
+            } else {
+                &s.label
+            });
+            let study = s.study.clone().unwrap_or_default();
+            let (load, a_star) = (opt(s.w_over_w0), opt(s.a_star_over_ls2));
             for (x, y) in &s.points {
-                out.write_record([panel, &label, &x.to_string(), &y.to_string()])?;
+                out.write_record([
+                    panel,
+                    &series,
+                    &study,
+                    &load,
+                    &a_star,
+                    &xq,
+                    &x.to_string(),
+                    &yq,
+                    &y.to_string(),
+                ])?;
             }
         }
         Ok(())
     }
 
-    /// The plotted data as CSV (`series, <x label>, <y label>`), beside the images.
+    /// The plotted data as CSV beside the images, one row per drawn point ([`DATA_COLUMNS`]).
     pub fn write_data(&self, path: &Path) -> DrawResult {
         let mut w = csv::Writer::from_path(path)?;
-        w.write_record([
-            "series".to_string(),
-            text::flat(&self.x_label),
-            text::flat(&self.y_label),
-        ])?;
-        for s in &self.series {
-            let label = text::flat(&s.label);
-            for (x, y) in &s.points {
-                w.write_record([label.clone(), x.to_string(), y.to_string()])?;
-            }
-        }
+        w.write_record(DATA_COLUMNS)?;
+        self.data_rows(&text::flat(&self.title), &mut w)?;
         w.flush()?;
         Ok(())
     }

@@ -25,6 +25,22 @@ use style::PALETTE;
 pub use style::{Dash, Marker};
 pub use ticks::{number, power_of_ten, snap_zero};
 
+/// Columns of a figure's data file: one row per drawn point, with what a reader filters on
+/// (the panel's title, the curve, its study, load W/W₀ and threshold A*/λₛ² where it has
+/// them) and the point with its axes' quantities, as plain Unicode. Every quantity of the
+/// figures is dimensionless (normalised as its axis label says).
+pub const DATA_COLUMNS: [&str; 9] = [
+    "panel",
+    "series",
+    "study",
+    "w_over_w0",
+    "a_star_over_ls2",
+    "x_quantity",
+    "x",
+    "y_quantity",
+    "y",
+];
+
 /// The embedded text font's bytes.
 static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 /// The embedded math font (DejaVu Math TeX Gyre, same licence), for the few mathematical
@@ -64,6 +80,13 @@ pub struct Series {
     pub width: u32,
     /// Marker at each point.
     pub marker: Option<Marker>,
+    /// The curve's name in the data file when it has no legend entry (e.g. a fit drawn under
+    /// a shared entry).
+    pub name: String,
+    /// The study, load W/W₀ and threshold A*/λₛ² the curve belongs to, for the data file.
+    pub study: Option<String>,
+    pub w_over_w0: Option<f64>,
+    pub a_star_over_ls2: Option<f64>,
 }
 
 impl Default for Series {
@@ -77,6 +100,10 @@ impl Default for Series {
             dash: Dash::Solid,
             width: 2,
             marker: None,
+            name: String::new(),
+            study: None,
+            w_over_w0: None,
+            a_star_over_ls2: None,
         }
     }
 }
@@ -266,18 +293,12 @@ impl Panels {
         }
     }
 
-    /// The plotted data as CSV (`panel, series, x, y`; axis labels in the panel titles).
+    /// The plotted data as CSV, one row per drawn point of every panel ([`DATA_COLUMNS`]).
     pub fn write_data(&self, path: &Path) -> DrawResult {
         let mut w = csv::Writer::from_path(path)?;
-        w.write_record(["panel", "series", "x", "y"])?;
+        w.write_record(DATA_COLUMNS)?;
         for p in &self.plots {
-            let name = format!(
-                "{} [x: {}; y: {}]",
-                text::flat(&p.title),
-                text::flat(&p.x_label),
-                text::flat(&p.y_label)
-            );
-            p.data_rows(&name, &mut w)?;
+            p.data_rows(&text::flat(&p.title), &mut w)?;
         }
         w.flush()?;
         Ok(())
