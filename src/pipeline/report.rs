@@ -137,14 +137,21 @@ pub fn render(
         )?;
         for file in fig.files.iter().filter(|f| f.ends_with(".png")) {
             let stem = file.trim_end_matches(".png");
+            // Links to the files beside the image that exist: its data, its vector version.
+            let links: Vec<String> = [("csv", "data"), ("npy", "data"), ("svg", "vector")]
+                .iter()
+                .map(|(ext, what)| (format!("{stem}.{ext}"), what))
+                .filter(|(f, _)| fig.files.contains(f))
+                .map(|(f, what)| format!("{what}: <a href=\"{0}\">{0}</a>", escape(&f)))
+                .collect();
             writeln!(
                 h,
-                "<figure>\n<img src=\"{0}\" alt=\"{1}\">\n<figcaption><b>{1}.</b> {2} \
-                 Data: <a href=\"{1}.csv\">{1}.csv</a> or <code>.npy</code> beside it; vector: \
-                 <a href=\"{1}.svg\">{1}.svg</a>.</figcaption>\n</figure>",
+                "<figure>\n<img src=\"{0}\" alt=\"{1}\">\n<figcaption><b>{1}.</b> {2} {3}.\
+                 </figcaption>\n</figure>",
                 escape(file),
                 escape(stem),
-                escape(caption(stem))
+                escape(caption(stem)),
+                links.join("; ")
             )?;
         }
         let mut alphas = String::new();

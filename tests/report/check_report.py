@@ -5,8 +5,9 @@
 Drives the browser over the DevTools protocol on --remote-debugging-pipe (standard library
 only): loads the page from file://, waits for the load event, then for every <img> awaits
 img.decode() and reads naturalWidth (a missing image shows in the network log, a corrupt one
-only here), and takes a full-page screenshot. Prints a JSON summary; exit status 0 when every
-image decoded, 1 otherwise (or when the browser fails).
+only here), checks that every relative link points at a file beside the page, and takes a
+full-page screenshot. Prints a JSON summary; exit status 0 when every image decoded and no
+link is dead, 1 otherwise (or when the browser fails).
 """
 
 import base64
@@ -112,6 +113,10 @@ def main(chromium, page, screenshot):
         result = browser.send("Runtime.evaluate", {"expression": CHECK_IMAGES,
                               "awaitPromise": True, "returnByValue": True}, session)
         images = json.loads(result["result"]["value"])
+        links = browser.send("Runtime.evaluate", {
+            "expression": "JSON.stringify([...document.links].map(a => a.getAttribute('href')))",
+            "returnByValue": True}, session)
+        hrefs = json.loads(links["result"]["value"])
         shot = browser.send("Page.captureScreenshot",
                             {"format": "png", "captureBeyondViewport": True}, session)
         data = base64.b64decode(shot["data"])
@@ -120,9 +125,13 @@ def main(chromium, page, screenshot):
     finally:
         browser.close()
     bad = [i["src"] for i in images if not i["ok"]]
-    print(json.dumps({"page": page, "images": len(images), "failed": bad,
-                      "screenshot_bytes": len(data)}))
-    ok = images and not bad and data[:8] == b"\x89PNG\r\n\x1a\n"
+    # Links to files beside the page (data, vector images) must point at files that exist.
+    here = os.path.dirname(os.path.abspath(page))
+    dead = [h for h in hrefs if "://" not in h and not h.startswith("#")
+            and not os.path.isfile(os.path.join(here, h))]
+    print(json.dumps({"page": page, "images": len(images), "failed": bad, "links": len(hrefs),
+                      "dead_links": dead, "screenshot_bytes": len(data)}))
+    ok = images and not bad and not dead and data[:8] == b"\x89PNG\r\n\x1a\n"
     return 0 if ok else 1
 
 
