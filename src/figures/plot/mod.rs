@@ -119,20 +119,6 @@ impl Series {
         }
     }
 
-    /// Markers only, no line.
-    pub fn points(
-        label: impl Into<String>,
-        points: Vec<(f64, f64)>,
-        color: usize,
-        marker: Marker,
-    ) -> Self {
-        Series {
-            width: 0,
-            marker: Some(marker),
-            ..Series::line(label, points, color)
-        }
-    }
-
     fn rgb_color(&self) -> RGBColor {
         let RGBColor(r, g, b) = match self.rgb {
             Some((r, g, b)) => RGBColor(r, g, b),

@@ -97,22 +97,25 @@ pub fn plain(markup: &str) -> String {
     parse(markup).into_iter().map(|s| s.text).collect()
 }
 
+/// `c` mapped from `from` to the character at the same place in `to`, if any.
+fn mapped(c: char, from: &str, to: &str) -> Option<char> {
+    from.chars()
+        .position(|f| f == c)
+        .and_then(|i| to.chars().nth(i))
+}
+
 /// Unicode subscript of `c`, where Unicode has one.
 fn subscript_char(c: char) -> Option<char> {
-    const FROM: &str = "0123456789+−-=()aehijklmnoprstuvx";
-    const TO: &str = "₀₁₂₃₄₅₆₇₈₉₊₋₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ";
-    FROM.chars()
-        .position(|f| f == c)
-        .and_then(|i| TO.chars().nth(i))
+    mapped(
+        c,
+        "0123456789+−-=()aehijklmnoprstuvx",
+        "₀₁₂₃₄₅₆₇₈₉₊₋₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ",
+    )
 }
 
 /// Unicode superscript of `c`, where Unicode has one.
 fn superscript_char(c: char) -> Option<char> {
-    const FROM: &str = "0123456789+−-=()in*";
-    const TO: &str = "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻⁻⁼⁽⁾ⁱⁿ*";
-    FROM.chars()
-        .position(|f| f == c)
-        .and_then(|i| TO.chars().nth(i))
+    mapped(c, "0123456789+−-=()in*", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻⁻⁼⁽⁾ⁱⁿ*")
 }
 
 /// The label on one line of plain Unicode (for data files): scripts as Unicode sub- and
