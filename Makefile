@@ -69,9 +69,10 @@ bench-warm-start:
 bench-labelling:
 	bash benches/labelling_compare.sh
 
-# Speed against accuracy: solver tolerance and discretisation (figures/speed_accuracy.*).
+# Speed against accuracy: solver tolerance (with Tamaas from PyPI as peer), discretisation
+# and realizations (figures/speed_accuracy.*); prints the tolerance it chooses per family.
 speed-accuracy:
-	cargo bench --bench speed_accuracy
+	WEARCOEF_PEERS_PYTHON="$$(bash benches/peers/venv.sh)" cargo bench --bench speed_accuracy
 
 # Contact sweeps of wearcoef and Tamaas (PyPI) on the same surfaces, in the same run.
 bench-peers:

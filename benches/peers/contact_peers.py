@@ -11,6 +11,10 @@ doubles (fixed costs such as the binary or the interpreter cancel).
 
 Usage: python contact_peers.py WEARCOEF_BIN OUTDIR [N ...]
 Prints a markdown table.
+
+Also: python contact_peers.py --tamaas-maps SURFACE.npy TOL W1,W2,... OUT.u8 (used by
+`make speed-accuracy`): solves the sweep with Tamaas, writes the contact maps (one byte per
+node, load-major, 1 = contact) to OUT.u8 and prints the seconds of the solves as JSON.
 """
 import json
 import os
@@ -91,7 +95,40 @@ def tamaas_child(path, tol):
     print(json.dumps(rows))
 
 
+def tamaas_maps(path, tol, loads, out):
+    """Tamaas's contact maps of a warm-started sweep (see the module docstring)."""
+    import tamaas as tm
+
+    h = np.load(path)
+    n = h.shape[0]
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
+    model.E, model.nu = 1.0, 0.0
+    q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
+    qx, qy = np.meshgrid(q, q)
+    slope = np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
+    solver = tm.PolonskyKeerRey(model, h, tol)
+    solver.max_iter = 20000
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    saved = os.dup(1)
+    seconds, maps = 0.0, []
+    for w in loads:
+        os.dup2(devnull, 1)
+        start = time.perf_counter()
+        err = solver.solve(w * model.E_star * slope)
+        seconds += time.perf_counter() - start
+        os.dup2(saved, 1)
+        if not err <= tol:
+            raise SystemExit(f"Tamaas did not converge at W/W0 = {w}: error {err} > {tol}")
+        maps.append((np.asarray(model.traction) > 0).astype(np.uint8).reshape(n, n))
+    np.stack(maps).tofile(out)
+    print(json.dumps({"seconds": seconds}))
+
+
 def main():
+    if sys.argv[1] == "--tamaas-maps":
+        tamaas_maps(sys.argv[2], float(sys.argv[3]),
+                    [float(w) for w in sys.argv[4].split(",")], sys.argv[5])
+        return
     if sys.argv[1] == "--tamaas-child":
         tamaas_child(sys.argv[2], float(sys.argv[3]))
         return

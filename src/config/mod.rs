@@ -127,6 +127,9 @@ pub struct StudyProfile {
     /// Loads for this profile, replacing the study's.
     #[serde(default)]
     pub loads: Option<Loads>,
+    /// Solver tolerance for this profile, replacing `solver.tolerance`.
+    #[serde(default)]
+    pub tolerance: Option<f64>,
 }
 
 /// Loads W/W0 (dimensionless, W0 = E*·rms slope·L²), either listed or as a range.
@@ -345,6 +348,15 @@ impl Pipeline {
                 ));
             }
         }
+        if let Some(tol) = sp.tolerance {
+            if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+                return Err(invalid(
+                    format!("{pbase}.tolerance"),
+                    tol,
+                    "must lie in (0, 1), or be left out to use solver.tolerance".into(),
+                ));
+            }
+        }
         let res = sp.lambda_s_over_dl;
         if !(res.is_finite() && res >= 2.0) {
             return Err(invalid(
@@ -415,7 +427,7 @@ impl Pipeline {
             keep_pressure,
             sweep,
             e_star: self.material.e_star,
-            tolerance: self.solver.tolerance,
+            tolerance: sp.tolerance.unwrap_or(self.solver.tolerance),
             max_iterations: self.solver.max_iterations,
         })
     }

@@ -101,6 +101,16 @@ fn each_invalid_value_names_its_field() {
         ("e_star: 1.0", "e_star: 0.0", "material.e_star"),
         ("tolerance: 1.0e-10", "tolerance: 2.0", "solver.tolerance"),
         (
+            "realizations: 2",
+            "realizations: 2, tolerance: 0.0",
+            "studies.s.profiles.quick.tolerance",
+        ),
+        (
+            "realizations: 2",
+            "realizations: 2, tolerance: 1.0",
+            "studies.s.profiles.quick.tolerance",
+        ),
+        (
             "max_iterations: 1000",
             "max_iterations: 0",
             "solver.max_iterations",
@@ -123,6 +133,18 @@ fn each_invalid_value_names_its_field() {
         let text = BASE.replacen(from, to, 1);
         assert_eq!(&field_of(&text), field, "replacing {from} by {to}");
     }
+}
+
+#[test]
+fn a_profile_tolerance_replaces_the_solver_tolerance_for_that_profile_only() {
+    let text = BASE.replacen(
+        "      quick: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 2}",
+        "      quick: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 2, tolerance: 1.0e-6}\n      default: {l_over_lambda_l: 2, lambda_s_over_dl: 4, realizations: 2}",
+        1,
+    );
+    let p = Pipeline::parse(&text, "test.yaml").unwrap();
+    assert_eq!(p.plan("quick", "test.yaml").unwrap()[0].tolerance, 1e-6);
+    assert_eq!(p.plan("default", "test.yaml").unwrap()[0].tolerance, 1e-10);
 }
 
 #[test]
@@ -332,7 +354,15 @@ fn load_resolution_studies_are_the_default_fig3_ll128_sweep_and_a_finer_one() {
         strip(a) == strip(b)
     };
     assert!(same(&drawn, &chosen) && drawn.loads == chosen.loads);
-    assert!(same(&drawn, &fine));
+    // The fine sweep is the reference: the same surfaces, at a tolerance no looser.
+    assert!(fine.tolerance <= drawn.tolerance);
+    assert!(same(
+        &drawn,
+        &wearcoef::config::StudyPlan {
+            tolerance: drawn.tolerance,
+            ..fine.clone()
+        }
+    ));
     assert!(fine.loads.len() > chosen.loads.len());
     // The fine sweep lies inside the chosen one's range, so every fine load is judged.
     assert!(chosen.loads[0] <= fine.loads[0]);

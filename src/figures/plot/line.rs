@@ -14,17 +14,26 @@ use super::text::{self, Align, TextLook};
 use super::ticks::{log_key_points, padded, snap_zero, LinLogCoord, Ticks};
 use super::{
     finite_on, plot_err, write_scene, DrawResult, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX,
-    DATA_COLUMNS, SIZE_PX, TICK_PX, TITLE_PX,
+    DATA_COLUMNS, LEGEND_PX, SIZE_PX, TICK_PX, TITLE_PX,
 };
 
 impl LinePlot {
-    /// Finite points (positive on logarithmic axes) of every series.
+    /// Finite points (positive on logarithmic axes) of every series, as drawn.
     fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         let keep = finite_on(self.x_log, self.y_axis);
         self.series
             .iter()
-            .flat_map(|s| s.points.iter().copied())
+            .flat_map(|s| s.points.iter().map(|&p| self.drawn_at(p)))
             .filter(move |p| keep(p))
+            .chain(self.y_floor.map(|f| (f64::NAN, f)))
+    }
+
+    /// Where a point is drawn: a zero ordinate goes to the floor when there is one.
+    fn drawn_at(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        match self.y_floor {
+            Some(f) if y == 0.0 && self.y_axis == YAxis::Log => (x, f),
+            _ => (x, y),
+        }
     }
 
     fn extent(&self, pick: impl Fn((f64, f64)) -> f64) -> anyhow::Result<(f64, f64)> {
@@ -182,12 +191,26 @@ impl LinePlot {
             let curves: Vec<Vec<(i32, i32)>> = self
                 .series
                 .iter()
-                .map(|s| s.points.iter().filter(|p| keep(p)).map(to_px).collect())
+                .map(|s| {
+                    s.points
+                        .iter()
+                        .map(|&p| self.drawn_at(p))
+                        .filter(|p| keep(p))
+                        .map(|p| to_px(&p))
+                        .collect()
+                })
                 .collect();
+            let xs = x().range();
             let marks: Vec<Vec<(i32, i32)>> = self
                 .x_marks
                 .iter()
                 .map(|&xm| vec![to_px(&(xm, y_span.0)), to_px(&(xm, y_span.1))])
+                .chain(
+                    self.y_marks
+                        .iter()
+                        .chain(&self.y_floor)
+                        .map(|&ym| vec![to_px(&(xs.start, ym)), to_px(&(xs.end, ym))]),
+                )
                 .collect();
             (curves, marks)
         };
@@ -229,7 +252,10 @@ impl LinePlot {
         let hint = 7;
         let (xs, ys) = (x().range(), y_span);
         let x_label = |v: &f64| xt.label(snap_zero(*v, xs.end - xs.start));
-        let y_label = |v: &f64| yt.label(snap_zero(*v, ys.1 - ys.0));
+        let y_label = |v: &f64| match self.y_floor {
+            Some(f) if (v / f - 1.0).abs() < 1e-9 => "exact".to_string(),
+            _ => yt.label(snap_zero(*v, ys.1 - ys.0)),
+        };
         chart
             .configure_mesh()
             .disable_mesh()
@@ -251,13 +277,14 @@ impl LinePlot {
         ))
         .map_err(plot_err)?;
         let (curves, marks) = curves_of(&chart);
-        for m in marks {
-            draw_path(
-                &plot,
-                m,
-                Dash::Dashed,
-                RGBColor(150, 150, 150).stroke_width(1),
-            )?;
+        let floor_mark = marks.len() - usize::from(self.y_floor.is_some());
+        for (i, m) in marks.into_iter().enumerate() {
+            let dash = if i < floor_mark {
+                Dash::Dashed
+            } else {
+                Dash::Dotted
+            };
+            draw_path(&plot, m, dash, RGBColor(150, 150, 150).stroke_width(1))?;
         }
         for (s, pts) in self.series.iter().zip(curves) {
             let color = s.rgb_color();
@@ -268,6 +295,26 @@ impl LinePlot {
                 for &p in &pts {
                     draw_marker(&plot, m, p, marker_r, color)?;
                 }
+            }
+        }
+        if !self.notes.is_empty() {
+            let base = chart.plotting_area().strip_coord_spec().get_base_pixel();
+            for (at, note) in &self.notes {
+                let p = self.drawn_at(*at);
+                if !keep(&p) {
+                    continue;
+                }
+                let (a, b) = chart.backend_coord(&p);
+                text::draw(
+                    &plot,
+                    note,
+                    (a - base.0 + px(7.0), b - base.1 - px(16.0)),
+                    Align::Start,
+                    TextLook {
+                        color: RGBColor(90, 90, 90),
+                        ..TextLook::new(LEGEND_PX * 0.85 * scale)
+                    },
+                )?;
             }
         }
         // Axis labels, outside the tick labels.

@@ -159,6 +159,13 @@ pub struct LinePlot {
     pub y_bounds: Option<(f64, f64)>,
     /// The abscissa is a count (e.g. realizations): only whole-number ticks are labelled.
     pub x_integer: bool,
+    /// On a logarithmic y axis, where values of exactly 0 are drawn: the tick there reads
+    /// "exact" and a dotted line marks it (errors that vanish stay visible).
+    pub y_floor: Option<f64>,
+    /// Ordinates marked by horizontal dashed grey lines (e.g. a tolerance).
+    pub y_marks: Vec<f64>,
+    /// Short texts (label markup) written beside points (x, y), e.g. the setting of a point.
+    pub notes: Vec<((f64, f64), String)>,
 }
 
 impl LinePlot {
@@ -181,6 +188,9 @@ impl LinePlot {
             legend: LegendAt::Auto,
             y_bounds: None,
             x_integer: false,
+            y_floor: None,
+            y_marks: Vec::new(),
+            notes: Vec::new(),
         }
     }
 }

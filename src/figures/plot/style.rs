@@ -24,6 +24,8 @@ pub enum Marker {
     Triangle,
     Diamond,
     Cross,
+    /// A hollow circle twice the size of the others, around a point (a chosen setting).
+    Ring,
 }
 
 impl Marker {
@@ -69,6 +71,7 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
                 .map_err(plot_err)?;
             area.draw(&PathElement::new(vec![(x - r, y + r), (x + r, y - r)], s))
         }
+        Marker::Ring => area.draw(&Circle::new(c, 2 * r + 2, color.stroke_width(2))),
     }
     .map_err(plot_err)
 }
