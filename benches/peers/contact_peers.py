@@ -46,18 +46,26 @@ def run_child(args, env=None):
     return rows, max(r["peak_rss_bytes"] for r in rows)
 
 
-def tamaas_child(path, tol):
-    """Solve the sweep with Tamaas in this process; print JSON."""
+def tamaas_model(path):
+    """Tamaas model of the surface at `path` (E* = 1) and the surface's spectral rms slope
+    (as wearcoef computes it, for W0 = E* rms slope L²)."""
     import tamaas as tm
 
     h = np.load(path)
     n = h.shape[0]
     model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
     model.E, model.nu = 1.0, 0.0
-    # W0 = E* rms slope L^2 with the spectral rms slope (as wearcoef computes it).
     q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
     qx, qy = np.meshgrid(q, q)
     slope = np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
+    return h, n, model, slope
+
+
+def tamaas_child(path, tol):
+    """Solve the sweep with Tamaas in this process; print JSON."""
+    import tamaas as tm
+
+    h, n, model, slope = tamaas_model(path)
     solver = tm.PolonskyKeerRey(model, h, tol)
     solver.max_iter = 5000
     # Iterations are only printed by Tamaas's logger (C level); capture fd 1 and 2.
@@ -99,13 +107,7 @@ def tamaas_maps(path, tol, loads, out):
     """Tamaas's contact maps of a warm-started sweep (see the module docstring)."""
     import tamaas as tm
 
-    h = np.load(path)
-    n = h.shape[0]
-    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
-    model.E, model.nu = 1.0, 0.0
-    q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
-    qx, qy = np.meshgrid(q, q)
-    slope = np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
+    h, n, model, slope = tamaas_model(path)
     solver = tm.PolonskyKeerRey(model, h, tol)
     solver.max_iter = 20000
     devnull = os.open(os.devnull, os.O_WRONLY)
