@@ -176,17 +176,15 @@ fn plot(p: &Panel) -> LinePlot {
             .collect()
     };
     let current = setting_label(p.knob, p.current);
-    let (label, rgb) = match p.choice {
-        Some(c) if c == p.current => (
-            format!("pipeline.yaml = chart's choice: {current}"),
-            (0, 0, 0),
-        ),
-        _ => (format!("pipeline.yaml: {current}"), (0, 0, 0)),
+    let label = if p.choice == Some(p.current) {
+        format!("pipeline.yaml = chart's choice: {current}")
+    } else {
+        format!("pipeline.yaml: {current}")
     };
     lp.series.push(Series {
         marker: Some(Marker::Ring),
         width: 0,
-        rgb: Some(rgb),
+        rgb: Some((0, 0, 0)),
         ..Series::line(label, mark(p.current), 0)
     });
     if let Some(c) = p.choice.filter(|c| *c != p.current) {
