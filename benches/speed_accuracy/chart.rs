@@ -103,8 +103,13 @@ fn note_settings(lp: &mut LinePlot, knob: &str, points: &[&Point]) {
             }
             floor_noted = true;
         }
-        lp.notes
-            .push(((x.cost, shown(x.worst())), setting_label(knob, x.setting)));
+        let mut note = setting_label(knob, x.setting);
+        let lost = x.undefined();
+        if !lost.is_empty() {
+            let names: Vec<&str> = lost.iter().map(|q| q.symbol()).collect();
+            note = format!("{note} (no {})", names.join(", "));
+        }
+        lp.notes.push(((x.cost, shown(x.worst())), note));
     }
 }
 

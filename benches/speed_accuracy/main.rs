@@ -52,18 +52,31 @@ pub struct Point {
 }
 
 impl Point {
-    /// The worst scaled error of `q` (all details).
+    /// The worst scaled error of `q` (all details); None where it is undefined (NaN: the
+    /// quantity exists on one side only).
     pub fn error(&self, q: Quantity) -> Option<f64> {
         self.errors
             .iter()
-            .filter(|e| e.0 == q)
+            .filter(|e| e.0 == q && !e.3.is_nan())
             .map(|e| e.3)
             .reduce(f64::max)
     }
 
-    /// The worst scaled error over all quantities.
+    /// The worst scaled error over the quantities that are defined.
     pub fn worst(&self) -> f64 {
         self.errors.iter().map(|e| e.3).fold(0.0, f64::max)
+    }
+
+    /// The quantities this setting cannot give although the reference does (or the reverse).
+    pub fn undefined(&self) -> Vec<Quantity> {
+        let mut q: Vec<Quantity> = self
+            .errors
+            .iter()
+            .filter(|e| e.3.is_nan())
+            .map(|e| e.0)
+            .collect();
+        q.dedup();
+        q
     }
 }
 
@@ -248,7 +261,7 @@ fn tolerance_panel(fam: &Family, current: f64, peer: Option<&(PathBuf, PathBuf)>
     }
     let choice = points
         .iter()
-        .filter(|p| p.code == "wearcoef" && p.worst() <= 1.0)
+        .filter(|p| p.code == "wearcoef" && p.worst() <= 1.0 && p.undefined().is_empty())
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .map(|p| p.setting);
     Panel {

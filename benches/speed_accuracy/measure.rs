@@ -183,6 +183,18 @@ impl Quantity {
             Quantity::Count => "cluster count N",
         }
     }
+
+    /// Short symbol (markup) for notes.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Quantity::Alpha => "α̂",
+            Quantity::KArchard => "K",
+            Quantity::KUpscaled => "𝒦",
+            Quantity::Ks => "KS",
+            Quantity::Area => "A_c",
+            Quantity::Count => "N",
+        }
+    }
 }
 
 /// Values of one quantity at its points (loads, thresholds), with the points' names.
@@ -303,15 +315,22 @@ pub fn scatter(per_realization: &[Values]) -> Vec<f64> {
 }
 
 /// Largest |a − b| over points, and the largest |a − b| / scale. A point whose scale is 0
-/// counts as `f64::INFINITY` when a and b differ (a change where nothing scatters).
+/// counts as `f64::INFINITY` when a and b differ (a change where nothing scatters). NaN for
+/// both (undefined) when a value exists on one side only (a fit lost, or gained) or at no
+/// point on either side.
 pub fn worst(a: &Values, b: &Values, scale: &[f64]) -> (f64, f64) {
     let mut raw = 0.0f64;
     let mut scaled = 0.0f64;
+    let mut compared = 0;
     for ((pa, pb), s) in a.iter().zip(b).zip(scale) {
+        if pa.1.is_nan() != pb.1.is_nan() {
+            return (f64::NAN, f64::NAN);
+        }
         let d = (pa.1 - pb.1).abs();
         if !d.is_finite() {
             continue;
         }
+        compared += 1;
         raw = raw.max(d);
         scaled = scaled.max(if d == 0.0 {
             0.0
@@ -320,6 +339,9 @@ pub fn worst(a: &Values, b: &Values, scale: &[f64]) -> (f64, f64) {
         } else {
             f64::INFINITY
         });
+    }
+    if compared == 0 {
+        return (f64::NAN, f64::NAN);
     }
     (raw, scaled)
 }

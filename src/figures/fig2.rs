@@ -1,7 +1,7 @@
 //! Fig. 2: the surface and contact maps of one realization (2a–d), contact area, largest
 //! cluster and dN/dA_c over the sweep (2e–f), and the realization audit of 2e–f.
 
-use super::plot::{viridis, ColorBar, LinePlot, Marker, RasterPlot, Series, YAxis};
+use super::plot::{viridis, ColorBar, Dash, LinePlot, Marker, RasterPlot, Series, YAxis};
 use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label, Connectivity};
 use crate::pipeline::inputs::Inputs;
@@ -11,7 +11,9 @@ use crate::stages::contact::contact_file;
 
 /// Fig. 2e (A_c and the largest cluster) and 2f (dN/dA_c) against W/W0; the loads of the
 /// contact maps (Fig. 2b–d) marked by dashed lines.
-/// Input 0: the study's statistics; input 1: its realization audit.
+/// With the small-load law `A_c/L² = κ W/W₀` fitted by the analytic stage drawn dashed over
+/// its fitted range.
+/// Input 0: the study's statistics; input 1: its realization audit; input 2: its analytic fit.
 pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(String, Drawn)>> {
     let df = inputs.table(0, "statistics", "loads.parquet")?;
     let df = &df;
@@ -39,6 +41,33 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
             1,
         ),
     ];
+    if let Some(fit) = inputs.of(2, "analytic")?.results.get("area_load_slope") {
+        let num = |k: &str| fit.get(k).and_then(serde_json::Value::as_f64);
+        let range = fit.get("w_over_w0_range").and_then(|r| r.as_array());
+        if let (Some(kappa), Some(r)) = (num("kappa"), range) {
+            let (lo, hi) = (
+                r[0].as_f64().unwrap_or(f64::NAN),
+                r[1].as_f64().unwrap_or(f64::NAN),
+            );
+            anyhow::ensure!(
+                kappa.is_finite() && lo.is_finite() && hi.is_finite(),
+                "analytic area_load_slope is not finite: {fit}"
+            );
+            e.series.push(Series {
+                dash: Dash::Dashed,
+                rgb: Some((0, 0, 0)),
+                width: 1,
+                ..Series::line(
+                    format!(
+                        "κ W/W_0, κ = {kappa:.2} (fit for W/W_0 ≤ {})",
+                        (hi * 1e4).round() / 1e4
+                    ),
+                    vec![(lo, kappa * lo), (hi, kappa * hi)],
+                    0,
+                )
+            });
+        }
+    }
     let mut f = LinePlot::new(
         "Fig. 2f: growth of the cluster count",
         "W/W_0",

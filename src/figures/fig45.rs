@@ -103,7 +103,8 @@ fn per_threshold(
 /// pooled over realizations) and from the fitted plateau + power-law model (dashed).
 ///
 /// Input 0: the study's statistics; input 1: its fitted model (analytic).
-pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
+pub fn fig45(inputs: &Inputs, lambda_l_over_lambda_s: f64) -> anyhow::Result<Vec<(String, Drawn)>> {
+    let spectrum = format!("λ_l/λ_s = {}", super::plot::number(lambda_l_over_lambda_s));
     let wear = &inputs.table(0, "statistics", "wear.parquet")?;
     let model = &inputs.table(1, "analytic", "model.parquet")?;
     let mut k = per_threshold(wear, "k_archard_pooled", "K", false)?;
@@ -124,7 +125,7 @@ pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
         (
             "fig4b".into(),
             plot(
-                "Fig. 4b: Archard's wear coefficient, λ_l/λ_s = 128",
+                &format!("Fig. 4b: Archard's wear coefficient, {spectrum}"),
                 "K = P(A > A*)  (linear below 10^{−5})",
                 YAxis::LinLog {
                     threshold: FIG4B_LINEAR_UP_TO,
@@ -135,7 +136,7 @@ pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
         (
             "fig5a".into(),
             plot(
-                "Fig. 5a: up-scaled wear coefficient, λ_l/λ_s = 128",
+                &format!("Fig. 5a: up-scaled wear coefficient, {spectrum}"),
                 "𝒦 = A_c^*/A_c",
                 YAxis::Linear,
                 kk,
@@ -144,7 +145,7 @@ pub fn fig45(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
         (
             "fig5b".into(),
             plot(
-                "Fig. 5b: wear rate (ω = 1/3), λ_l/λ_s = 128",
+                &format!("Fig. 5b: wear rate (ω = 1/3), {spectrum}"),
                 "R/L^2",
                 YAxis::Log,
                 rate,

@@ -398,7 +398,8 @@ fn fig2_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
     let job = FigureJob::Fig2ef {
         marked_loads: maps.iter().map(|m| m.1).collect(),
     };
-    b.add::<Figures>(&job, vec![k.statistics.clone(), audit], &studies, None, fig);
+    let inputs = vec![k.statistics.clone(), audit, k.analytic.clone()];
+    b.add::<Figures>(&job, inputs, &studies, None, fig);
     Ok(())
 }
 
@@ -444,7 +445,10 @@ fn fig45_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
     let k = c.find(decl.study.as_deref().unwrap_or_default())?;
     let inputs = vec![k.statistics.clone(), k.analytic.clone()];
     let studies = std::slice::from_ref(&k.plan.name);
-    b.add::<Figures>(&FigureJob::Fig45, inputs, studies, None, fig);
+    let job = FigureJob::Fig45 {
+        lambda_l_over_lambda_s: k.plan.surface.lambda_l_px / k.plan.surface.lambda_s_px,
+    };
+    b.add::<Figures>(&job, inputs, studies, None, fig);
     Ok(())
 }
 

@@ -1,5 +1,7 @@
 //! The analytic stage: the plateau + power-law model (paper Appendix A) fitted to one study
-//! on its A* grid (`model.parquet`), or the model curves of paper Fig. 6 (`fig6.parquet`).
+//! on its A* grid (`model.parquet`), the plateau of K that model predicts (`plateau.parquet`)
+//! and the small-load area law `A_c/L² = κ W/W₀` (manifest results), or the model curves of
+//! paper Fig. 6 (`fig6.parquet`).
 
 use std::path::Path;
 
@@ -9,8 +11,9 @@ use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
 use crate::analytic::PlateauPowerLaw;
-use crate::pipeline::table::{col, write};
+use crate::pipeline::table::{col, f64_column, str_column, u32_column, write};
 use crate::powerlaw::Estimator;
+use crate::statistics as stats;
 
 pub struct Analytic;
 
@@ -19,6 +22,10 @@ pub struct Analytic;
 pub const FIG6_ALPHA: f64 = 1.5;
 pub const FIG6_A_STAR_OVER_A_S: [f64; 5] = [0.5, 1.0, 10.0, 100.0, 1000.0];
 pub const FIG6_POINTS: usize = 121;
+
+/// Upper end of the paper's mild-wear load range (W/W₀ ∈ [0.001, 0.06], its Sec. 4): the
+/// area–load slope is fitted, and the plateau of K taken, at loads up to it.
+pub const MILD_WEAR_MAX_LOAD: f64 = 0.06;
 
 /// What an analytic instance computes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -56,7 +63,7 @@ impl AnalyticJob {
 
 impl Stage for Analytic {
     const NAME: &'static str = "analytic";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
     type Job = AnalyticJob;
 
     fn compute(job: &AnalyticJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
@@ -126,6 +133,16 @@ fn fitted_model(
             }
         }
     }
+    let plateau_load = write_plateau(lambda_s_px, a_star_over_ls2, inputs, &df, dir)?;
+    let slope = {
+        let loads = inputs.table(0, "statistics", "loads.parquet")?;
+        stats::area_load_slope(
+            &f64_column(&loads, "w_over_w0")?,
+            &f64_column(&loads, "area_fraction_mean")?,
+            &f64_column(&loads, "area_fraction_ci95")?,
+            MILD_WEAR_MAX_LOAD,
+        )
+    };
     let n = rows.0.len();
     let [a, s, m, k, kk] = fit;
     write(
@@ -145,9 +162,106 @@ fn fitted_model(
             ],
         )?,
     )?;
-    Ok(
-        json!({ "fitted_loads": fitted_loads, "source_estimator": Estimator::DiscretePlateauPowerLaw.name() }),
-    )
+    Ok(json!({
+        "fitted_loads": fitted_loads,
+        "source_estimator": Estimator::DiscretePlateauPowerLaw.name(),
+        "plateau_w_over_w0": plateau_load,
+        "area_load_slope": slope.map(|s| json!({
+            "kappa": s.kappa,
+            "kappa_ci95_correlated": s.kappa_band,
+            "kappa_at_lowest_load": s.kappa_at_lowest,
+            "kappa_at_highest_load": s.kappa_at_highest,
+            "w_over_w0_range": [s.lowest_load, s.highest_load],
+            "loads": s.loads,
+        })),
+    }))
+}
+
+/// The plateau of Archard's K that the fitted model predicts, `K_PL(A*)` in the limit
+/// `A_m → ∞`, from the fit at the largest load of the mild-wear range that has one, beside
+/// the model at that load's own cut-off and the simulated K there: `plateau.parquet`.
+/// Returns that load (None, and no rows, when no load up to [`MILD_WEAR_MAX_LOAD`] is fitted).
+fn write_plateau(
+    lambda_s_px: f64,
+    a_star_over_ls2: &[f64],
+    inputs: &Inputs,
+    alpha_table: &DataFrame,
+    dir: &Path,
+) -> anyhow::Result<Option<f64>> {
+    let wear = inputs.table(0, "statistics", "wear.parquet")?;
+    let (load, table) = plateau_table(lambda_s_px, a_star_over_ls2, alpha_table, &wear)?;
+    write(dir, "plateau.parquet", table)?;
+    Ok(load)
+}
+
+/// [`write_plateau`]'s table from the statistics' `alpha.parquet` and `wear.parquet`.
+fn plateau_table(
+    lambda_s_px: f64,
+    a_star_over_ls2: &[f64],
+    alpha_table: &DataFrame,
+    wear: &DataFrame,
+) -> anyhow::Result<(Option<f64>, DataFrame)> {
+    let ls2 = lambda_s_px * lambda_s_px;
+    let est = str_column(alpha_table, "estimator")?;
+    let li = u32_column(alpha_table, "load_index")?;
+    let w = f64_column(alpha_table, "w_over_w0")?;
+    let alpha = f64_column(alpha_table, "alpha")?;
+    let k_s = f64_column(alpha_table, "k_s_px")?;
+    let k_m = f64_column(alpha_table, "k_max_px")?;
+    // The largest fitted load in range (NaN marks an unfitted load).
+    let fit = (0..w.len())
+        .filter(|&i| est[i] == Estimator::DiscretePlateauPowerLaw.name())
+        .filter(|&i| w[i] <= MILD_WEAR_MAX_LOAD)
+        .filter(|&i| alpha[i].is_finite() && k_s[i].is_finite() && k_m[i].is_finite())
+        .max_by(|&a, &b| w[a].total_cmp(&w[b]));
+    let (wl, wa, wk, wci) = (
+        u32_column(wear, "load_index")?,
+        f64_column(wear, "a_star_over_ls2")?,
+        f64_column(wear, "k_archard_mean")?,
+        f64_column(wear, "k_archard_ci95")?,
+    );
+    let mut cols: [Vec<f64>; 7] = Default::default();
+    if let Some(i) = fit {
+        let at_load = PlateauPowerLaw::new(alpha[i], k_s[i], k_m[i])?;
+        let limit = PlateauPowerLaw::new(alpha[i], k_s[i], f64::INFINITY)?;
+        for &a_star in a_star_over_ls2 {
+            let j = (0..wl.len())
+                .find(|&j| wl[j] == li[i] && (wa[j] - a_star).abs() <= 1e-12 * a_star.abs())
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "wear.parquet has no row at W/W0 = {} and A*/λs² = {a_star}",
+                        w[i]
+                    )
+                })?;
+            for (c, v) in cols.iter_mut().zip([
+                a_star,
+                w[i],
+                alpha[i],
+                limit.k_archard(a_star * ls2)?,
+                at_load.k_archard(a_star * ls2)?,
+                wk[j],
+                wci[j],
+            ]) {
+                c.push(v);
+            }
+        }
+    }
+    let names = [
+        "a_star_over_ls2",
+        "w_over_w0",
+        "alpha",
+        "k_pl_plateau",
+        "k_pl_at_load",
+        "k_archard_mean",
+        "k_archard_ci95",
+    ];
+    let n = cols[0].len();
+    let columns = names
+        .iter()
+        .zip(cols)
+        .map(|(name, v)| col(name, v))
+        .collect();
+    Ok((fit.map(|i| w[i]), DataFrame::new(n, columns)?))
 }
 
 /// K_PL and 𝒦_PL against `A_m/A_s` for α = 1.5 and several `A*/A_s` (paper Fig. 6), plus
@@ -190,4 +304,66 @@ fn fig6_curves(
         )?,
     )?;
     Ok(json!({ "rows": n }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plateau comes from the largest fitted load up to W/W₀ = 0.06 (not an unfitted
+    /// one, not one beyond), and is the model's A_m → ∞ limit (A.3) by hand.
+    #[test]
+    fn plateau_of_k_is_the_limit_at_the_largest_fitted_mild_load() {
+        let mle = Estimator::DiscretePlateauPowerLaw.name();
+        let (alpha, a_s_px, a_m_px) = (1.6, 200.0, 5.0e4);
+        let alpha_table = df!(
+            "estimator" => [mle, mle, mle, "other", mle],
+            "load_index" => [0u32, 1, 2, 3, 3],
+            "w_over_w0" => [0.01, 0.03, 0.05, 0.1, 0.1],
+            "alpha" => [1.4, alpha, f64::NAN, 1.9, 1.9],
+            "k_s_px" => [100.0, a_s_px, 300.0, 400.0, 400.0],
+            "k_max_px" => [1.0e4, a_m_px, 1.0e5, 1.0e6, 1.0e6],
+        )
+        .unwrap();
+        let a_star = [1.0, 8.0, 32.0];
+        let wear = df!(
+            "load_index" => [1u32, 1, 1, 0],
+            "a_star_over_ls2" => [1.0, 8.0, 32.0, 1.0],
+            "k_archard_mean" => [0.5, 0.1, 0.01, 0.9],
+            "k_archard_ci95" => [0.05, 0.01, 0.001, 0.09],
+        )
+        .unwrap();
+        let lambda_s_px = 8.0;
+        let (load, t) = plateau_table(lambda_s_px, &a_star, &alpha_table, &wear).unwrap();
+        assert_eq!(load, Some(0.03));
+        let lim = f64_column(&t, "k_pl_plateau").unwrap();
+        let at = f64_column(&t, "k_pl_at_load").unwrap();
+        assert_eq!(f64_column(&t, "k_archard_mean").unwrap(), [0.5, 0.1, 0.01]);
+        for (i, &s) in a_star.iter().enumerate() {
+            let r = s * lambda_s_px * lambda_s_px / a_s_px;
+            let want = if r <= 1.0 {
+                1.0 - (alpha - 1.0) / alpha * r
+            } else {
+                r.powf(1.0 - alpha) / alpha
+            };
+            assert!(
+                (lim[i] - want).abs() < 1e-14,
+                "A* = {s}: {} vs {want}",
+                lim[i]
+            );
+            assert!(at[i] < lim[i], "a finite cut-off removes tail mass");
+        }
+        // No fitted load in range: no load and no rows.
+        let beyond = df!(
+            "estimator" => [mle, mle],
+            "load_index" => [0u32, 1],
+            "w_over_w0" => [0.01, 0.1],
+            "alpha" => [f64::NAN, 1.5],
+            "k_s_px" => [100.0, 100.0],
+            "k_max_px" => [1.0e4, 1.0e4],
+        )
+        .unwrap();
+        let (load, t) = plateau_table(lambda_s_px, &a_star, &beyond, &wear).unwrap();
+        assert_eq!((load, t.height()), (None, 0));
+    }
 }

@@ -29,7 +29,7 @@ pub enum FigureJob {
         a_star_over_ls2: f64,
     },
     /// Figs. 2e–f with the loads of 2b–d marked, and the realization audit's chart. Inputs:
-    /// the statistics, the audit.
+    /// the statistics, the audit, the analytic fit.
     Fig2ef { marked_loads: Vec<f64> },
     /// Figs. 3 and 4a. Inputs: the statistics of `ratios`, then of `hurst`.
     Fig3Fig4a {
@@ -38,8 +38,9 @@ pub enum FigureJob {
         loads: Vec<f64>,
         inset_load: f64,
     },
-    /// Figs. 4b, 5a, 5b. Inputs: the statistics, the fitted model.
-    Fig45,
+    /// Figs. 4b, 5a, 5b of a study of spectrum `lambda_l_over_lambda_s`. Inputs: the
+    /// statistics, the fitted model.
+    Fig45 { lambda_l_over_lambda_s: f64 },
     /// Fig. B.1 (`b1`) or B.2 and the convergence chart. Inputs: each setting's statistics,
     /// then the settings audit.
     Appendix {
@@ -78,7 +79,9 @@ impl Stage for Figures {
                 loads,
                 inset_load,
             } => draw::fig3_4a::fig34a(inputs, ratios, hurst, loads, *inset_load)?,
-            FigureJob::Fig45 => draw::fig45::fig45(inputs)?,
+            FigureJob::Fig45 {
+                lambda_l_over_lambda_s,
+            } => draw::fig45::fig45(inputs, *lambda_l_over_lambda_s)?,
             FigureJob::Appendix {
                 figure,
                 quantity,

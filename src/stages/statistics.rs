@@ -133,7 +133,6 @@ fn read_sample(job: &StatisticsJob, inputs: &Inputs) -> anyhow::Result<Sample> {
     Ok(s)
 }
 
-/// Ensemble statistics of one study.
 /// What the tables of one study are computed from.
 struct Study<'a> {
     job: &'a StatisticsJob,

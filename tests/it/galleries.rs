@@ -23,10 +23,16 @@ fn committed_galleries_match_what_their_profiles_would_draw() {
     let mut checked = 0;
     for entry in std::fs::read_dir(repo.join("figures")).unwrap() {
         let dir = entry.unwrap().path();
-        let record = dir.join(PROVENANCE);
-        if !record.is_file() {
+        if !dir.is_dir() {
             continue;
         }
+        let record = dir.join(PROVENANCE);
+        assert!(
+            record.is_file(),
+            "{} has no {PROVENANCE}: a gallery must say what it was drawn from \
+             (`make figures PROFILE=<its profile>` writes it)",
+            dir.display()
+        );
         let committed: Provenance =
             serde_json::from_str(&std::fs::read_to_string(&record).unwrap()).unwrap();
         let profile = dir.file_name().unwrap().to_string_lossy().into_owned();
@@ -57,7 +63,22 @@ fn committed_galleries_match_what_their_profiles_would_draw() {
             committed.figures.iter().all(|f| !f.files.is_empty()),
             "figures/{profile}: a declared figure drew nothing"
         );
+        // Its report, with the numbers behind the figures it holds.
+        let page = std::fs::read_to_string(dir.join("index.html"))
+            .unwrap_or_else(|e| panic!("figures/{profile}/index.html: {e}"));
+        for (file, section) in [
+            ("fig2e.png", "Area–load slope"),
+            ("fig4b.png", "Plateau of K"),
+            ("fig3.png", "Exponents α̂ behind it"),
+        ] {
+            if listed.contains(file) {
+                assert!(
+                    page.contains(section),
+                    "figures/{profile}/index.html lacks '{section}'"
+                );
+            }
+        }
         checked += 1;
     }
-    assert!(checked >= 1, "no committed gallery has a {PROVENANCE}");
+    assert!(checked >= 1, "no committed gallery");
 }

@@ -294,6 +294,107 @@ fn analytic_stage_evaluates_the_fitted_model_and_the_fig6_curves() {
     assert_eq!(fitted_files, 2);
 }
 
+/// The plateau of K is the model's `A_m → ∞` limit (A.3) at the fitted α and A_s of the
+/// largest load up to W/W₀ = 0.06, the area–load slope is the least-squares κ of the mean
+/// areas, and the report shows both.
+#[test]
+fn analytic_stage_gives_the_plateau_of_k_and_the_area_load_slope() {
+    // The test pipeline with Fig. 2 (whose report shows κ) declared too.
+    let text = small_pipeline(0.8, "x").replace(
+        "figures:\n",
+        "figures:\n  fig2: {kind: fig2, study: a, loads: [0.01, 0.02], profiles: [t]}\n",
+    );
+    assert!(text.contains("kind: fig2"));
+    let (_t, dir) = workdir(&text);
+    let out = run_in(&dir, &["run", "--profile", "t", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut checked = 0;
+    for entry in entries(&dir, "analytic") {
+        if entry.join("fig6.parquet").exists() {
+            continue;
+        }
+        let m = manifest(&entry);
+        let stats = dir
+            .join("data/cache/statistics")
+            .join(m["inputs"][0].as_str().unwrap());
+        // κ by hand from the per-load table.
+        let loads = read(&stats.join("loads.parquet"));
+        let (w, a) = (
+            f64s(&loads, "w_over_w0"),
+            f64s(&loads, "area_fraction_mean"),
+        );
+        let (mut wa, mut ww) = (0.0, 0.0);
+        for i in 0..w.len() {
+            if w[i] <= 0.06 {
+                wa += w[i] * a[i];
+                ww += w[i] * w[i];
+            }
+        }
+        let slope = &m["results"]["area_load_slope"];
+        let kappa = slope["kappa"].as_f64().unwrap();
+        assert!((kappa - wa / ww).abs() <= 1e-12 * kappa, "{slope}");
+        assert!(slope["kappa_ci95_correlated"].as_f64().unwrap() > 0.0);
+        // The plateau from the alpha table's fit at the recorded load; none when no load up
+        // to 0.06 has a fit (these small studies: too few clusters), and then no rows.
+        let alpha = read(&stats.join("alpha.parquet"));
+        let plateau = read(&entry.join("plateau.parquet"));
+        let Some(at) = m["results"]["plateau_w_over_w0"].as_f64() else {
+            let (a, w) = (f64s(&alpha, "alpha"), f64s(&alpha, "w_over_w0"));
+            assert!(a.iter().zip(&w).all(|(a, w)| a.is_nan() || *w > 0.06));
+            assert_eq!(plateau.height(), 0);
+            checked += 1;
+            continue;
+        };
+        assert!(at <= 0.06);
+        let est = alpha.column("estimator").unwrap().str().unwrap().clone();
+        let (aw, al, ks) = (
+            f64s(&alpha, "w_over_w0"),
+            f64s(&alpha, "alpha"),
+            f64s(&alpha, "k_s_px"),
+        );
+        let row = (0..alpha.height())
+            .find(|&j| aw[j] == at && est.get(j) == Some("discrete_plateau_power_law_mle"))
+            .unwrap();
+        // Every fitted load above it lies beyond 0.06.
+        assert!((0..alpha.height()).all(|j| {
+            est.get(j) != Some("discrete_plateau_power_law_mle")
+                || !al[j].is_finite()
+                || aw[j] <= at
+                || aw[j] > 0.06
+        }));
+        let (a_star, lim, at_load) = (
+            f64s(&plateau, "a_star_over_ls2"),
+            f64s(&plateau, "k_pl_plateau"),
+            f64s(&plateau, "k_pl_at_load"),
+        );
+        assert!(!a_star.is_empty());
+        let lambda_s_px = m["job"]["lambda_s_px"].as_f64().unwrap();
+        let (alpha, a_s) = (al[row], ks[row]);
+        for i in 0..a_star.len() {
+            let r = a_star[i] * lambda_s_px * lambda_s_px / a_s;
+            let want = if r <= 1.0 {
+                1.0 - (alpha - 1.0) / alpha * r
+            } else {
+                r.powf(1.0 - alpha) / alpha
+            };
+            assert!((lim[i] - want).abs() < 1e-12, "A*/λs² = {}", a_star[i]);
+            // A finite cut-off removes tail: K at the load's A_m is below the limit.
+            assert!(at_load[i] <= lim[i] + 1e-12);
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 2);
+    let page = std::fs::read_to_string(dir.join("figures/t/index.html")).unwrap();
+    assert!(
+        page.contains("Area–load slope") && page.contains("κ = "),
+        "{page}"
+    );
+}
+
 /// Width and height from a PNG's IHDR chunk (after the 8-byte signature).
 fn png_size(bytes: &[u8]) -> (u32, u32) {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");

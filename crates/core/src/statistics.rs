@@ -209,6 +209,56 @@ pub fn derivative(x: &[f64], y: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The small-load law `A_c/L² = κ W/W₀` fitted to ensemble means: least squares through the
+/// origin over the loads `0 < W/W₀ ≤ max_load`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AreaLoadSlope {
+    /// `κ = Σ wᵢ aᵢ / Σ wᵢ²`.
+    pub kappa: f64,
+    /// Half-width of κ's 95 % band if every load's mean moved by its own half-width together
+    /// (the loads of one realization are correlated, so this bounds the independent case).
+    pub kappa_band: f64,
+    /// `aᵢ/wᵢ` at the lowest and the highest load of the fit: κ drifts down with load.
+    pub kappa_at_lowest: f64,
+    pub kappa_at_highest: f64,
+    pub lowest_load: f64,
+    pub highest_load: f64,
+    pub loads: usize,
+}
+
+/// [`AreaLoadSlope`] of mean areas `area` (with 95 % half-widths `band`) at loads `w`; `None`
+/// when no load lies in `(0, max_load]` or a value there is not finite.
+pub fn area_load_slope(
+    w: &[f64],
+    area: &[f64],
+    band: &[f64],
+    max_load: f64,
+) -> Option<AreaLoadSlope> {
+    let kept: Vec<usize> = (0..w.len().min(area.len()).min(band.len()))
+        .filter(|&i| w[i] > 0.0 && w[i] <= max_load)
+        .collect();
+    if kept.is_empty()
+        || kept
+            .iter()
+            .any(|&i| !(area[i].is_finite() && band[i].is_finite()))
+    {
+        return None;
+    }
+    let ww: f64 = kept.iter().map(|&i| w[i] * w[i]).sum();
+    let slope = |v: &[f64]| kept.iter().map(|&i| w[i] * v[i]).sum::<f64>() / ww;
+    let lo = *kept.iter().min_by(|&&a, &&b| w[a].total_cmp(&w[b]))?;
+    let hi = *kept.iter().max_by(|&&a, &&b| w[a].total_cmp(&w[b]))?;
+    Some(AreaLoadSlope {
+        kappa: slope(area),
+        kappa_band: slope(band),
+        kappa_at_lowest: area[lo] / w[lo],
+        kappa_at_highest: area[hi] / w[hi],
+        lowest_load: w[lo],
+        highest_load: w[hi],
+        loads: kept.len(),
+    })
+}
+
 /// Two-sample Kolmogorov–Smirnov distance `sup_x |F_a(x) − F_b(x)|` between the empirical
 /// distribution functions of two samples (ties handled: both functions are evaluated after
 /// every occurrence of a value). 0 when either sample is empty.
@@ -281,6 +331,37 @@ mod tests {
         let w = wear_at(&areas, 0.0);
         assert_eq!((w.k_archard, w.k_upscaled), (1.0, 1.0));
         assert_eq!(wear_at(&[], 1.0).k_upscaled, 0.0);
+    }
+
+    #[test]
+    fn area_load_slope_recovers_a_linear_law_and_its_drift() {
+        // Exactly linear: κ = 2.3 at every load; the band of a band proportional to w is its
+        // constant. Loads above the cut and at zero are ignored.
+        let w = [0.0, 0.001, 0.01, 0.05, 0.2];
+        let a: Vec<f64> = w
+            .iter()
+            .map(|x| 2.3 * x + if *x > 0.1 { 1.0 } else { 0.0 })
+            .collect();
+        let band: Vec<f64> = w.iter().map(|x| 0.1 * x).collect();
+        let s = area_load_slope(&w, &a, &band, 0.06).unwrap();
+        assert!((s.kappa - 2.3).abs() < 1e-14, "{s:?}");
+        assert!((s.kappa_band - 0.1).abs() < 1e-15);
+        assert_eq!((s.loads, s.lowest_load, s.highest_load), (3, 0.001, 0.05));
+        // a = w (2 − 10 w): κ(w) falls with load; the fit by hand.
+        let a: Vec<f64> = w.iter().map(|x| x * (2.0 - 10.0 * x)).collect();
+        let s = area_load_slope(&w, &a, &band, 0.06).unwrap();
+        let (num, den) = w[1..4].iter().fold((0.0, 0.0), |(n, d), x| {
+            (n + x * x * (2.0 - 10.0 * x), d + x * x)
+        });
+        assert!((s.kappa - num / den).abs() < 1e-14);
+        assert!(
+            (s.kappa_at_lowest - 1.99).abs() < 1e-12 && (s.kappa_at_highest - 1.5).abs() < 1e-12
+        );
+        // Nothing in range, or a NaN in range: no fit.
+        assert_eq!(area_load_slope(&w, &a, &band, 1e-4), None);
+        let mut nan = a.clone();
+        nan[2] = f64::NAN;
+        assert_eq!(area_load_slope(&w, &nan, &band, 0.06), None);
     }
 
     #[test]

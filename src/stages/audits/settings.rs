@@ -25,8 +25,7 @@ pub struct Setting {
 }
 
 /// Largest KS distance to the reference (over loads) below which a setting, or a number of
-/// realizations, counts as converged (Appendix B studies; README "Model no more than a scene
-/// needs").
+/// realizations, counts as converged (Appendix B studies; docs/SIZES.md).
 pub const CONVERGENCE_KS_TOLERANCE: f64 = 0.05;
 /// Exponent compared between settings: the plateau + power-law fit over the whole
 /// distribution (the free-`x_min` tail fit of λ_l/λ_s = 8 surfaces lands in the cut-off).
