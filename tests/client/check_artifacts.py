@@ -57,6 +57,9 @@ SCHEMAS = {
     ("analytic", "model.parquet"): [
         ("load_index", U32), ("w_over_w0", F64), ("a_star_over_ls2", F64), ("alpha", F64),
         ("a_s_over_ls2", F64), ("a_m_over_ls2", F64), ("k_pl", F64), ("k_upscaled_pl", F64)],
+    ("analytic", "plateau.parquet"): [
+        ("a_star_over_ls2", F64), ("w_over_w0", F64), ("alpha", F64), ("k_pl_plateau", F64),
+        ("k_pl_at_load", F64), ("k_archard_mean", F64), ("k_archard_ci95", F64)],
     ("analytic", "fig6.parquet"): [
         ("alpha", F64), ("a_star_over_a_s", F64), ("a_m_over_a_s", F64), ("k_pl", F64),
         ("k_upscaled_pl", F64)],
@@ -378,6 +381,13 @@ def main(data_dir, profile):
         parquet_files += 1
         if r.file == "fig6.parquet":
             check(len(df) == FIG6_ROWS, f"{r.path}: {len(df)} rows, expected {FIG6_ROWS}")
+        elif r.file == "plateau.parquet":
+            # One row per A* (none when no load up to W/W0 = 0.06 has a fit); the model at a
+            # finite cut-off stays below its A_m → ∞ plateau, both probabilities.
+            check(len(df) in (0, A_STAR_GRID), f"{r.path}: {len(df)} rows")
+            check(df["k_pl_plateau"].between(0, 1).all()
+                  and (df["k_pl_at_load"] <= df["k_pl_plateau"] + 1e-12).all(),
+                  f"{r.path}: plateau values out of order")
         else:
             check(len(df) % A_STAR_GRID == 0 and len(df) > 0, f"{r.path}: {len(df)} rows")
 
