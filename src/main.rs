@@ -73,6 +73,14 @@ fn main() -> ExitCode {
     match dispatch(cli) {
         Ok(code) => code,
         Err(e) => {
+            // The reader closed the pipe (`wearcoef status | head -1`): it has what it wanted.
+            let closed_pipe = e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            });
+            if closed_pipe {
+                return ExitCode::SUCCESS;
+            }
             eprintln!("error: {e:#}");
             let is_input = e.chain().any(|c| {
                 c.downcast_ref::<ConfigError>().is_some()

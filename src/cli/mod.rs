@@ -7,6 +7,19 @@ use anyhow::Context;
 
 use wearcoef::config::Pipeline;
 
+/// `println!` that returns the write's error instead of panicking: a reader that closes the
+/// pipe early (`wearcoef status | head -1`) ends the command cleanly (exit 0, see `main`).
+macro_rules! out {
+    () => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock())
+    }};
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
 pub mod plan;
 pub mod store;
 pub mod submit;

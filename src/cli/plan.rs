@@ -114,25 +114,29 @@ pub fn print_plan(
         })?;
     }
     if json_out {
-        println!("{}", serde_json::to_string(&doc)?);
+        out!("{}", serde_json::to_string(&doc)?)?;
         return Ok(());
     }
     let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
-    println!(
+    out!(
         "{:<11} {:>9} {:>7} {:>11} {:>12}",
-        "stage", "instances", "cached", "core-hours", "largest GiB"
-    );
+        "stage",
+        "instances",
+        "cached",
+        "core-hours",
+        "largest GiB"
+    )?;
     for (stage, t) in &totals.per_stage {
-        println!(
+        out!(
             "{:<11} {:>9} {:>7} {:>11.3} {:>12.2}",
             stage,
             t.instances,
             t.cached,
             t.core_hours,
             gib(t.largest_peak_bytes)
-        );
+        )?;
     }
-    println!(
+    out!(
         "profile {}: {} instances in {} levels, {} cached; {:.2} core-hours from nothing, {:.2} core-hours ({:.2} h on {} cores) for what is missing; largest instance {:.2} GiB ({})",
         plan.profile,
         totals.instances,
@@ -144,7 +148,7 @@ pub fn print_plan(
         cores,
         gib(totals.largest_peak_bytes),
         totals.largest.as_deref().unwrap_or("-"),
-    );
+    )?;
     Ok(())
 }
 
@@ -305,6 +309,6 @@ pub fn exec(args: ExecArgs) -> anyhow::Result<ExitCode> {
         at_once.max(1),
         quiet,
     )?;
-    println!("{done}");
+    out!("{done}")?;
     Ok(ExitCode::SUCCESS)
 }

@@ -52,9 +52,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     let origin = store.config.display().to_string();
     let summary = runner::run(&pipeline, &origin, &Store::new(&store.data), &opts)?;
     if json {
-        println!("{}", serde_json::to_string(&summary)?);
+        out!("{}", serde_json::to_string(&summary)?)?;
     } else {
-        println!("{summary}");
+        out!("{summary}")?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -113,7 +113,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
         })
         .collect();
     if json {
-        println!(
+        out!(
             "{}",
             serde_json::to_string(&json!({
                 "profile": profile,
@@ -121,30 +121,36 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
                 "per_stage": per_stage,
                 "campaigns": campaign_json,
             }))?
-        );
+        )?;
         return Ok(ExitCode::SUCCESS);
     }
-    println!("{:<10} {:>8} {:>8}", "stage", "present", "missing");
+    out!("{:<10} {:>8} {:>8}", "stage", "present", "missing")?;
     for l in &per_stage {
-        println!("{:<10} {:>8} {:>8}", l.stage, l.present, l.missing);
+        out!("{:<10} {:>8} {:>8}", l.stage, l.present, l.missing)?;
     }
-    println!();
-    println!(
+    out!()?;
+    out!(
         "{:<10} {:<24} {:>8} {:>8}",
-        "stage", "study", "present", "missing"
-    );
+        "stage",
+        "study",
+        "present",
+        "missing"
+    )?;
     for l in &lines {
-        println!(
+        out!(
             "{:<10} {:<24} {:>8} {:>8}",
-            l.stage, l.study, l.present, l.missing
-        );
+            l.stage,
+            l.study,
+            l.present,
+            l.missing
+        )?;
     }
     for (dir, c) in &campaigns {
-        println!(
+        out!(
             "\ncampaign {} ({} instances submitted)",
             dir.display(),
             c.instances
-        );
+        )?;
         for a in &c.arrays {
             for ch in &a.chunks {
                 let id = ch.job_id.clone().unwrap_or_default();
@@ -160,13 +166,13 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
                         "{unknown} left the queue (no record: see the store above)"
                     ));
                 }
-                println!(
+                out!(
                     "  job {:<8} {:<24} {:>5} tasks: {}",
                     id,
                     a.spec.name,
                     ch.chunk.len,
                     counts.join(", ")
-                );
+                )?;
             }
         }
     }
@@ -183,18 +189,26 @@ pub struct VerifyArgs {
 
 pub fn verify(args: VerifyArgs) -> anyhow::Result<ExitCode> {
     let VerifyArgs { data, json } = args;
+    if !data.join("cache").is_dir() {
+        return Err(InputError(format!(
+            "--data {}: no store there (no cache/ directory); give the data directory a run \
+             wrote (default: data)",
+            data.display()
+        ))
+        .into());
+    }
     let store = Store::new(&data);
     let (checked, problems) = store.verify()?;
     if json {
-        println!(
+        out!(
             "{}",
             serde_json::to_string(&json!({"checked": checked, "problems": problems}))?
-        );
+        )?;
     } else {
         for p in &problems {
-            println!("MISMATCH {}: {}", p.path, p.reason);
+            out!("MISMATCH {}: {}", p.path, p.reason)?;
         }
-        println!("verified {checked} entries: {} problem(s)", problems.len());
+        out!("verified {checked} entries: {} problem(s)", problems.len())?;
     }
     if !problems.is_empty() {
         return Ok(ExitCode::from(1));
@@ -216,13 +230,13 @@ pub fn clean(args: CleanArgs) -> anyhow::Result<ExitCode> {
     if corrupt {
         let removed = store.remove_corrupt()?;
         let stale = store.remove_stale_temporaries()?;
-        println!(
+        out!(
             "removed {} corrupt entries and {stale} stale temporary directories",
             removed.len()
-        );
+        )?;
     } else {
         store.remove_all()?;
-        println!("removed {}", data.display());
+        out!("removed {}", data.display())?;
     }
     Ok(ExitCode::SUCCESS)
 }

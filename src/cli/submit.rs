@@ -177,13 +177,13 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
         super::plan::make_plan(&pipeline, &origin, &data, &args.profile, &args.targets)?;
     let missing = plan.instances.iter().filter(|i| !i.cached).count();
     if missing == 0 {
-        println!(
+        out!(
             "nothing to submit: the store holds all {} instances of profile {}; `wearcoef run --profile {}` (or `make figures PROFILE={}`) exports the figures and writes the catalog",
             plan.instances.len(),
             args.profile,
             args.profile,
             args.profile
-        );
+        )?;
         return Ok(ExitCode::SUCCESS);
     }
     if !args.dry_run && !slurm::available() {
@@ -260,8 +260,15 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
     if args.dry_run {
         for a in &record.arrays {
             for c in &a.chunks {
-                println!("# ---- {}", c.script);
-                print!("{}", std::fs::read_to_string(&c.script)?);
+                out!("# ---- {}", c.script)?;
+                {
+                    use std::io::Write as _;
+                    write!(
+                        std::io::stdout().lock(),
+                        "{}",
+                        std::fs::read_to_string(&c.script)?
+                    )
+                }?;
             }
         }
     } else {
@@ -269,7 +276,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
     }
     let json = dir.join("campaign.json");
     std::fs::write(&json, serde_json::to_vec_pretty(&record)?)?;
-    print_summary(&record, &dir);
+    print_summary(&record, &dir)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -307,15 +314,20 @@ fn submit_all(record: &mut Campaign) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_summary(record: &Campaign, dir: &Path) {
-    println!(
+fn print_summary(record: &Campaign, dir: &Path) -> std::io::Result<()> {
+    out!(
         "{:<32} {:>6} {:>9} {:>5} {:>9} {:>11}  job ids",
-        "array", "tasks", "instances", "cpus", "mem MiB", "time"
-    );
+        "array",
+        "tasks",
+        "instances",
+        "cpus",
+        "mem MiB",
+        "time"
+    )?;
     for a in &record.arrays {
         let r = a.spec.resources;
         let ids: Vec<String> = a.chunks.iter().filter_map(|c| c.job_id.clone()).collect();
-        println!(
+        out!(
             "{:<32} {:>6} {:>9} {:>5} {:>9} {:>11}  {}",
             a.spec.name,
             a.spec.tasks,
@@ -328,27 +340,28 @@ fn print_summary(record: &Campaign, dir: &Path) {
             } else {
                 ids.join(",")
             }
-        );
+        )?;
     }
     let verb = if record.submitted {
         "submitted"
     } else {
         "written (dry run, nothing submitted)"
     };
-    println!(
+    out!(
         "profile {}: {} missing instances in {} arrays {verb}; {:.2} core-hours estimated; campaign {}",
         record.profile,
         record.instances,
         record.arrays.len(),
         record.core_hours,
         dir.display()
-    );
+    )?;
     if record.submitted {
-        println!(
+        out!(
             "watch with `wearcoef status --profile {p}`; when the arrays are done, `wearcoef run --profile {p}` exports the figures and writes the catalog (it computes nothing that the arrays stored)",
             p = record.profile
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The submitted campaigns of a profile, oldest first.

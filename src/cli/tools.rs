@@ -86,12 +86,12 @@ pub fn model(args: ModelArgs) -> anyhow::Result<ExitCode> {
     let k = model.k_archard(a_star).map_err(bad)?;
     let kk = model.k_upscaled(a_star).map_err(bad)?;
     if json {
-        println!(
+        out!(
             "{}",
             serde_json::to_string(&json!({"K": k, "K_upscaled": kk}))?
-        );
+        )?;
     } else {
-        println!("K = {k} (Archard, P(A > A*)), K_upscaled = {kk} (area fraction above A*)");
+        out!("K = {k} (Archard, P(A > A*)), K_upscaled = {kk} (area fraction above A*)")?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -130,10 +130,10 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
             "areas_px": areas,
             "percolating": percolating,
         });
-        println!("{}", serde_json::to_string(&out)?);
+        out!("{}", serde_json::to_string(&out)?)?;
     } else {
         let in_contact: u64 = areas.iter().sum();
-        println!(
+        out!(
             "{rows} × {cols} map ({format:?}), {connectivity}-connected: {} clusters, \
              {in_contact} pixels in contact, largest {} px{}",
             areas.len(),
@@ -143,7 +143,7 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
             } else {
                 ""
             }
-        );
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -224,7 +224,7 @@ pub fn surface(args: SurfaceArgs) -> anyhow::Result<ExitCode> {
             "hurst_fit": s.stats.hurst_fit,
             "output": output.display().to_string(),
         });
-        println!("{}", serde_json::to_string(&out)?);
+        out!("{}", serde_json::to_string(&out)?)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -335,7 +335,7 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
                 })
             })
             .collect();
-        println!("{}", serde_json::to_string(&rows)?);
+        out!("{}", serde_json::to_string(&rows)?)?;
     }
     Ok(())
 }

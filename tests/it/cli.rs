@@ -438,3 +438,38 @@ fn model_command_prints_both_coefficients_and_rejects_bad_input() {
         assert!(!out.stderr.is_empty());
     }
 }
+
+/// A reader that closes the pipe early ends the command cleanly: exit 0, no panic message.
+#[test]
+fn closed_stdout_pipe_exits_0_without_a_panic() {
+    let (_t, dir) = workdir(&crate::small_pipeline(0.8, "x"));
+    let mut child = crate::bin()
+        .current_dir(&dir)
+        .args(["status", "--profile", "t"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the read end before the command writes its first line.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+/// Usage errors exit 2: an unknown target, and `verify` of a directory that holds no store.
+#[test]
+fn unknown_target_and_missing_store_exit_2() {
+    let (_t, dir) = workdir(&crate::small_pipeline(0.8, "x"));
+    let out = run_in(&dir, &["run", "--profile", "t", "nosuchtarget"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown target 'nosuchtarget'"));
+    let out = run_in(&dir, &["verify", "--data", "no/such/dir"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--data no/such/dir") && stderr.contains("no store"),
+        "{stderr}"
+    );
+}
