@@ -6,6 +6,7 @@ use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label, Connectivity};
 use crate::pipeline::inputs::Inputs;
 use crate::pipeline::table::{f64_column, u32_column};
+use crate::stages::analytic::AreaLoadSlopeRecord;
 use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
 use crate::stages::contact::contact_file;
 
@@ -41,32 +42,25 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
             1,
         ),
     ];
-    if let Some(fit) = inputs.of(2, "analytic")?.results.get("area_load_slope") {
-        let num = |k: &str| fit.get(k).and_then(serde_json::Value::as_f64);
-        let range = fit.get("w_over_w0_range").and_then(|r| r.as_array());
-        if let (Some(kappa), Some(r)) = (num("kappa"), range) {
-            let (lo, hi) = (
-                r[0].as_f64().unwrap_or(f64::NAN),
-                r[1].as_f64().unwrap_or(f64::NAN),
-            );
-            anyhow::ensure!(
-                kappa.is_finite() && lo.is_finite() && hi.is_finite(),
-                "analytic area_load_slope is not finite: {fit}"
-            );
-            e.series.push(Series {
-                dash: Dash::Dashed,
-                rgb: Some((0, 0, 0)),
-                width: 1,
-                ..Series::line(
-                    format!(
-                        "κ W/W_0, κ = {kappa:.2} (fit for W/W_0 ≤ {})",
-                        (hi * 1e4).round() / 1e4
-                    ),
-                    vec![(lo, kappa * lo), (hi, kappa * hi)],
-                    0,
-                )
-            });
-        }
+    if let Some(fit) = AreaLoadSlopeRecord::of(&inputs.of(2, "analytic")?.results)? {
+        let ([lo, hi], kappa) = (fit.w_over_w0_range, fit.kappa);
+        anyhow::ensure!(
+            kappa.is_finite() && lo.is_finite() && hi.is_finite(),
+            "analytic area_load_slope is not finite: {fit:?}"
+        );
+        e.series.push(Series {
+            dash: Dash::Dashed,
+            rgb: Some((0, 0, 0)),
+            width: 1,
+            ..Series::line(
+                format!(
+                    "κ W/W_0, κ = {kappa:.2} (fit for W/W_0 ≤ {})",
+                    (hi * 1e4).round() / 1e4
+                ),
+                vec![(lo, kappa * lo), (hi, kappa * hi)],
+                0,
+            )
+        });
     }
     let mut f = LinePlot::new(
         "Fig. 2f: growth of the cluster count",

@@ -11,6 +11,7 @@ use super::gallery::{FigureRecord, Provenance};
 use super::store::Store;
 use super::table::{f64_column, str_column};
 use crate::figures::plot::number;
+use crate::stages::analytic::AreaLoadSlopeRecord;
 
 /// Text with `&`, `<`, `>` and `"` escaped for HTML.
 pub fn escape(s: &str) -> String {
@@ -90,37 +91,20 @@ fn analytic_lines(
     let Some(manifest) = store.lookup("analytic", key)? else {
         return Ok(());
     };
-    if let Some(s) = manifest
-        .results
-        .get("area_load_slope")
-        .filter(|s| !s.is_null())
-    {
-        let num = |k: &str| {
-            s.get(k)
-                .and_then(serde_json::Value::as_f64)
-                .unwrap_or(f64::NAN)
-        };
-        let range = |i: usize| {
-            s.get("w_over_w0_range")
-                .and_then(|r| r.get(i))
-                .and_then(serde_json::Value::as_f64)
-                .unwrap_or(f64::NAN)
-        };
+    if let Some(s) = AreaLoadSlopeRecord::of(&manifest.results)? {
         writeln!(
             slopes,
             "<li>{}: κ = {:.3} ± {:.3} (least squares through the origin over {} loads, \
              W/W₀ = {}–{}); A<sub>c</sub>/(L² W/W₀) = {:.3} at the lowest load, {:.3} at \
              the highest.</li>",
             escape(study),
-            num("kappa"),
-            num("kappa_ci95_correlated"),
-            s.get("loads")
-                .and_then(serde_json::Value::as_u64)
-                .unwrap_or(0),
-            number(range(0)),
-            number(range(1)),
-            num("kappa_at_lowest_load"),
-            num("kappa_at_highest_load"),
+            s.kappa,
+            s.kappa_ci95_correlated,
+            s.loads,
+            number(s.w_over_w0_range[0]),
+            number(s.w_over_w0_range[1]),
+            s.kappa_at_lowest_load,
+            s.kappa_at_highest_load,
         )?;
     }
     let Ok(path) = store.read_output(&manifest, "plateau.parquet") else {

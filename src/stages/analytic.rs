@@ -23,6 +23,42 @@ pub const FIG6_ALPHA: f64 = 1.5;
 pub const FIG6_A_STAR_OVER_A_S: [f64; 5] = [0.5, 1.0, 10.0, 100.0, 1000.0];
 pub const FIG6_POINTS: usize = 121;
 
+/// The area–load slope as the manifest records it (`results.area_load_slope`), written here
+/// and read back by Fig. 2e and the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AreaLoadSlopeRecord {
+    pub kappa: f64,
+    pub kappa_ci95_correlated: f64,
+    pub kappa_at_lowest_load: f64,
+    pub kappa_at_highest_load: f64,
+    pub w_over_w0_range: [f64; 2],
+    pub loads: usize,
+}
+
+impl AreaLoadSlopeRecord {
+    fn new(s: &stats::AreaLoadSlope) -> Self {
+        Self {
+            kappa: s.kappa,
+            kappa_ci95_correlated: s.kappa_band,
+            kappa_at_lowest_load: s.kappa_at_lowest,
+            kappa_at_highest_load: s.kappa_at_highest,
+            w_over_w0_range: [s.lowest_load, s.highest_load],
+            loads: s.loads,
+        }
+    }
+
+    /// The record of an analytic instance's results; None where no load was in range (null),
+    /// an error where the record is there but malformed.
+    pub fn of(results: &Value) -> anyhow::Result<Option<Self>> {
+        match results.get("area_load_slope") {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => Ok(Some(serde_json::from_value(v.clone()).map_err(|e| {
+                anyhow::anyhow!("analytic results.area_load_slope is malformed ({e}): {v}")
+            })?)),
+        }
+    }
+}
+
 /// Upper end of the paper's mild-wear load range (W/W₀ ∈ [0.001, 0.06], its Sec. 4): the
 /// area–load slope is fitted, and the plateau of K taken, at loads up to it.
 pub const MILD_WEAR_MAX_LOAD: f64 = 0.06;
@@ -166,14 +202,7 @@ fn fitted_model(
         "fitted_loads": fitted_loads,
         "source_estimator": Estimator::DiscretePlateauPowerLaw.name(),
         "plateau_w_over_w0": plateau_load,
-        "area_load_slope": slope.map(|s| json!({
-            "kappa": s.kappa,
-            "kappa_ci95_correlated": s.kappa_band,
-            "kappa_at_lowest_load": s.kappa_at_lowest,
-            "kappa_at_highest_load": s.kappa_at_highest,
-            "w_over_w0_range": [s.lowest_load, s.highest_load],
-            "loads": s.loads,
-        })),
+        "area_load_slope": slope.as_ref().map(AreaLoadSlopeRecord::new),
     }))
 }
 
