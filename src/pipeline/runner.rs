@@ -94,7 +94,15 @@ pub fn run(
         let dir = gallery::dir(store, &opts.profile);
         super::report::write(store, &dir, &provenance, &descriptions)?;
     }
-    let rows = catalog_rows(store, &plan.instances)?;
+    // The catalog describes every stored instance of the whole profile: a targeted run adds
+    // rows, never drops the other studies'.
+    let whole = if opts.targets.is_empty() {
+        None
+    } else {
+        Some(Plan::build(pipeline, origin, &opts.profile, &[])?)
+    };
+    let listed = whole.as_ref().map_or(&plan.instances, |p| &p.instances);
+    let rows = catalog_rows(store, listed)?;
     catalog::write(&catalog_dir, &rows)?;
     Ok(RunSummary {
         profile: opts.profile.clone(),

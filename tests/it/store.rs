@@ -317,6 +317,41 @@ fn identical_artifacts_for_one_and_two_threads() {
     assert_eq!(artifacts(&one), artifacts(&two));
 }
 
+/// A run of one target after a full run adds to the catalog and never truncates it: the
+/// catalog keeps describing every stored instance of the profile.
+#[test]
+fn a_targeted_run_keeps_the_whole_catalog() {
+    use polars::prelude::*;
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    let rows = |dir: &Path| {
+        let file = std::fs::File::open(dir.join("data/t/index.parquet")).unwrap();
+        let df = ParquetReader::new(file).finish().unwrap();
+        let studies: std::collections::BTreeSet<String> = df
+            .column("study")
+            .unwrap()
+            .str()
+            .unwrap()
+            .iter()
+            .flatten()
+            .map(String::from)
+            .collect();
+        (df.height(), studies)
+    };
+    run_json(&dir, &[]);
+    let full = rows(&dir);
+    assert!(full.1.contains("a") && full.1.contains("b"), "{full:?}");
+    run_json(&dir, &["b"]);
+    assert_eq!(rows(&dir), full);
+    // A targeted run into an empty store lists what it stored (only b's instances).
+    let (_t2, fresh) = workdir(&small_pipeline(0.8, "x"));
+    run_json(&fresh, &["b"]);
+    let partial = rows(&fresh);
+    assert!(
+        partial.0 < full.0 && !partial.1.contains("a"),
+        "{partial:?}"
+    );
+}
+
 #[test]
 fn catalog_reads_back_with_typed_columns() {
     use polars::prelude::*;
