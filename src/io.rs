@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use ndarray::Array2;
+use ndarray::{Array2, Array3, Axis};
 use ndarray_npy::{read_npy, write_npy};
 
 /// Errors reading or writing field files.
@@ -71,6 +71,9 @@ pub enum ContactMapFormat {
     Bool,
     /// `uint8` array of 0/1 `(rows, cols)`.
     ZeroOne,
+    /// One map of a `uint8` stack of 0/1 maps `(loads, rows, cols)`, as `wearcoef solve
+    /// --contact-out` writes for several loads.
+    Stacked,
     /// The project's bit-packed rows (numpy `packbits(axis=1)` convention): `uint8`
     /// `(n, ceil(n/8))` for an `n × n` map, most significant bit first.
     Packed,
@@ -134,4 +137,38 @@ pub fn read_contact_map(
             ))),
         },
     }
+}
+
+/// One contact map: rows, columns, the map row-major, and the format it was read from.
+pub type ContactMap = (usize, usize, Vec<bool>, ContactMapFormat);
+
+/// Every contact map of a file: the one map of a 2-D file ([`read_contact_map`]), or each
+/// map of a 3-D `uint8` stack of 0/1 maps `(loads, rows, cols)` in order.
+pub fn read_contact_maps(path: &Path) -> Result<Vec<ContactMap>, IoError> {
+    let Ok(stack) = read_npy::<_, Array3<u8>>(path) else {
+        return read_contact_map(path).map(|m| vec![m]);
+    };
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let (maps, rows, cols) = stack.dim();
+    if maps == 0 || rows == 0 || cols == 0 {
+        return Err(err(format!(
+            "contact maps are empty ({maps} × {rows} × {cols})"
+        )));
+    }
+    if let Some(((k, i, j), v)) = stack.indexed_iter().find(|(_, &v)| v > 1) {
+        return Err(err(format!(
+            "a stack of uint8 contact maps must hold 0 or 1, found {v} in map {k}, row {i}, \
+             column {j}"
+        )));
+    }
+    Ok(stack
+        .axis_iter(Axis(0))
+        .map(|m| {
+            let map = m.iter().map(|&v| v == 1).collect();
+            (rows, cols, map, ContactMapFormat::Stacked)
+        })
+        .collect())
 }

@@ -61,7 +61,7 @@ enum Command {
     /// area fraction). Areas in any one unit.
     Model(cli::tools::ModelArgs),
 
-    /// Label the contact clusters of a map on the periodic torus.
+    /// Label the contact clusters of a map, or of each map of a stack, on the periodic torus.
     Clusters(cli::tools::ClustersArgs),
 
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).

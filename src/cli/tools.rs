@@ -98,14 +98,16 @@ pub fn model(args: ModelArgs) -> anyhow::Result<ExitCode> {
 
 #[derive(clap::Args)]
 pub struct ClustersArgs {
-    /// Contact map: bool or uint8 0/1 `.npy` (rows, cols), or the project's bit-packed
-    /// uint8 (n, ceil(n/8)) from the contact stage.
+    /// Contact map: bool or uint8 0/1 `.npy` (rows, cols), the project's bit-packed uint8
+    /// (n, ceil(n/8)) from the contact stage, or a uint8 0/1 stack (loads, rows, cols) as
+    /// `solve --contact-out` writes for several loads (one result per map).
     #[arg(long)]
     pub contact: PathBuf,
     /// Neighbours that link pixels: 8 (edges and corners, the paper's) or 4 (edges).
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(4..=8))]
     pub connectivity: u32,
-    /// Print `{"n_clusters", "areas_px" (descending), "percolating"}` as JSON.
+    /// Print `{"n_clusters", "areas_px" (descending), "percolating"}` as JSON (for a stack,
+    /// an array of them with `map_index`).
     #[arg(long)]
     pub json: bool,
 }
@@ -118,32 +120,54 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let conn = Connectivity::from_neighbours(connectivity)
         .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
-    let (rows, cols, map, format) = wearcoef::io::read_contact_map(&contact)?;
-    let labelling = clusters::label(&map, rows, cols, conn)
-        .map_err(|e| InputError(format!("{}: {e}", contact.display())))?;
-    let mut areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
-    areas.sort_unstable_by(|a, b| b.cmp(a));
-    let percolating = labelling.clusters.iter().any(|c| c.percolating());
-    if json {
-        let out = json!({
-            "n_clusters": labelling.clusters.len(),
-            "areas_px": areas,
-            "percolating": percolating,
-        });
-        out!("{}", serde_json::to_string(&out)?)?;
-    } else {
-        let in_contact: u64 = areas.iter().sum();
-        out!(
-            "{rows} × {cols} map ({format:?}), {connectivity}-connected: {} clusters, \
-             {in_contact} pixels in contact, largest {} px{}",
-            areas.len(),
-            areas.first().copied().unwrap_or(0),
-            if percolating {
-                ", a cluster wraps around the periodic box (percolating)"
-            } else {
-                ""
+    // One map, or a stack of maps (one per load of a `solve --contact-out` sweep): one
+    // result per map, a JSON array for a stack.
+    let maps = wearcoef::io::read_contact_maps(&contact)?;
+    let stacked = maps.len() > 1;
+    let mut results = Vec::new();
+    for (index, (rows, cols, map, format)) in maps.into_iter().enumerate() {
+        let labelling = clusters::label(&map, rows, cols, conn)
+            .map_err(|e| InputError(format!("{}: {e}", contact.display())))?;
+        let mut areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
+        areas.sort_unstable_by(|a, b| b.cmp(a));
+        let percolating = labelling.clusters.iter().any(|c| c.percolating());
+        if json {
+            let mut row = json!({
+                "n_clusters": labelling.clusters.len(),
+                "areas_px": areas,
+                "percolating": percolating,
+            });
+            if stacked {
+                row["map_index"] = json!(index);
             }
-        )?;
+            results.push(row);
+        } else {
+            let in_contact: u64 = areas.iter().sum();
+            out!(
+                "{}{rows} × {cols} map ({format:?}), {connectivity}-connected: {} clusters, \
+                 {in_contact} pixels in contact, largest {} px{}",
+                if stacked {
+                    format!("map {index}: ")
+                } else {
+                    String::new()
+                },
+                areas.len(),
+                areas.first().copied().unwrap_or(0),
+                if percolating {
+                    ", a cluster wraps around the periodic box (percolating)"
+                } else {
+                    ""
+                }
+            )?;
+        }
+    }
+    if json {
+        let doc = if stacked {
+            serde_json::Value::Array(results)
+        } else {
+            results.remove(0)
+        };
+        out!("{}", serde_json::to_string(&doc)?)?;
     }
     Ok(ExitCode::SUCCESS)
 }

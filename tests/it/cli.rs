@@ -473,3 +473,69 @@ fn unknown_target_and_missing_store_exit_2() {
         "{stderr}"
     );
 }
+
+/// `clusters` reads the stack that `solve --contact-out` writes for several loads: one
+/// result per map, each equal to the labelling of that load's map solved alone (the first
+/// load of a sweep is solved from the same start as a one-load solve).
+#[test]
+fn clusters_reads_a_stack_of_maps_from_solve() {
+    let dir = tempfile::tempdir().unwrap();
+    write_surface(dir.path(), 64);
+    for (loads, file) in [("0.02", "one.npy"), ("0.02,0.05", "two.npy")] {
+        let out = run_in(
+            dir.path(),
+            &[
+                "solve",
+                "--surface",
+                "h.npy",
+                "--loads",
+                loads,
+                "--contact-out",
+                file,
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let clusters = |file: &str| {
+        let out = run_in(dir.path(), &["clusters", "--contact", file, "--json"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout_json(&out)
+    };
+    let one = clusters("one.npy");
+    let two = clusters("two.npy");
+    let maps = two.as_array().expect("a stack gives an array");
+    assert_eq!(maps.len(), 2);
+    assert_eq!(maps[0]["map_index"], 0);
+    assert_eq!(maps[0]["areas_px"], one["areas_px"]);
+    assert_eq!(maps[0]["n_clusters"], one["n_clusters"]);
+    // More load, more contact.
+    let total = |m: &serde_json::Value| -> u64 {
+        m["areas_px"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_u64().unwrap())
+            .sum()
+    };
+    assert!(total(&maps[1]) > total(&maps[0]));
+    // A stack holding something other than 0/1 is refused, naming where.
+    let bad = dir.path().join("bad.npy");
+    let mut stack = ndarray::Array3::<u8>::zeros((2, 4, 4));
+    stack[[1, 2, 3]] = 7;
+    ndarray_npy::write_npy(&bad, &stack).unwrap();
+    let out = run_in(dir.path(), &["clusters", "--contact", "bad.npy"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("found 7 in map 1, row 2, column 3"),
+        "{stderr}"
+    );
+}
