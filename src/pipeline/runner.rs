@@ -142,7 +142,9 @@ pub fn execute(
         }
         let label = stage_list(missing.iter().map(|i| i.stage.as_str()));
         let bar = progress(missing.len(), &label, quiet);
-        let results = build_all(store, &missing, jobs, at_once, &bar)?;
+        // Off a terminal (a log file, CI) the bar is hidden: one plain line per instance.
+        let lines = !quiet && bar.is_hidden();
+        let results = build_all(store, &missing, jobs, at_once, &bar, lines)?;
         bar.finish_and_clear();
         for r in results {
             r?;
@@ -150,6 +152,21 @@ pub fn execute(
         }
     }
     Ok(computed)
+}
+
+/// An instance for a progress line: stage, figure or studies, realization, short key.
+fn describe(inst: &Instance) -> String {
+    let mut s = inst.stage.clone();
+    match (&inst.name, inst.studies.as_slice()) {
+        (Some(name), _) => s.push_str(&format!(" {name}")),
+        (None, []) => {}
+        (None, studies) => s.push_str(&format!(" {}", studies.join(","))),
+    }
+    if let Some(r) = inst.realization {
+        s.push_str(&format!(" r{r}"));
+    }
+    s.push_str(&format!(" {}", &inst.key[..12.min(inst.key.len())]));
+    s
 }
 
 /// The stages of a batch, in order of first appearance (`contact+clusters`).
@@ -171,9 +188,11 @@ fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {
         bar.set_draw_target(ProgressDrawTarget::stderr());
     }
     bar.set_style(
-        ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} eta {eta}")
-            .expect("static template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {wide_msg}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
     );
     bar.set_prefix(stage.to_string());
     bar
@@ -190,6 +209,7 @@ fn build_all(
     jobs: usize,
     at_once: usize,
     bar: &ProgressBar,
+    lines: bool,
 ) -> anyhow::Result<Vec<anyhow::Result<()>>> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     let workers = at_once.min(missing.len()).max(1);
@@ -207,10 +227,22 @@ fn build_all(
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
                         let Some(inst) = missing.get(i) else { break };
+                        let what = describe(inst);
+                        bar.set_message(what.clone());
+                        let started = std::time::Instant::now();
                         let before: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
                         let built = pool.install(|| build(store, inst, &pool, before));
+                        let verdict = if built.is_ok() { "done" } else { "FAILED" };
                         out.push((i, built));
                         bar.inc(1);
+                        if lines {
+                            eprintln!(
+                                "{verdict} {what} in {:.1} s ({}/{} of this level)",
+                                started.elapsed().as_secs_f64(),
+                                bar.position(),
+                                bar.length().unwrap_or(0)
+                            );
+                        }
                     }
                     Ok(out)
                 })

@@ -539,3 +539,26 @@ fn clusters_reads_a_stack_of_maps_from_solve() {
         "{stderr}"
     );
 }
+
+/// Off a terminal (a log file, CI), a run writes one plain progress line per computed
+/// instance to stderr, naming its stage and study; `--quiet` writes none.
+#[test]
+fn a_run_into_a_log_prints_one_line_per_instance() {
+    let (_t, dir) = workdir(&crate::small_pipeline(0.8, "x"));
+    let out = run_in(&dir, &["run", "--profile", "t", "--json"]);
+    assert!(out.status.success());
+    let computed = stdout_json(&out)["computed"].as_u64().unwrap() as usize;
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("done ")).collect();
+    assert_eq!(lines.len(), computed, "{stderr}");
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("done contact a r0 ") && l.contains(" s (")),
+        "{stderr}"
+    );
+    let (_t2, quiet) = workdir(&crate::small_pipeline(0.8, "x"));
+    let out = run_in(&quiet, &["run", "--profile", "t", "--quiet"]);
+    assert!(out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("done "));
+}
