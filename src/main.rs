@@ -47,6 +47,14 @@ enum Command {
     /// Show what is present or missing for a profile, and the Slurm jobs of its campaigns.
     Status(cli::store::StatusArgs),
 
+    /// The catalog of a profile from the store as it is: one row per file, or with --stage
+    /// one row per instance with its parameters and results (CSV or Parquet).
+    Catalog(cli::store::CatalogArgs),
+
+    /// Remove store entries that no profile of the pipeline file references (--dry-run lists
+    /// them).
+    Gc(cli::store::GcArgs),
+
     /// Re-hash every artifact against its manifest; exit 1 on any mismatch.
     Verify(cli::store::VerifyArgs),
 
@@ -106,6 +114,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Submit(args) => cli::submit::submit(args),
         Command::Status(args) => cli::store::status(args),
         Command::Verify(args) => cli::store::verify(args),
+        Command::Catalog(args) => cli::store::catalog(args),
+        Command::Gc(args) => cli::store::gc(args),
         Command::Clean(args) => cli::store::clean(args),
         Command::Solve(args) => cli::tools::solve(args),
         Command::Model(args) => cli::tools::model(args),

@@ -27,6 +27,22 @@ pub struct RunArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Where the galleries go: the figures of a profile, its provenance.json and index.html
+    /// land in FIGURES/<profile>/ (everything else stays under --data).
+    #[arg(long, default_value = "figures")]
+    pub figures: PathBuf,
+    /// Print what would be computed and why (missing, changed parameter, stage version,
+    /// input changed, forced), compute nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Recompute this stage's instances even where stored, and everything downstream of them
+    /// (repeatable).
+    #[arg(long, value_name = "STAGE")]
+    pub force: Vec<String>,
+    /// Compute again the instances whose computation failed in an earlier run (by default
+    /// a recorded failure is reported, not retried).
+    #[arg(long)]
+    pub retry_failed: bool,
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
@@ -37,6 +53,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         jobs,
         quiet,
         json,
+        figures,
+        dry_run,
+        force,
+        retry_failed,
     } = args;
     let pipeline = load(&store.config)?;
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -48,8 +68,34 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         targets,
         jobs,
         quiet,
+        figures,
+        force,
+        retry_failed,
     };
     let origin = store.config.display().to_string();
+    if dry_run {
+        let pending = runner::dry_run(&pipeline, &origin, &Store::new(&store.data), &opts)?;
+        if json {
+            out!("{}", serde_json::to_string(&pending)?)?;
+        } else {
+            for p in &pending {
+                out!(
+                    "{:<10} {:<24} {:>3} {} {}",
+                    p.stage,
+                    p.name.clone().unwrap_or_else(|| p.studies.join(",")),
+                    p.realization.map_or("-".to_string(), |r| format!("r{r}")),
+                    &p.key[..12],
+                    p.reason
+                )?;
+            }
+            out!(
+                "wearcoef run --profile {} would compute {} instance(s)",
+                opts.profile,
+                pending.len()
+            )?;
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let summary = runner::run(&pipeline, &origin, &Store::new(&store.data), &opts)?;
     if json {
         out!("{}", serde_json::to_string(&summary)?)?;
@@ -65,8 +111,12 @@ pub struct StatusArgs {
     pub store: StoreArgs,
     #[arg(long, default_value = "default")]
     pub profile: String,
+    /// Everything as JSON: totals, per stage and study, every instance with its key.
     #[arg(long)]
     pub json: bool,
+    /// Also list every instance: stage, studies or figure, realization, key, present/missing.
+    #[arg(long)]
+    pub keys: bool,
 }
 
 pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
@@ -74,12 +124,15 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
         store,
         profile,
         json,
+        keys,
     } = args;
     let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
     let runner::Status {
         per_stage,
         per_study: lines,
+        totals,
+        instances,
     } = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
     let campaigns = super::submit::campaigns(&store.data, &profile)?;
     let ids: Vec<String> = campaigns.iter().flat_map(|(_, c)| c.job_ids()).collect();
@@ -117,6 +170,8 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
             "{}",
             serde_json::to_string(&json!({
                 "profile": profile,
+                "totals": totals,
+                "instances": instances,
                 "stages": lines,
                 "per_stage": per_stage,
                 "campaigns": campaign_json,
@@ -124,9 +179,37 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
         )?;
         return Ok(ExitCode::SUCCESS);
     }
-    out!("{:<10} {:>8} {:>8}", "stage", "present", "missing")?;
-    for l in &per_stage {
-        out!("{:<10} {:>8} {:>8}", l.stage, l.present, l.missing)?;
+    out!(
+        "{:<10} {:>8} {:>8} {:>8}",
+        "stage",
+        "present",
+        "missing",
+        "(failed)"
+    )?;
+    for l in per_stage.iter().chain([&totals]) {
+        out!(
+            "{:<10} {:>8} {:>8} {:>8}",
+            l.stage,
+            l.present,
+            l.missing,
+            l.failed
+        )?;
+    }
+    for i in instances.iter().filter(|i| i.state == "failed") {
+        out!("FAILED {}", i.error.as_deref().unwrap_or(""))?;
+    }
+    if keys {
+        out!()?;
+        for i in &instances {
+            out!(
+                "{:<10} {:<24} {:>3} {} {}",
+                i.stage,
+                i.name.clone().unwrap_or_else(|| i.studies.join(",")),
+                i.realization.map_or("-".to_string(), |r| format!("r{r}")),
+                i.key,
+                i.state
+            )?;
+        }
     }
     out!()?;
     out!(
@@ -189,26 +272,25 @@ pub struct VerifyArgs {
 
 pub fn verify(args: VerifyArgs) -> anyhow::Result<ExitCode> {
     let VerifyArgs { data, json } = args;
-    if !data.join("cache").is_dir() {
-        return Err(InputError(format!(
-            "--data {}: no store there (no cache/ directory); give the data directory a run \
-             wrote (default: data)",
-            data.display()
-        ))
-        .into());
-    }
-    let store = Store::new(&data);
-    let (checked, problems) = store.verify()?;
+    let store = require_store(&data)?;
+    let (checked, mut problems) = store.verify()?;
+    let (rows, catalog_problems) = wearcoef::pipeline::catalog::verify(&store)?;
+    problems.extend(catalog_problems);
     if json {
         out!(
             "{}",
-            serde_json::to_string(&json!({"checked": checked, "problems": problems}))?
+            serde_json::to_string(
+                &json!({"checked": checked, "catalog_rows": rows, "problems": problems})
+            )?
         )?;
     } else {
         for p in &problems {
             out!("MISMATCH {}: {}", p.path, p.reason)?;
         }
-        out!("verified {checked} entries: {} problem(s)", problems.len())?;
+        out!(
+            "verified {checked} entries and {rows} catalog rows: {} problem(s)",
+            problems.len()
+        )?;
     }
     if !problems.is_empty() {
         return Ok(ExitCode::from(1));
@@ -237,6 +319,203 @@ pub fn clean(args: CleanArgs) -> anyhow::Result<ExitCode> {
     } else {
         store.remove_all()?;
         out!("removed {}", data.display())?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum CatalogFormat {
+    Csv,
+    Parquet,
+}
+
+#[derive(clap::Args)]
+pub struct CatalogArgs {
+    #[command(flatten)]
+    pub store: StoreArgs,
+    #[arg(long, default_value = "default")]
+    pub profile: String,
+    /// csv (to standard output, or --output) or parquet (needs --output).
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: CatalogFormat,
+    /// One row per instance of this stage with its parameters and results, instead of one
+    /// row per file.
+    #[arg(long)]
+    pub stage: Option<String>,
+    /// Write here instead of standard output.
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+}
+
+/// The catalog of a profile, built from the store as it is now (nothing runs).
+pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
+    use wearcoef::pipeline::catalog::{write_csv, write_csv_to, Catalog};
+    use wearcoef::pipeline::plan::Plan;
+    let CatalogArgs {
+        store,
+        profile,
+        format,
+        stage,
+        output,
+    } = args;
+    if let Some(s) = &stage {
+        if wearcoef::pipeline::registry::find(s).is_none() {
+            return Err(InputError(format!(
+                "--stage {s}: no such stage; use one of {}",
+                wearcoef::pipeline::registry::names().join(", ")
+            ))
+            .into());
+        }
+    }
+    if matches!(format, CatalogFormat::Parquet) && output.is_none() {
+        return Err(InputError(
+            "--format parquet needs --output FILE (Parquet is not written to a terminal)".into(),
+        )
+        .into());
+    }
+    if let Some(dir) = output.as_ref().and_then(|o| o.parent()) {
+        if !dir.as_os_str().is_empty() && !dir.is_dir() {
+            return Err(InputError(format!(
+                "--output {}: directory {} does not exist; create it first",
+                output.as_ref().unwrap().display(),
+                dir.display()
+            ))
+            .into());
+        }
+    }
+    let data = require_store(&store.data)?;
+    let pipeline = load(&store.config)?;
+    let origin = store.config.display().to_string();
+    let plan = Plan::build(&pipeline, &origin, &profile, &[])?;
+    let studies = pipeline.plan(&profile, &origin)?;
+    let cat = Catalog::collect(&data, &profile, &plan.instances, &studies)?;
+    let df = match &stage {
+        Some(s) => cat.stage_frame(s)?,
+        None => cat.files_frame()?,
+    };
+    match (format, output) {
+        (CatalogFormat::Csv, None) => {
+            let mut w = csv::Writer::from_writer(std::io::stdout().lock());
+            write_csv_to(&mut w, &df)?;
+            w.flush()?;
+        }
+        (CatalogFormat::Csv, Some(path)) => write_csv(&path, &df)?,
+        (CatalogFormat::Parquet, Some(path)) => {
+            let kv = vec![
+                ("wearcoef.profile".to_string(), profile.clone()),
+                (
+                    "wearcoef.store_root".to_string(),
+                    std::path::absolute(data.root())?.display().to_string(),
+                ),
+            ];
+            wearcoef::pipeline::table::write_with_metadata(&path, df, kv)?;
+        }
+        (CatalogFormat::Parquet, None) => unreachable!("checked above"),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The store at `data`, or a usage error when there is none.
+pub fn require_store(data: &std::path::Path) -> anyhow::Result<Store> {
+    if !data.join("cache").is_dir() {
+        return Err(InputError(format!(
+            "--data {}: no store there (no cache/ directory); give the data directory a run \
+             wrote (default: data)",
+            data.display()
+        ))
+        .into());
+    }
+    Ok(Store::new(data))
+}
+
+#[derive(clap::Args)]
+pub struct GcArgs {
+    #[command(flatten)]
+    pub store: StoreArgs,
+    /// List what would be removed, remove nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Remove the store entries that no profile of the pipeline file references (and the
+/// temporaries of dead processes of this host).
+pub fn gc(args: GcArgs) -> anyhow::Result<ExitCode> {
+    use std::collections::BTreeSet;
+    use wearcoef::pipeline::plan::Plan;
+    let GcArgs {
+        store,
+        dry_run,
+        json,
+    } = args;
+    let data = require_store(&store.data)?;
+    let pipeline = load(&store.config)?;
+    let origin = store.config.display().to_string();
+    // Every profile must plan, or nothing is removed: an entry only an unplannable profile
+    // references must not go.
+    let mut referenced: BTreeSet<(String, String)> = BTreeSet::new();
+    for profile in pipeline.profile_names() {
+        let plan = Plan::build(&pipeline, &origin, &profile, &[])?;
+        referenced.extend(plan.instances.into_iter().map(|i| (i.stage, i.key)));
+    }
+    let mut removed = Vec::new();
+    let mut bytes = 0u64;
+    for (stage, key, dir) in data.entries()? {
+        if referenced.contains(&(stage.clone(), key.clone())) {
+            continue;
+        }
+        let size: u64 = std::fs::read_dir(&dir)?
+            .filter_map(|e| e.ok()?.metadata().ok())
+            .map(|m| m.len())
+            .sum();
+        if !dry_run {
+            std::fs::remove_dir_all(&dir)?;
+        }
+        bytes += size;
+        removed.push(json!({"stage": stage, "key": key, "bytes": size}));
+    }
+    for (stage, key, path) in data.failures()? {
+        if referenced.contains(&(stage.clone(), key.clone())) {
+            continue;
+        }
+        if !dry_run {
+            std::fs::remove_file(&path)?;
+        }
+        removed.push(json!({"stage": stage, "key": key, "failed": true, "bytes": 0}));
+    }
+    let temporaries = if dry_run {
+        0
+    } else {
+        data.remove_stale_temporaries()?
+    };
+    let verb = if dry_run { "would remove" } else { "removed" };
+    if json {
+        out!(
+            "{}",
+            serde_json::to_string(&json!({
+                "dry_run": dry_run,
+                "entries": removed,
+                "bytes": bytes,
+                "kept": referenced.len(),
+                "temporaries": temporaries,
+            }))?
+        )?;
+    } else {
+        for r in &removed {
+            out!(
+                "{verb} {}/{}",
+                r["stage"].as_str().unwrap_or(""),
+                r["key"].as_str().unwrap_or("")
+            )?;
+        }
+        out!(
+            "{verb} {} unreferenced entries ({:.1} MiB) and {temporaries} stale temporary directories; the profiles of {} reference {} instances",
+            removed.len(),
+            bytes as f64 / (1u64 << 20) as f64,
+            store.config.display(),
+            referenced.len()
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }

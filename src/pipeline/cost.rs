@@ -346,6 +346,7 @@ mod tests {
                 wall_seconds: 1.0,
                 cpu_seconds: Some(1.0),
                 results,
+                results_sha256: None,
             })
             .unwrap();
     }

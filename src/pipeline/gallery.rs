@@ -1,5 +1,6 @@
-//! A profile's gallery: its figures copied from the store to `figures/<profile>/` beside the
-//! data directory, with `provenance.json` saying which store instances drew them.
+//! A profile's gallery: its figures copied from the store to `<figures>/<profile>/` (`run
+//! --figures`, default `figures/` in the working directory), with `provenance.json` saying
+//! which store instances drew them.
 //!
 //! `provenance.json` is written by the program, never by hand: for every figure the profile
 //! declares, the figures-stage instance key, the files it wrote, and the instances it was
@@ -50,15 +51,9 @@ pub struct Provenance {
     pub figures: Vec<FigureRecord>,
 }
 
-/// Directory the figures of `profile` are copied to: `figures/<profile>/` beside the data
-/// directory.
-pub fn dir(store: &Store, profile: &str) -> PathBuf {
-    store
-        .root()
-        .parent()
-        .unwrap_or(Path::new(""))
-        .join("figures")
-        .join(profile)
+/// Directory the figures of `profile` are copied to: `<figures>/<profile>/`.
+pub fn dir(figures: &Path, profile: &str) -> PathBuf {
+    figures.join(profile)
 }
 
 /// The record of the figures instances among `all` (files left empty).
@@ -98,11 +93,12 @@ pub fn expected(all: &[Instance], profile: &str) -> Provenance {
 /// holds exactly its declared figures; returns the record then.
 pub fn export(
     store: &Store,
+    figures: &Path,
     all: &[Instance],
     profile: &str,
     record: bool,
 ) -> anyhow::Result<Option<Provenance>> {
-    let out = dir(store, profile);
+    let out = dir(figures, profile);
     let mut provenance = expected(all, profile);
     let mut written: BTreeSet<String> = BTreeSet::new();
     for fig in &mut provenance.figures {

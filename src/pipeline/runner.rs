@@ -1,6 +1,7 @@
 //! Running a profile: plan the instances, build the missing ones in parallel, write the
 //! catalog, report.
 
+use std::collections::BTreeSet;
 use std::io::IsTerminal;
 use std::time::Instant;
 
@@ -8,11 +9,11 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 use serde_json::Value;
 
-use super::catalog::{self, Row};
+use super::catalog::Catalog;
 use super::cost::{machine_memory_bytes, CostModel};
 use super::gallery;
 use super::plan::{Instance, Plan};
-use super::store::{CommitOutcome, Manifest, Program, Store};
+use super::store::{CommitOutcome, Failure, Manifest, Program, Store};
 use crate::config::Pipeline;
 use crate::stages::Inputs;
 
@@ -26,6 +27,12 @@ pub struct RunOptions {
     pub jobs: usize,
     /// Hide the progress bar even on a terminal.
     pub quiet: bool,
+    /// Root of the galleries: figures go to `<figures>/<profile>/`.
+    pub figures: std::path::PathBuf,
+    /// Stages to recompute even where stored (with everything downstream of them).
+    pub force: Vec<String>,
+    /// Compute again the instances whose computation failed in an earlier run.
+    pub retry_failed: bool,
 }
 
 /// The one-line outcome of a run.
@@ -65,6 +72,12 @@ pub fn run(
     let start = Instant::now();
     let mut plan = Plan::build(pipeline, origin, &opts.profile, &opts.targets)?;
     plan.mark(store, &CostModel::fit(store)?)?;
+    let forced = forced_keys(&plan, &opts.force)?;
+    for inst in &mut plan.instances {
+        if forced.contains(&inst.key) {
+            inst.cached = false;
+        }
+    }
     if let Some(memory) = machine_memory_bytes() {
         Plan {
             profile: plan.profile.clone(),
@@ -79,19 +92,35 @@ pub fn run(
     }
     store.remove_stale_temporaries()?;
     let reused = plan.instances.iter().filter(|i| i.cached).count();
-    let computed = execute(store, &plan.instances, opts.jobs, opts.jobs, opts.quiet)?;
+    let outcome = execute_forcing(
+        store,
+        &plan.instances,
+        &forced,
+        opts.retry_failed,
+        opts.jobs,
+        opts.jobs,
+        opts.quiet,
+    )?;
+    let computed = outcome.computed;
 
     let catalog_dir = store.root().join(&opts.profile);
     // A partial plan (targets) exports its figures but leaves the gallery's record and
     // report alone.
     let record = opts.targets.is_empty();
-    if let Some(provenance) = gallery::export(store, &plan.instances, &opts.profile, record)? {
+    let complete = outcome.failed.is_empty() && outcome.failed_before.is_empty();
+    // An incomplete run (failures) leaves the gallery as it was.
+    let provenance = if complete {
+        gallery::export(store, &opts.figures, &plan.instances, &opts.profile, record)?
+    } else {
+        None
+    };
+    if let Some(provenance) = provenance {
         let descriptions: std::collections::BTreeMap<String, String> = pipeline
             .figures_of(&opts.profile)
             .into_iter()
             .map(|(name, decl)| (name.to_string(), decl.description.clone()))
             .collect();
-        let dir = gallery::dir(store, &opts.profile);
+        let dir = gallery::dir(&opts.figures, &opts.profile);
         super::report::write(store, &dir, &provenance, &descriptions)?;
     }
     // The catalog describes every stored instance of the whole profile: a targeted run adds
@@ -102,8 +131,10 @@ pub fn run(
         Some(Plan::build(pipeline, origin, &opts.profile, &[])?)
     };
     let listed = whole.as_ref().map_or(&plan.instances, |p| &p.instances);
-    let rows = catalog_rows(store, listed)?;
-    catalog::write(&catalog_dir, &rows)?;
+    let studies = pipeline.plan(&opts.profile, origin)?;
+    Catalog::collect(store, &opts.profile, listed, &studies)?.write(&catalog_dir)?;
+    // Failures end the run with exit 1, after the catalog lists them.
+    outcome.into_result()?;
     Ok(RunSummary {
         profile: opts.profile.clone(),
         instances: plan.instances.len(),
@@ -126,14 +157,119 @@ pub fn execute(
     at_once: usize,
     quiet: bool,
 ) -> anyhow::Result<usize> {
+    execute_forcing(
+        store,
+        instances,
+        &BTreeSet::new(),
+        false,
+        jobs,
+        at_once,
+        quiet,
+    )?
+    .into_result()
+}
+
+/// How an execution ended: what was computed, what failed now, what had failed before and
+/// was not retried, and what could not run because an input failed.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Outcome {
+    pub computed: usize,
+    pub failed: Vec<String>,
+    pub failed_before: Vec<String>,
+    pub skipped: usize,
+}
+
+impl Outcome {
+    /// The number computed, or an error (exit 1) that says what failed.
+    pub fn into_result(self) -> anyhow::Result<usize> {
+        if self.failed.is_empty() && self.failed_before.is_empty() {
+            return Ok(self.computed);
+        }
+        let mut text = String::new();
+        if !self.failed.is_empty() {
+            text.push_str(&format!(
+                "{} instance(s) failed (recorded under failed/ in the store; `wearcoef status` lists them):\n  {}",
+                self.failed.len(),
+                self.failed.join("\n  ")
+            ));
+        }
+        if !self.failed_before.is_empty() {
+            if !text.is_empty() {
+                text.push('\n');
+            }
+            text.push_str(&format!(
+                "{} instance(s) failed in an earlier run and were not retried (retry with --retry-failed, or change their parameters):\n  {}",
+                self.failed_before.len(),
+                self.failed_before.join("\n  ")
+            ));
+        }
+        if self.skipped > 0 {
+            text.push_str(&format!(
+                "\n{} instance(s) not run because an input failed; {} computed",
+                self.skipped, self.computed
+            ));
+        }
+        Err(anyhow::Error::new(ComputeFailed(text)))
+    }
+}
+
+/// The keys `--force STAGE…` recomputes: every instance of those stages and everything
+/// downstream of them in the plan. An unknown stage is a usage error.
+pub fn forced_keys(plan: &Plan, stages: &[String]) -> anyhow::Result<BTreeSet<String>> {
+    for s in stages {
+        if crate::pipeline::registry::find(s).is_none() {
+            return Err(crate::pipeline::UsageError(format!(
+                "--force {s}: no such stage; use one of {}",
+                crate::pipeline::registry::names().join(", ")
+            ))
+            .into());
+        }
+    }
+    let mut forced = BTreeSet::new();
+    // Instances are in level order: inputs come first.
+    for inst in &plan.instances {
+        if stages.contains(&inst.stage) || inst.inputs.iter().any(|r| forced.contains(&r.key)) {
+            forced.insert(inst.key.clone());
+        }
+    }
+    Ok(forced)
+}
+
+/// [`execute`], recomputing the instances whose keys are in `forced` even where stored (the
+/// new entry replaces the old one only once it is complete).
+pub fn execute_forcing(
+    store: &Store,
+    instances: &[Instance],
+    forced: &BTreeSet<String>,
+    retry_failed: bool,
+    jobs: usize,
+    at_once: usize,
+    quiet: bool,
+) -> anyhow::Result<Outcome> {
     let jobs = jobs.max(1);
     let at_once = at_once.max(1);
     let levels = instances.iter().map(|i| i.level + 1).max().unwrap_or(0);
-    let mut computed = 0;
+    let mut outcome = Outcome::default();
+    // Keys that failed, now or before, and everything downstream of them.
+    let mut blocked: BTreeSet<String> = BTreeSet::new();
     for level in 0..levels {
         let mut missing = Vec::new();
         for inst in instances.iter().filter(|i| i.level == level) {
-            if store.lookup(&inst.stage, &inst.key)?.is_none() {
+            let wanted =
+                forced.contains(&inst.key) || store.lookup(&inst.stage, &inst.key)?.is_none();
+            if !wanted {
+                continue;
+            }
+            if inst.inputs.iter().any(|r| blocked.contains(&r.key)) {
+                blocked.insert(inst.key.clone());
+                outcome.skipped += 1;
+            } else if let Some(f) = (!retry_failed && !forced.contains(&inst.key))
+                .then(|| store.failure(&inst.stage, &inst.key))
+                .flatten()
+            {
+                blocked.insert(inst.key.clone());
+                outcome.failed_before.push(f.error);
+            } else {
                 missing.push(inst);
             }
         }
@@ -144,14 +280,20 @@ pub fn execute(
         let bar = progress(missing.len(), &label, quiet);
         // Off a terminal (a log file, CI) the bar is hidden: one plain line per instance.
         let lines = !quiet && bar.is_hidden();
-        let results = build_all(store, &missing, jobs, at_once, &bar, lines)?;
+        let results = build_all(store, &missing, forced, jobs, at_once, &bar, lines)?;
         bar.finish_and_clear();
-        for r in results {
-            r?;
-            computed += 1;
+        for (inst, r) in missing.iter().zip(results) {
+            match r {
+                Ok(()) => outcome.computed += 1,
+                Err(e) if e.downcast_ref::<ComputeFailed>().is_some() => {
+                    blocked.insert(inst.key.clone());
+                    outcome.failed.push(e.to_string());
+                }
+                Err(e) => return Err(e),
+            }
         }
     }
-    Ok(computed)
+    Ok(outcome)
 }
 
 /// An instance for a progress line: stage, figure or studies, realization, short key.
@@ -206,6 +348,7 @@ fn progress(len: usize, stage: &str, quiet: bool) -> ProgressBar {
 fn build_all(
     store: &Store,
     missing: &[&Instance],
+    forced: &BTreeSet<String>,
     jobs: usize,
     at_once: usize,
     bar: &ProgressBar,
@@ -231,7 +374,8 @@ fn build_all(
                         bar.set_message(what.clone());
                         let started = std::time::Instant::now();
                         let before: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
-                        let built = pool.install(|| build(store, inst, &pool, before));
+                        let replace = forced.contains(&inst.key);
+                        let built = pool.install(|| build(store, inst, &pool, before, replace));
                         let verdict = if built.is_ok() { "done" } else { "FAILED" };
                         out.push((i, built));
                         bar.inc(1);
@@ -285,6 +429,7 @@ fn build(
     inst: &Instance,
     pool: &rayon::ThreadPool,
     cpu_before: f64,
+    replace: bool,
 ) -> anyhow::Result<()> {
     let start = Instant::now();
     let stage = crate::pipeline::registry::find(&inst.stage).ok_or_else(|| {
@@ -304,16 +449,42 @@ fn build(
     );
     let inputs = Inputs::load(store, &inst.inputs)?;
     let entry = store.begin(&inst.stage, &inst.key)?;
-    let results = stage
-        .compute(&inst.params, &inputs, entry.path())
-        .map_err(|e| {
-            anyhow::anyhow!(
-                "stage {} (studies {}, realization {}) failed: {e:#}",
+    let results = match stage.compute(&inst.params, &inputs, entry.path()) {
+        Ok(results) => results,
+        Err(e) => {
+            let message = format!(
+                "stage {} (studies {}, realization {}, key {}) failed: {e:#}",
                 inst.stage,
                 inst.studies.join(", "),
-                inst.realization.map_or("-".to_string(), |r| r.to_string())
-            )
-        })?;
+                inst.realization.map_or("-".to_string(), |r| r.to_string()),
+                &inst.key[..12.min(inst.key.len())]
+            );
+            // The failure is data: kept for status, the catalog and an audit, never as
+            // an entry that looks valid (the temporary entry is dropped).
+            store.record_failure(&Failure {
+                stage: inst.stage.clone(),
+                key: inst.key.clone(),
+                params: inst.params.clone(),
+                inputs: keys,
+                studies: inst.studies.clone(),
+                realization: inst.realization,
+                error: message.clone(),
+                report: failure_report(&e),
+                program: Program::current(),
+                wall_seconds: start.elapsed().as_secs_f64(),
+            })?;
+            return Err(anyhow::Error::new(ComputeFailed(message)));
+        }
+    };
+    super::table::stamp(
+        entry.path(),
+        &super::table::TableOrigin {
+            stage: &inst.stage,
+            key: &inst.key,
+            params: &inst.params,
+            realization: inst.realization,
+        },
+    )?;
     let wall_seconds = start.elapsed().as_secs_f64();
     let cpu_after: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
     let manifest = Manifest {
@@ -327,67 +498,52 @@ fn build(
         wall_seconds,
         cpu_seconds: Some((cpu_after - cpu_before).max(0.0)),
         results,
+        results_sha256: None,
     };
-    match entry.commit(manifest)? {
-        CommitOutcome::Stored | CommitOutcome::AlreadyPresent => Ok(()),
+    let outcome = if replace {
+        entry.commit_replacing(manifest)?
+    } else {
+        entry.commit(manifest)?
+    };
+    match outcome {
+        CommitOutcome::Stored | CommitOutcome::AlreadyPresent => {
+            store.clear_failure(&inst.stage, &inst.key)?;
+            Ok(())
+        }
     }
 }
 
-fn catalog_rows(store: &Store, all: &[Instance]) -> anyhow::Result<Vec<Row>> {
-    let mut rows = Vec::new();
-    for inst in all {
-        let Some(manifest) = store.lookup(&inst.stage, &inst.key)? else {
-            continue;
-        };
-        let mut extra = std::collections::BTreeMap::new();
-        for source in [&manifest.params, &manifest.results] {
-            if let Value::Object(map) = source {
-                for (k, v) in map {
-                    // Scalars only; a parameter named like a fixed column (the clusters
-                    // stage's `realization`) is already there.
-                    let fixed = ["stage", "study", "realization", "file", "path", "key"];
-                    if !v.is_object() && !v.is_array() && !fixed.contains(&k.as_str()) {
-                        extra.insert(k.clone(), v.clone());
-                    }
-                }
-            }
-        }
-        let dir = store.entry_dir(&inst.stage, &inst.key);
-        let loads: Option<Vec<f64>> = (inst.stage == "contact")
-            .then(|| inst.params.get("loads_w_over_w0")?.as_array().cloned())
-            .flatten()
-            .map(|a| a.iter().filter_map(Value::as_f64).collect());
-        // Shared instances (the model curves of Fig. 6) are listed once, with no study.
-        let studies = if inst.studies.is_empty() {
-            vec![String::new()]
-        } else {
-            inst.studies.clone()
-        };
-        for study in &studies {
-            for file in manifest.outputs.keys() {
-                let mut extra = extra.clone();
-                // Per-load files carry their load index in the name (`contact_007.npy`).
-                let index = file
-                    .rsplit_once('_')
-                    .and_then(|(_, rest)| rest.strip_suffix(".npy"))
-                    .and_then(|d| d.parse::<usize>().ok());
-                if let (Some(i), Some(loads)) = (index, &loads) {
-                    extra.insert("load_index".into(), Value::from(i as u64));
-                    extra.insert("w_over_w0".into(), Value::from(loads[i]));
-                }
-                rows.push(Row {
-                    stage: inst.stage.clone(),
-                    study: study.clone(),
-                    realization: inst.realization,
-                    file: file.clone(),
-                    path: dir.join(file).display().to_string(),
-                    key: inst.key.clone(),
-                    extra,
-                });
-            }
+/// A stage's computation failed (recorded in the store's `failed/`); the run goes on with
+/// whatever does not depend on it.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct ComputeFailed(pub String);
+
+/// What a failed computation reported, as JSON: the contact sweep's non-convergence
+/// (load, W/W0, solver status, iterations, last error, tolerance), else `null`.
+fn failure_report(e: &anyhow::Error) -> Value {
+    use crate::contact::sweep::SweepError;
+    for c in e.chain() {
+        if let Some(SweepError::NotConverged {
+            index,
+            w_over_w0,
+            status,
+            iterations,
+            error,
+            tolerance,
+        }) = c.downcast_ref::<SweepError>()
+        {
+            return serde_json::json!({
+                "load_index": index,
+                "w_over_w0": w_over_w0,
+                "solver_status": format!("{status:?}"),
+                "iterations": iterations,
+                "last_error": error,
+                "tolerance": tolerance,
+            });
         }
     }
-    Ok(rows)
+    Value::Null
 }
 
 /// Presence of every instance of a profile, per stage and study.
@@ -396,7 +552,10 @@ pub struct StatusLine {
     pub stage: String,
     pub study: String,
     pub present: usize,
+    /// Not stored (failed ones included).
     pub missing: usize,
+    /// Not stored because the computation failed (recorded under `failed/`).
+    pub failed: usize,
 }
 
 /// What is present or missing for a profile: per stage (each instance once), and per stage
@@ -405,6 +564,24 @@ pub struct StatusLine {
 pub struct Status {
     pub per_stage: Vec<StatusLine>,
     pub per_study: Vec<StatusLine>,
+    /// Every instance of the profile once.
+    pub totals: StatusLine,
+    pub instances: Vec<InstanceState>,
+}
+
+/// One instance of a profile and whether the store holds it.
+#[derive(Debug, Clone, Serialize)]
+pub struct InstanceState {
+    pub stage: String,
+    pub key: String,
+    pub studies: Vec<String>,
+    pub realization: Option<u32>,
+    pub name: Option<String>,
+    /// `present`, `missing` or `failed` (missing, with a failure recorded).
+    pub state: String,
+    /// The recorded failure of a failed instance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
 }
 
 /// Count the instances of `stage` (of `study`, when given) that the store holds.
@@ -419,6 +596,7 @@ fn status_line(
         study: study.unwrap_or_default().to_string(),
         present: 0,
         missing: 0,
+        failed: 0,
     };
     for inst in plan
         .instances
@@ -429,6 +607,9 @@ fn status_line(
             line.present += 1;
         } else {
             line.missing += 1;
+            if store.failure(&inst.stage, &inst.key).is_some() {
+                line.failed += 1;
+            }
         }
     }
     Ok(line)
@@ -446,7 +627,43 @@ pub fn status(
     let mut status = Status {
         per_stage: Vec::new(),
         per_study: Vec::new(),
+        totals: StatusLine {
+            stage: "total".into(),
+            study: String::new(),
+            present: 0,
+            missing: 0,
+            failed: 0,
+        },
+        instances: Vec::new(),
     };
+    for inst in &plan.instances {
+        let present = store.lookup(&inst.stage, &inst.key)?.is_some();
+        let failure = (!present)
+            .then(|| store.failure(&inst.stage, &inst.key))
+            .flatten();
+        if present {
+            status.totals.present += 1;
+        } else {
+            status.totals.missing += 1;
+        }
+        let state = match (present, &failure) {
+            (true, _) => "present",
+            (false, Some(_)) => "failed",
+            (false, None) => "missing",
+        };
+        if failure.is_some() {
+            status.totals.failed += 1;
+        }
+        status.instances.push(InstanceState {
+            stage: inst.stage.clone(),
+            key: inst.key.clone(),
+            studies: inst.studies.clone(),
+            realization: inst.realization,
+            name: inst.name.clone(),
+            state: state.to_string(),
+            error: failure.map(|f| f.error),
+        });
+    }
     for stage in crate::pipeline::registry::names() {
         status
             .per_stage
@@ -458,4 +675,135 @@ pub fn status(
         }
     }
     Ok(status)
+}
+
+/// An instance a run would compute, and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct Pending {
+    pub stage: String,
+    pub key: String,
+    pub studies: Vec<String>,
+    pub realization: Option<u32>,
+    pub name: Option<String>,
+    /// `missing`, `forced`, `changed parameter: …`, `stage version a → b`, `input changed`.
+    pub reason: String,
+}
+
+/// What `run` would compute, and why, without computing anything: each instance the store
+/// lacks (or that `--force` names) with the reason, found by comparing it with the instance
+/// the profile's catalog lists for the same stage, studies, realization and figure.
+pub fn dry_run(
+    pipeline: &Pipeline,
+    origin: &str,
+    store: &Store,
+    opts: &RunOptions,
+) -> anyhow::Result<Vec<Pending>> {
+    let mut plan = Plan::build(pipeline, origin, &opts.profile, &opts.targets)?;
+    plan.mark(store, &CostModel::fit(store)?)?;
+    let forced = forced_keys(&plan, &opts.force)?;
+    let previous = previous_instances(store, &opts.profile);
+    let mut out = Vec::new();
+    for inst in &plan.instances {
+        let reason = if forced.contains(&inst.key) {
+            if opts.force.contains(&inst.stage) {
+                format!("forced (--force {})", inst.stage)
+            } else {
+                "forced: downstream of a forced stage".to_string()
+            }
+        } else if inst.cached {
+            continue;
+        } else if let Some(f) = store.failure(&inst.stage, &inst.key) {
+            if opts.retry_failed {
+                format!("failed before, retried (--retry-failed): {}", f.error)
+            } else {
+                format!(
+                    "failed before, not retried without --retry-failed: {}",
+                    f.error
+                )
+            }
+        } else {
+            why_missing(store, inst, &previous)
+        };
+        out.push(Pending {
+            stage: inst.stage.clone(),
+            key: inst.key.clone(),
+            studies: inst.studies.clone(),
+            realization: inst.realization,
+            name: inst.name.clone(),
+            reason,
+        });
+    }
+    Ok(out)
+}
+
+/// (stage, studies, realization, name) → key of each instance the profile's catalog lists.
+type Slot = (String, Vec<String>, Option<u32>, Option<String>);
+
+fn previous_instances(store: &Store, profile: &str) -> Vec<(Slot, String)> {
+    let mut out = Vec::new();
+    for stage in crate::pipeline::registry::names() {
+        let path = store
+            .root()
+            .join(profile)
+            .join(format!("index_{stage}.parquet"));
+        let Ok(df) = super::table::read(&path) else {
+            continue;
+        };
+        let (Ok(keys), Ok(studies)) = (
+            super::table::str_column(&df, "key"),
+            super::table::str_column(&df, "studies"),
+        ) else {
+            continue;
+        };
+        let realizations = super::table::u32_column(&df, "realization").ok();
+        let names = df.column("name").ok().and_then(|c| c.str().ok().cloned());
+        for i in 0..df.height() {
+            let slot = (
+                stage.to_string(),
+                studies[i].split_whitespace().map(String::from).collect(),
+                realizations.as_ref().and_then(|r| r[i]),
+                names.as_ref().and_then(|n| n.get(i)).map(String::from),
+            );
+            out.push((slot, keys[i].clone()));
+        }
+    }
+    out
+}
+
+fn why_missing(store: &Store, inst: &Instance, previous: &[(Slot, String)]) -> String {
+    let before = previous.iter().find(|((stage, studies, r, name), _)| {
+        stage == &inst.stage
+            && r == &inst.realization
+            && name == &inst.name
+            && studies.iter().any(|s| inst.studies.contains(s))
+    });
+    let Some(Ok(Some(old))) = before.map(|(_, key)| store.lookup(&inst.stage, key)) else {
+        return "missing".to_string();
+    };
+    let version = crate::pipeline::registry::find(&inst.stage).map_or(0, |s| s.version());
+    if old.version != version {
+        return format!("stage version {} → {version}", old.version);
+    }
+    let mut changed = Vec::new();
+    if let (Value::Object(a), Value::Object(b)) = (&old.params, &inst.params) {
+        let names: BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+        for n in names {
+            let (x, y) = (a.get(n), b.get(n));
+            if x != y {
+                let show = |v: Option<&Value>| {
+                    let t = v.map_or("(none)".to_string(), Value::to_string);
+                    if t.chars().count() > 40 {
+                        format!("{}…", t.chars().take(40).collect::<String>())
+                    } else {
+                        t
+                    }
+                };
+                changed.push(format!("{n} {} → {}", show(x), show(y)));
+            }
+        }
+    }
+    if !changed.is_empty() {
+        return format!("changed parameter: {}", changed.join("; "));
+    }
+    "input changed".to_string()
 }

@@ -93,6 +93,18 @@ pub struct Manifest {
     pub cpu_seconds: Option<f64>,
     /// Stage-specific results (realised statistics, solver reports, ...).
     pub results: Value,
+    /// SHA-256 of the canonical JSON of `results` and `wall_seconds`, so that `verify`
+    /// notices an edited result (absent in entries of older builds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub results_sha256: Option<String>,
+}
+
+impl Manifest {
+    /// The hash `results_sha256` records.
+    pub fn results_hash(&self) -> String {
+        let v = serde_json::json!({"results": self.results, "wall_seconds": self.wall_seconds});
+        super::hash::sha256_hex(super::hash::canonical_json(&v).as_bytes())
+    }
 }
 
 /// The store rooted at a data directory.
@@ -359,6 +371,14 @@ fn check_entry(stage: &str, key: &str, dir: &Path) -> Result<(), String> {
             "manifest parameters hash to {recomputed}, not to the entry's key"
         ));
     }
+    if let Some(recorded) = &manifest.results_sha256 {
+        let hash = manifest.results_hash();
+        if &hash != recorded {
+            return Err(format!(
+                "manifest results hash to {hash}, not to the recorded {recorded}: a result was edited"
+            ));
+        }
+    }
     for (name, file) in &manifest.outputs {
         let path = dir.join(name);
         let (hash, bytes) = sha256_file(&path).map_err(|e| format!("{name}: unreadable ({e})"))?;
@@ -408,6 +428,7 @@ impl TempEntry {
             outputs.insert(name, OutputFile { sha256, bytes });
         }
         manifest.outputs = outputs;
+        manifest.results_sha256 = Some(manifest.results_hash());
         let text = serde_json::to_string_pretty(&manifest).expect("manifest serialises");
         let path = self.dir.join(MANIFEST);
         std::fs::write(&path, text + "\n").map_err(io_err(&path))?;
@@ -423,6 +444,29 @@ impl TempEntry {
                 source: e,
             }),
         }
+    }
+}
+
+impl TempEntry {
+    /// [`TempEntry::commit`], replacing a stored entry of the same key (`run --force`): the
+    /// old entry is moved aside under a temporary name, the new one renamed into place, then
+    /// the old one removed; a crash in between leaves either entry complete, or none (the
+    /// next run rebuilds it), never a mix.
+    pub fn commit_replacing(self, manifest: Manifest) -> Result<CommitOutcome, StoreError> {
+        if self.final_dir.exists() {
+            let stage_dir = self.final_dir.parent().unwrap_or(Path::new("."));
+            let key = file_name(&self.final_dir);
+            let aside = stage_dir.join(format!(
+                ".tmp-{key}-{}-{}-replaced",
+                host_name(),
+                std::process::id()
+            ));
+            std::fs::rename(&self.final_dir, &aside).map_err(io_err(&self.final_dir))?;
+            let outcome = self.commit(manifest);
+            std::fs::remove_dir_all(&aside).map_err(io_err(&aside))?;
+            return outcome;
+        }
+        self.commit(manifest)
     }
 }
 
@@ -443,5 +487,80 @@ fn debug_pause() {
         .and_then(|v| v.parse::<u64>().ok())
     {
         std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+}
+
+/// A stage instance whose computation failed (a solve that did not converge, …), kept at
+/// `D/failed/<stage>/<key>.json` so that the failure can be audited: `status` and the catalog
+/// show it, and the next `run` retries it only with `--retry-failed` (or when a changed
+/// parameter gives it a new key). It is never an entry: nothing downstream reads it.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Failure {
+    pub stage: String,
+    pub key: String,
+    pub params: Value,
+    pub inputs: Vec<String>,
+    pub studies: Vec<String>,
+    pub realization: Option<u32>,
+    /// The error, as the run printed it.
+    pub error: String,
+    /// What the stage reported (for a contact sweep: the load, solver status, iterations,
+    /// last error and tolerance), `null` when it said nothing structured.
+    pub report: Value,
+    pub program: Program,
+    pub wall_seconds: f64,
+}
+
+impl Store {
+    /// `D/failed/<stage>/<key>.json`.
+    pub fn failure_path(&self, stage: &str, key: &str) -> PathBuf {
+        self.root
+            .join("failed")
+            .join(stage)
+            .join(format!("{key}.json"))
+    }
+
+    /// Record a failed instance (atomically, replacing an earlier record of the same key).
+    pub fn record_failure(&self, failure: &Failure) -> Result<(), StoreError> {
+        let path = self.failure_path(&failure.stage, &failure.key);
+        let dir = path.parent().unwrap_or(Path::new("."));
+        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+        let tmp = dir.join(format!(".{}.tmp-{}", failure.key, std::process::id()));
+        let text = serde_json::to_string_pretty(failure).expect("a failure serialises");
+        std::fs::write(&tmp, text + "\n").map_err(io_err(&tmp))?;
+        std::fs::rename(&tmp, &path).map_err(io_err(&path))
+    }
+
+    /// The failure record of an instance, if any (an unreadable one counts as none).
+    pub fn failure(&self, stage: &str, key: &str) -> Option<Failure> {
+        let text = std::fs::read_to_string(self.failure_path(stage, key)).ok()?;
+        serde_json::from_str(&text).ok()
+    }
+
+    /// Remove the failure record of an instance (once it has been computed).
+    pub fn clear_failure(&self, stage: &str, key: &str) -> Result<(), StoreError> {
+        let path = self.failure_path(stage, key);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(io_err(&path)(e)),
+            _ => Ok(()),
+        }
+    }
+
+    /// Every failure record as (stage, key, path).
+    pub fn failures(&self) -> Result<Vec<(String, String, PathBuf)>, StoreError> {
+        let mut out = Vec::new();
+        let root = self.root.join("failed");
+        for stage_dir in list_dirs(&root)? {
+            let stage = file_name(&stage_dir);
+            for entry in std::fs::read_dir(&stage_dir).map_err(io_err(&stage_dir))? {
+                let path = entry.map_err(io_err(&stage_dir))?.path();
+                let name = file_name(&path);
+                if let Some(key) = name.strip_suffix(".json").filter(|k| !k.starts_with('.')) {
+                    out.push((stage.clone(), key.to_string(), path));
+                }
+            }
+        }
+        out.sort();
+        Ok(out)
     }
 }

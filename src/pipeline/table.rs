@@ -93,3 +93,239 @@ pub fn loads_of(df: &DataFrame) -> anyhow::Result<Vec<(u32, f64)>> {
     }
     Ok(out)
 }
+
+/// The unit of a column of any table the pipeline writes, by name (docs/CONVENTIONS.md):
+/// written into every Parquet file's metadata (`wearcoef.units`). `None` for a name this
+/// list does not know; the client test fails on any column without a unit.
+pub fn unit_of(column: &str) -> Option<&'static str> {
+    let unit = match column {
+        // Where a row comes from.
+        "realization" | "load_index" | "bin" | "cluster_id" | "count_peak_load_index" => "index",
+        "stage" | "study" | "studies" | "profile" | "file" | "path" | "key" | "estimator"
+        | "note" | "kind" | "curve" | "alpha_estimator" | "panel" | "series" | "x_quantity"
+        | "y_quantity" | "status" | "error_message" | "state" | "failure" | "solver_status" => {
+            "text"
+        }
+        "last_error" => "1 (relative complementarity error)",
+        "converged" | "percolating" | "at_transition" | "within_rule" | "cached" => "boolean",
+        // Loads and pressures.
+        "w_over_w0" | "count_peak_w_over_w0" => "W₀ = E*·h′rms·L²",
+        "mean_pressure" => "E*",
+        // Areas, lengths and counts on the grid.
+        "area_px" | "width_px" | "k_min_px" | "k_max_px" | "k_s_px" | "n_contact_px" => {
+            "Δl² (grid cells)"
+        }
+        "perimeter_px" | "extent_x_px" | "extent_y_px" => "Δl (grid spacings)",
+        "n_clusters"
+        | "n_clusters_reference"
+        | "n_percolating"
+        | "n_fitted"
+        | "count_pooled"
+        | "iterations"
+        | "convolutions"
+        | "realizations"
+        | "realizations_percolating"
+        | "n_clusters_mean"
+        | "n_clusters_ci95" => "count",
+        "dn_dac_per_ls2" => "clusters per λₛ² of contact area",
+        "pdf_pooled" | "pdf_mean" | "pdf_ci95" => "1/λₛ² (density of A/λₛ²)",
+        "wear_rate_over_l2_mean" | "wear_rate_over_l2_ci95" => {
+            "L² (worn volume per sliding distance, ω = 1/3)"
+        }
+        // Dimensionless ratios and fractions.
+        "alpha"
+        | "alpha_reference"
+        | "alpha_difference"
+        | "std_error"
+        | "bootstrap_ci95_low"
+        | "bootstrap_ci95_high"
+        | "ks_distance"
+        | "ks_critical_95"
+        | "ccdf"
+        | "ccdf_mean"
+        | "ccdf_ci95"
+        | "error"
+        | "area_fraction"
+        | "area_fraction_mean"
+        | "area_fraction_ci95"
+        | "k_pl"
+        | "k_upscaled_pl"
+        | "k_pl_plateau"
+        | "k_pl_at_load"
+        | "a_star_over_a_s"
+        | "a_m_over_a_s" => "1",
+        "area_max_rel_deviation"
+        | "area_max_rel_ci95"
+        | "count_max_rel_deviation"
+        | "count_max_rel_ci95"
+        | "largest_max_rel_deviation"
+        | "largest_max_rel_ci95" => "1 (relative to the reference)",
+        "error_over_ci95" | "neighbour_error_over_ci95" => "1 (in units of the 95 % CI)",
+        "value" | "ci95" | "interpolated" | "neighbours" => "1 (the quantity named by curve)",
+        "setting" => "1 (the study's varied parameter: λₛ/Δl, L/λₗ or n)",
+        "x" => "the unit of x_quantity",
+        "y" => "the unit of y_quantity",
+        "lambda_l_over_lambda_s" | "lambda_s_over_dl" | "l_over_lambda_l" | "hurst" => "1",
+        "n" => "grid cells per side",
+        // Parameters and scalar results of manifests (the catalog's per-stage tables).
+        "name" | "curves" | "source_estimator" | "audit" | "reference" | "connectivity"
+        | "draw" | "figure" | "quantity" | "method" | "b1" => "text",
+        "rule_met" => "boolean",
+        "bytes" => "bytes",
+        "seed" => "seed",
+        "e_star" => "E*",
+        "box_size" | "grid_spacing" | "mean_height" | "rms_height" => "L (box side)",
+        "plateau_w_over_w0" | "inset_load" => "W₀ = E*·h′rms·L²",
+        "fitted_loads"
+        | "points"
+        | "rows"
+        | "chosen_loads"
+        | "fine_loads"
+        | "points_judged"
+        | "points_at_transition"
+        | "smallest_converged_realizations"
+        | "tolerance_peak_load_steps"
+        | "peak_tolerance_steps"
+        | "loads_with_percolating_cluster"
+        | "total_clusters"
+        | "max_iterations"
+        | "total_iterations"
+        | "bootstrap_resamples"
+        | "loads_with_exponent"
+        | "min_tail"
+        | "pdf_bins"
+        | "pdf_rows" => "count",
+        "chosen_largest_load_ratio"
+        | "curve_tolerance"
+        | "ks_tolerance"
+        | "tolerance"
+        | "tolerance_error_over_ci95"
+        | "tolerance_rel_deviation"
+        | "rms_slope"
+        | "hurst_fit"
+        | "omega"
+        | "smallest_converged_setting" => "1",
+        _ if column.ends_with("_seconds") => "s",
+        _ if column.ends_with("_px") => "Δl (grid spacings)",
+        _ if column.starts_with("k_archard") || column.starts_with("k_upscaled") => "1",
+        _ if column.ends_with("_over_ls2")
+            || column.ends_with("_over_ls2_mean")
+            || column.ends_with("_over_ls2_ci95") =>
+        {
+            "λₛ²"
+        }
+        _ => return None,
+    };
+    Some(unit)
+}
+
+/// Where the tables of a stage instance come from.
+pub struct TableOrigin<'a> {
+    pub stage: &'a str,
+    pub key: &'a str,
+    pub params: &'a serde_json::Value,
+    /// The realization of a per-realization instance (surface, contact, clusters).
+    pub realization: Option<u32>,
+}
+
+/// Rewrite every Parquet file of an instance's directory with the file-level key-value
+/// metadata a reader needs to know what it holds (`wearcoef.stage`, `wearcoef.key`,
+/// `wearcoef.params` as JSON, `wearcoef.units` as JSON column → unit, `wearcoef.program`),
+/// and, for a per-realization instance, a leading `realization` column where the table has
+/// none, so that concatenated tables keep where their rows came from.
+pub fn stamp(dir: &Path, origin: &TableOrigin) -> anyhow::Result<()> {
+    let mut names: Vec<std::path::PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "parquet"))
+        .collect();
+    names.sort();
+    for path in names {
+        let mut df = read(&path)?;
+        if let Some(r) = origin.realization {
+            if df.column("realization").is_err() {
+                let height = df.height();
+                df.insert_column(0, col("realization", vec![r; height]))?;
+            }
+        }
+        let mut kv = vec![
+            ("wearcoef.stage".to_string(), origin.stage.to_string()),
+            ("wearcoef.key".to_string(), origin.key.to_string()),
+            ("wearcoef.params".to_string(), origin.params.to_string()),
+        ];
+        if let Some(r) = origin.realization {
+            kv.push(("wearcoef.realization".to_string(), r.to_string()));
+        }
+        write_with_metadata(&path, df, kv)?;
+    }
+    Ok(())
+}
+
+/// This program's name and version, as tables record it (the git commit is in manifests
+/// only, so that tables stay byte-identical across commits of one version).
+pub fn program() -> String {
+    format!("{} {}", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))
+}
+
+/// Write `df` to `path` (through a temporary sibling and a rename) with `kv` plus the units of
+/// its columns (`wearcoef.units`) and the program (`wearcoef.program`) as file metadata.
+pub fn write_with_metadata(
+    path: &Path,
+    mut df: DataFrame,
+    mut kv: Vec<(String, String)>,
+) -> anyhow::Result<()> {
+    let units: serde_json::Map<String, serde_json::Value> = df
+        .get_column_names()
+        .iter()
+        .map(|c| {
+            let unit = unit_of(c.as_str()).unwrap_or("");
+            (c.to_string(), serde_json::Value::from(unit))
+        })
+        .collect();
+    kv.push((
+        "wearcoef.units".to_string(),
+        serde_json::Value::Object(units).to_string(),
+    ));
+    kv.push(("wearcoef.program".to_string(), program()));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    kv.push(("ARROW:schema".to_string(), arrow_schema_with(&df, &kv)));
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| -> anyhow::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        ParquetWriter::new(file)
+            .with_key_value_metadata(Some(KeyValueMetadata::from_static(kv)))
+            .finish(&mut df)?;
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(|e| anyhow::anyhow!("cannot write {}: {e:#}", path.display()))
+}
+
+/// The `ARROW:schema` entry of a Parquet file of `df` (what polars writes itself: the Arrow IPC
+/// schema message, length-prefixed, base64) with `kv` as the schema's metadata: Arrow readers
+/// (pyarrow, pandas) take a file's schema metadata from there, not from the footer's
+/// key-value pairs.
+fn arrow_schema_with(df: &DataFrame, kv: &[(String, String)]) -> String {
+    use base64::Engine as _;
+    use polars_arrow::io::ipc::write::{default_ipc_fields, schema_to_bytes};
+    let schema = df.schema().to_arrow(CompatLevel::newest());
+    let metadata: polars_arrow::datatypes::Metadata = kv
+        .iter()
+        .map(|(k, v)| (k.as_str().into(), v.as_str().into()))
+        .collect();
+    let message = schema_to_bytes(
+        &schema,
+        &default_ipc_fields(schema.iter_values()),
+        Some(&metadata),
+    );
+    let mut prefixed = Vec::with_capacity(message.len() + 8);
+    prefixed.extend_from_slice(&[255u8, 255, 255, 255]);
+    prefixed.extend_from_slice(&(message.len() as u32).to_le_bytes());
+    prefixed.extend_from_slice(&message);
+    base64::engine::general_purpose::STANDARD.encode(&prefixed)
+}

@@ -22,7 +22,7 @@ U32, U64, F64, BOOL, STR = "uint32", "uint64", "double", "bool", "string"
 # (stage, file) -> [(column, arrow type)] as documented in docs/CONVENTIONS.md.
 SCHEMAS = {
     ("contact", "loads.parquet"): [
-        ("load_index", U32), ("w_over_w0", F64), ("mean_pressure", F64),
+        ("realization", U32), ("load_index", U32), ("w_over_w0", F64), ("mean_pressure", F64),
         ("area_fraction", F64), ("n_contact_px", U64), ("iterations", U32),
         ("convolutions", U32), ("error", F64), ("converged", BOOL)],
     ("clusters", "clusters.parquet"): [
@@ -30,7 +30,7 @@ SCHEMAS = {
         ("area_px", U64), ("area_over_ls2", F64), ("perimeter_px", U64),
         ("extent_x_px", U32), ("extent_y_px", U32), ("percolating", BOOL)],
     ("clusters", "loads.parquet"): [
-        ("load_index", U32), ("w_over_w0", F64), ("n_clusters", U32), ("area_fraction", F64),
+        ("realization", U32), ("load_index", U32), ("w_over_w0", F64), ("n_clusters", U32), ("area_fraction", F64),
         ("largest_area_over_ls2", F64), ("n_percolating", U32)],
     ("statistics", "loads.parquet"): [
         ("load_index", U32), ("w_over_w0", F64), ("area_fraction_mean", F64),
@@ -76,8 +76,31 @@ FIG2_CONVERGENCE = [("realizations", U32)] + [
 # Two-sided 95 % Student t quantiles for 1 … 10 degrees of freedom.
 T975 = [12.706204736, 4.302652730, 3.182446305, 2.776445105, 2.570581836, 2.446911851,
         2.364624252, 2.306004135, 2.262157163, 2.228138852]
-CATALOG_COLUMNS = [("stage", STR), ("study", STR), ("realization", U32), ("file", STR),
-                   ("path", STR), ("key", STR)]
+CATALOG_COLUMNS = [("profile", STR), ("stage", STR), ("studies", STR), ("realization", U32),
+                   ("name", STR), ("state", STR), ("file", STR), ("path", STR), ("key", STR), ("bytes", U64)]
+# Key-value metadata of every stored table (`pyarrow.parquet.read_schema(p).metadata`).
+TABLE_METADATA = ["wearcoef.stage", "wearcoef.key", "wearcoef.params", "wearcoef.units",
+                  "wearcoef.program"]
+CATALOG_METADATA = ["wearcoef.profile", "wearcoef.store_root", "wearcoef.units",
+                    "wearcoef.program"]
+
+
+def check_metadata(path, keys, stage=None, key=None):
+    """The table's schema metadata names what it is and a unit for every column."""
+    meta = {k.decode(): v.decode() for k, v in (pq.read_schema(path).metadata or {}).items()}
+    missing = [k for k in keys if k not in meta]
+    if not check(not missing, f"{path}: metadata lacks {missing}"):
+        return meta
+    units = json.loads(meta["wearcoef.units"])
+    names = pq.read_schema(path).names
+    check(sorted(units) == sorted(names), f"{path}: units for {sorted(units)}, columns {names}")
+    check(all(units.get(c) for c in names),
+          f"{path}: columns without a unit {[c for c in names if not units.get(c)]}")
+    if stage is not None:
+        check(meta["wearcoef.stage"] == stage and meta["wearcoef.key"] == key,
+              f"{path}: metadata names {meta['wearcoef.stage']}/{meta['wearcoef.key']}")
+        json.loads(meta["wearcoef.params"])
+    return meta
 A_STAR_GRID = 13  # thresholds A*/λ_s² = 1/4 … 1024
 ESTIMATORS = 2
 FIG6_ROWS = 5 * (121 + 1)
@@ -271,12 +294,60 @@ def check_load_resolution(path, wear_of):
 def main(data_dir, profile):
     catalog_path = os.path.join(data_dir, profile, "index.parquet")
     schema = pq.read_schema(catalog_path)
-    got = [(f.name, arrow_type(f.type)) for f in schema][: len(CATALOG_COLUMNS)]
-    check(got == CATALOG_COLUMNS, f"catalog leading columns {got} != {CATALOG_COLUMNS}")
-    cat = pd.read_parquet(catalog_path)
-    check(len(cat) > 0, "catalog is empty")
-    for p in cat["path"]:
-        check(os.path.isfile(p), f"catalog lists a missing file {p}")
+    got = [(f.name, arrow_type(f.type)) for f in schema]
+    check(got == CATALOG_COLUMNS, f"catalog columns {got} != {CATALOG_COLUMNS}")
+    meta = check_metadata(catalog_path, CATALOG_METADATA)
+    check(meta.get("wearcoef.profile") == profile, f"catalog profile {meta.get('wearcoef.profile')}")
+    check(os.path.samefile(meta.get("wearcoef.store_root", "/nonexistent"), data_dir),
+          f"catalog store root {meta.get('wearcoef.store_root')} is not {data_dir}")
+    files = pd.read_parquet(catalog_path, dtype_backend="numpy_nullable")
+    check(len(files) > 0, "catalog is empty")
+    check(str(files["realization"].dtype) == "UInt32", f"realization as {files['realization'].dtype}")
+    check(not files.duplicated(["key", "file"]).any(), "a file is listed twice in the catalog")
+    check((files["profile"] == profile).all(), "a catalog row of another profile")
+    check((files["state"] == "stored").all(), "a failed instance in the quick profile")
+    # Paths are relative to the store root: they open from any directory.
+    for p in files["path"]:
+        check(not os.path.isabs(p) and os.path.isfile(os.path.join(data_dir, p)),
+              f"catalog path {p} is not a file under {data_dir}")
+    # Per-stage tables: one row per instance, the study's spectrum as ratios, no empty column.
+    for stage in ["surface", "contact", "clusters", "statistics", "analytic", "audits", "figures"]:
+        sp = os.path.join(data_dir, profile, f"index_{stage}.parquet")
+        if not check(os.path.isfile(sp), f"no per-stage catalog {sp}"):
+            continue
+        check_metadata(sp, CATALOG_METADATA)
+        st = pd.read_parquet(sp, dtype_backend="numpy_nullable")
+        check(sorted(st["key"]) == sorted(set(files[files["stage"] == stage]["key"])),
+              f"{sp}: instances differ from index.parquet's")
+        empty = [c for c in st.columns if st[c].isna().all()]
+        check(not empty, f"{sp}: columns null in every row {empty}")
+        if stage in ("surface", "contact", "clusters", "statistics"):
+            for c in ["l_over_lambda_l", "lambda_l_over_lambda_s", "lambda_s_over_dl", "hurst"]:
+                check(c in st.columns and st[c].notna().all(), f"{sp}: no {c} on every row")
+        if stage == "surface":
+            check(((st["l_over_lambda_l"] * st["lambda_l_over_lambda_s"]
+                    * st["lambda_s_over_dl"]) == st["n"]).all(),
+                  f"{sp}: L/λl · λl/λs · λs/Δl differs from n")
+    surface_n = dict(zip(*pd.read_parquet(os.path.join(data_dir, profile, "index_surface.parquet"))[["key", "n"]].T.values))
+    # One row per study of each file, as the README shows; paths made openable from here.
+    cat = files.assign(study=files["studies"].str.split()).explode("study")
+    cat["path"] = [os.path.join(data_dir, p) for p in cat["path"]]
+    cat = cat.astype({"study": object}).fillna({"study": ""})
+    # With each instance's parameters and results from its stage's table, as pandas joins them.
+    params = pd.concat([
+        pd.read_parquet(os.path.join(data_dir, profile, f"index_{s}.parquet"),
+                        dtype_backend="numpy_nullable").drop(
+            columns=["profile", "stage", "studies", "realization", "name", "state", "path"],
+            errors="ignore")
+        for s in sorted(set(files["stage"]))])
+    cat = cat.merge(params, on="key", how="left", validate="many_to_one")
+    for _, r in cat.drop_duplicates(["key", "file"]).iterrows():
+        if r.file.endswith(".parquet"):
+            check_metadata(r.path, TABLE_METADATA, r.stage, r.key)
+            if not pd.isna(r.realization):
+                t = pd.read_parquet(r.path)
+                check("realization" in t.columns and (t["realization"] == r.realization).all(),
+                      f"{r.path}: realization column does not say {r.realization}")
     stages = set(cat["stage"])
     for s in ["surface", "contact", "clusters", "statistics", "analytic", "figures"]:
         check(s in stages, f"no {s} artifact in the catalog")
@@ -328,7 +399,8 @@ def main(data_dir, profile):
               and h.flags["C_CONTIGUOUS"] and np.isfinite(h).all(),
               f"{r.path}: dtype {h.dtype}, shape {h.shape}")
         check(abs(h.mean()) <= 1e-12 * max(h.std(), 1e-300), f"{r.path}: mean {h.mean()}")
-        check(h.shape[0] == int(r.n), f"{r.path}: shape {h.shape} but n = {r.n} in catalog")
+        n = int(surface_n[r.key])
+        check(h.shape[0] == n, f"{r.path}: shape {h.shape} but n = {n} in index_surface")
 
     # Clusters: one row per cluster; counts and areas match the per-load table and contact.
     for _, r in rows("clusters", "clusters.parquet").iterrows():

@@ -37,8 +37,8 @@ import re, sys
 text = open(sys.argv[1], encoding="utf-8").read()
 section = text.split("## Reading the results with pandas", 1)[1]
 block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
-assert 'profile = "default"' in block, "the README example no longer names its profile"
-print(block.replace('profile = "default"', 'profile = "quick"', 1))
+assert 'root, profile = "data", "default"' in block, "the README example no longer names its store and profile"
+print(block.replace('root, profile = "data", "default"', 'root, profile = "data", "quick"', 1))
 PY
 "$venv/bin/python" readme_example.py
 echo "README example ran"

@@ -12,6 +12,7 @@ mod powerlaw;
 mod stability;
 mod stages;
 mod store;
+mod store_cli;
 mod submit;
 mod surface;
 

@@ -327,13 +327,13 @@ fn a_targeted_run_keeps_the_whole_catalog() {
         let file = std::fs::File::open(dir.join("data/t/index.parquet")).unwrap();
         let df = ParquetReader::new(file).finish().unwrap();
         let studies: std::collections::BTreeSet<String> = df
-            .column("study")
+            .column("studies")
             .unwrap()
             .str()
             .unwrap()
             .iter()
             .flatten()
-            .map(String::from)
+            .flat_map(|s| s.split_whitespace().map(String::from).collect::<Vec<_>>())
             .collect();
         (df.height(), studies)
     };
@@ -357,36 +357,46 @@ fn catalog_reads_back_with_typed_columns() {
     use polars::prelude::*;
     let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
     run_json(&dir, &[]);
-    let file = std::fs::File::open(dir.join("data/t/index.parquet")).unwrap();
-    let df = ParquetReader::new(file).finish().unwrap();
+    let read = |name: &str| {
+        let file = std::fs::File::open(dir.join("data/t").join(name)).unwrap();
+        ParquetReader::new(file).finish().unwrap()
+    };
+    let df = read("index.parquet");
     // 5 surfaces; 5 sweeps, each with loads.parquet and one contact map per load
     // (study a: 3 realizations × 2 loads, study b: 2 × 1); 5 cluster tables with their
     // per-load summaries; 2 statistics entries of 5 tables each; 2 fitted models with
-    // their plateau tables; the Fig. 6 curves and its PNG, SVG and CSV, listed once (they
-    // belong to no study).
+    // their plateau tables; the Fig. 6 curves and its PNG, SVG and CSV: each file once.
     assert_eq!(
         df.height(),
         5 + 5 + 3 * 2 + 2 + 5 * 2 + 2 * 5 + 2 * 2 + 1 + 3
     );
     for (name, dtype) in [
+        ("profile", DataType::String),
         ("stage", DataType::String),
-        ("study", DataType::String),
+        ("studies", DataType::String),
         ("realization", DataType::UInt32),
+        ("name", DataType::String),
+        ("state", DataType::String),
+        ("file", DataType::String),
         ("path", DataType::String),
         ("key", DataType::String),
-        ("n", DataType::UInt64),
-        ("hurst", DataType::Float64),
-        ("seed", DataType::UInt64),
-        ("rms_slope", DataType::Float64),
-        ("hurst_fit", DataType::Float64),
+        ("bytes", DataType::UInt64),
     ] {
         let col = df.column(name).unwrap_or_else(|_| panic!("column {name}"));
         assert_eq!(col.dtype(), &dtype, "{name}");
     }
-    // Every path points at a file that exists, relative to the run directory.
+    assert_eq!(
+        df.width(),
+        10,
+        "index.parquet has only columns that apply to every file"
+    );
+    // Every path is relative to the store root and names a file there, whatever the
+    // working directory.
     let paths = df.column("path").unwrap().str().unwrap().clone();
     for p in paths.iter() {
-        assert!(dir.join(p.unwrap()).exists());
+        let p = p.unwrap();
+        assert!(!Path::new(p).is_absolute(), "{p}");
+        assert!(dir.join("data").join(p).exists(), "{p}");
     }
     let csv = std::fs::read_to_string(dir.join("data/t/index.csv")).unwrap();
     assert_eq!(
@@ -394,12 +404,57 @@ fn catalog_reads_back_with_typed_columns() {
         1 + df.height(),
         "header + one row per artifact"
     );
-    // Contact maps carry their load.
-    let w = df.column("w_over_w0").unwrap().f64().unwrap().clone();
-    let files = df.column("file").unwrap().str().unwrap().clone();
-    for (f, w) in files.iter().zip(w.iter()) {
-        assert_eq!(f.unwrap().starts_with("contact_"), w.is_some(), "{f:?}");
+    // Per-stage tables: one row per instance, parameters typed, the spectrum as ratios.
+    let surfaces = read("index_surface.parquet");
+    assert_eq!(surfaces.height(), 5);
+    for (name, dtype) in [
+        ("n", DataType::UInt64),
+        ("hurst", DataType::Float64),
+        ("seed", DataType::UInt64),
+        ("rms_slope", DataType::Float64),
+        ("hurst_fit", DataType::Float64),
+        ("l_over_lambda_l", DataType::Float64),
+        ("lambda_l_over_lambda_s", DataType::Float64),
+        ("lambda_s_over_dl", DataType::Float64),
+    ] {
+        let col = surfaces
+            .column(name)
+            .unwrap_or_else(|_| panic!("column {name}"));
+        assert_eq!(col.dtype(), &dtype, "{name}");
+        assert_eq!(col.null_count(), 0, "{name}");
     }
+    assert!(
+        surfaces.column("rolloff_lambda_px").is_err(),
+        "a parameter null for every instance is left out"
+    );
+    let n = surfaces.column("n").unwrap().u64().unwrap().clone();
+    let ratios: Vec<f64> = [
+        "l_over_lambda_l",
+        "lambda_l_over_lambda_s",
+        "lambda_s_over_dl",
+    ]
+    .iter()
+    .map(|c| surfaces.column(c).unwrap().f64().unwrap().get(0).unwrap())
+    .collect();
+    assert_eq!(
+        ratios.iter().product::<f64>(),
+        n.get(0).unwrap() as f64,
+        "L/λl · λl/λs · λs/Δl = n"
+    );
+    let contact = read("index_contact.parquet");
+    assert_eq!(contact.height(), 5);
+    assert_eq!(
+        contact
+            .column("realization")
+            .unwrap()
+            .u32()
+            .unwrap()
+            .null_count(),
+        0
+    );
+    assert!(read("index_statistics.parquet")
+        .column("realization")
+        .is_err());
 }
 
 /// Keys must not drift between versions of the program unless a stage version or the salt
