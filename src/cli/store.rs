@@ -74,7 +74,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     };
     let origin = store.config.display().to_string();
     if dry_run {
-        let pending = runner::dry_run(&pipeline, &origin, &Store::new(&store.data), &opts)?;
+        let pending = wearcoef::pipeline::status::dry_run(
+            &pipeline,
+            &origin,
+            &Store::new(&store.data),
+            &opts,
+        )?;
         if json {
             out!("{}", serde_json::to_string(&pending)?)?;
         } else {
@@ -128,12 +133,12 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
-    let runner::Status {
+    let wearcoef::pipeline::status::Status {
         per_stage,
         per_study: lines,
         totals,
         instances,
-    } = runner::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
+    } = wearcoef::pipeline::status::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
     let campaigns = super::submit::campaigns(&store.data, &profile)?;
     let ids: Vec<String> = campaigns.iter().flat_map(|(_, c)| c.job_ids()).collect();
     let states = if ids.is_empty() {

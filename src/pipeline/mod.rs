@@ -15,6 +15,7 @@ pub mod registry;
 pub mod report;
 pub mod runner;
 pub mod slurm;
+pub mod status;
 pub mod store;
 pub mod table;
 

@@ -443,3 +443,104 @@ fn a_failed_solve_is_data_not_a_valid_looking_result() {
         0
     );
 }
+
+/// `fit --areas` recovers the exponent of areas drawn from a known discrete power law
+/// (α = 1.5 on [1, 10⁴], inverse-CDF sampling), per load, leaving percolating clusters out;
+/// bad tables are refused with exit 2.
+#[test]
+fn fit_recovers_a_known_exponent_from_a_table_of_areas() {
+    use polars::prelude::*;
+    use rand::{RngExt, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    let alpha = 1.5;
+    let k_max = 10_000u64;
+    let weights: Vec<f64> = (1..=k_max).map(|k| (k as f64).powf(-alpha)).collect();
+    let total: f64 = weights.iter().sum();
+    let mut cdf = Vec::with_capacity(weights.len());
+    let mut acc = 0.0;
+    for w in &weights {
+        acc += w / total;
+        cdf.push(acc);
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let (mut load, mut area, mut perc) = (Vec::new(), Vec::new(), Vec::new());
+    for l in 0..2u32 {
+        for _ in 0..4000 {
+            let u: f64 = rng.random();
+            let k = cdf.partition_point(|&c| c < u) as u64 + 1;
+            load.push(l);
+            area.push(k.min(k_max));
+            perc.push(false);
+        }
+        // One huge percolating cluster per load, which must not enter the fit.
+        load.push(l);
+        area.push(1_000_000);
+        perc.push(true);
+    }
+    let mut df = DataFrame::new(
+        load.len(),
+        vec![
+            Column::new("load_index".into(), load),
+            Column::new("area_px".into(), area),
+            Column::new("percolating".into(), perc),
+        ],
+    )
+    .unwrap();
+    let path = dir.path().join("areas.parquet");
+    ParquetWriter::new(std::fs::File::create(&path).unwrap())
+        .finish(&mut df)
+        .unwrap();
+    let out = bin()
+        .args(["fit", "--areas", path.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    let fits = stdout_json(&out);
+    let fits = fits.as_array().unwrap();
+    assert_eq!(fits.len(), 2);
+    for f in fits {
+        let a = f["alpha"].as_f64().unwrap();
+        let se = f["std_error"].as_f64().unwrap();
+        assert!((a - alpha).abs() < 4.0 * se, "{f}");
+        assert!(se < 0.05, "{f}");
+        let (lo, hi) = (
+            f["bootstrap_ci95_low"].as_f64().unwrap(),
+            f["bootstrap_ci95_high"].as_f64().unwrap(),
+        );
+        assert!(lo < a && a < hi, "{f}");
+        assert_eq!(f["percolating_left_out"], 1);
+        assert!(f["x_min_px"].as_f64().unwrap() >= 1.0);
+        assert!(f["x_max_px"].as_f64().unwrap() <= k_max as f64, "{f}");
+    }
+    // Bad input: exit 2, naming the problem.
+    let csv = dir.path().join("areas.csv");
+    std::fs::write(&csv, "area_px\n1\n").unwrap();
+    let mut bad_values =
+        DataFrame::new(2, vec![Column::new("area_px".into(), vec![1.5f64, 2.0])]).unwrap();
+    let frac = dir.path().join("frac.parquet");
+    ParquetWriter::new(std::fs::File::create(&frac).unwrap())
+        .finish(&mut bad_values)
+        .unwrap();
+    for (args, says) in [
+        (vec!["fit", "--areas", csv.to_str().unwrap()], "parquet"),
+        (
+            vec!["fit", "--areas", path.to_str().unwrap(), "--column", "nope"],
+            "no column 'nope'",
+        ),
+        (
+            vec!["fit", "--areas", frac.to_str().unwrap()],
+            "whole numbers",
+        ),
+        (
+            vec!["fit", "--areas", path.to_str().unwrap(), "--resamples", "2"],
+            "--resamples",
+        ),
+    ] {
+        let out = bin().args(&args).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(says),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
