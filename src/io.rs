@@ -18,12 +18,97 @@ pub fn write_heights(path: &Path, n: usize, values: Vec<f64>) -> Result<(), IoEr
     write_f64(path, &[n, n], values)
 }
 
+/// The `descr` and `shape` of a `.npy` file's header, checked against the file's length
+/// before anything is allocated: a header that promises more data than the file holds (a
+/// truncated or forged file) is an error, never an attempt to allocate what it claims.
+pub fn npy_header(path: &Path) -> Result<(String, Vec<usize>), IoError> {
+    use std::io::Read;
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let mut file = std::fs::File::open(path).map_err(|e| err(format!("cannot open ({e})")))?;
+    let file_len = file
+        .metadata()
+        .map_err(|e| err(format!("cannot read ({e})")))?
+        .len();
+    let not_npy = || err("not a .npy file (no NUMPY header)".into());
+    let mut magic = [0u8; 8];
+    file.read_exact(&mut magic).map_err(|_| not_npy())?;
+    if &magic[..6] != b"\x93NUMPY" {
+        return Err(not_npy());
+    }
+    let (len_bytes, prefix) = match magic[6] {
+        1 => (2, 10u64),
+        2 | 3 => (4, 12u64),
+        v => return Err(err(format!(".npy format version {v} is not supported"))),
+    };
+    let mut len = [0u8; 4];
+    file.read_exact(&mut len[..len_bytes])
+        .map_err(|_| not_npy())?;
+    let header_len = u32::from_le_bytes(len) as u64;
+    if prefix + header_len > file_len {
+        return Err(err(format!(
+            "header of {header_len} bytes is longer than the file ({file_len} bytes)"
+        )));
+    }
+    let mut header = vec![0u8; header_len as usize];
+    file.read_exact(&mut header).map_err(|_| not_npy())?;
+    let header = String::from_utf8_lossy(&header);
+    let field = |name: &str| -> Option<&str> {
+        let start = header.find(&format!("'{name}'"))? + name.len() + 2;
+        let rest = header[start..].trim_start().strip_prefix(':')?.trim_start();
+        Some(rest)
+    };
+    let descr = field("descr")
+        .and_then(|r| r.strip_prefix('\''))
+        .and_then(|r| r.split('\'').next())
+        .ok_or_else(|| err("header has no 'descr'".into()))?
+        .to_string();
+    let shape_text = field("shape")
+        .and_then(|r| r.strip_prefix('('))
+        .and_then(|r| r.split(')').next())
+        .ok_or_else(|| err("header has no 'shape'".into()))?;
+    let shape = shape_text
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.trim_end_matches('L').parse::<usize>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|_| {
+            err(format!(
+                "header's shape ({shape_text}) is not a tuple of sizes"
+            ))
+        })?;
+    let item_bytes: u64 = descr
+        .trim_start_matches(['<', '>', '|', '='])
+        .get(1..)
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| {
+            err(format!(
+                "header's dtype '{descr}' is not a plain number type"
+            ))
+        })?;
+    let payload = shape
+        .iter()
+        .try_fold(item_bytes, |acc, &d| acc.checked_mul(d as u64));
+    let available = file_len - prefix - header_len;
+    if payload != Some(available) {
+        return Err(err(format!(
+            "the header promises shape ({shape_text}) of '{descr}', {} bytes, but the file holds {available} bytes after it: truncated or not written by numpy",
+            payload.map_or("more than 2^64".to_string(), |b| b.to_string()),
+        )));
+    }
+    Ok((descr, shape))
+}
+
 /// Read a square float64 `.npy` field; returns `(n, values row-major)`.
 pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
     let err = |message: String| IoError::File {
         path: path.display().to_string(),
         message,
     };
+    npy_header(path)?;
     let array: Array2<f64> =
         read_npy(path).map_err(|e| err(format!("not a 2-D float64 .npy file ({e})")))?;
     let (rows, cols) = array.dim();
@@ -145,6 +230,7 @@ pub type ContactMap = (usize, usize, Vec<bool>, ContactMapFormat);
 /// Every contact map of a file: the one map of a 2-D file ([`read_contact_map`]), or each
 /// map of a 3-D `uint8` stack of 0/1 maps `(loads, rows, cols)` in order.
 pub fn read_contact_maps(path: &Path) -> Result<Vec<ContactMap>, IoError> {
+    npy_header(path)?;
     let Ok(stack) = read_npy::<_, Array3<u8>>(path) else {
         return read_contact_map(path).map(|m| vec![m]);
     };
@@ -171,4 +257,26 @@ pub fn read_contact_maps(path: &Path) -> Result<Vec<ContactMap>, IoError> {
             (rows, cols, map, ContactMapFormat::Stacked)
         })
         .collect())
+}
+
+/// "; the file system of `dir` has N bytes free …" when it is (nearly) full, else "".
+pub fn disk_note(dir: &std::path::Path) -> String {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(path) = std::ffi::CString::new(dir.as_os_str().as_bytes()) else {
+        return String::new();
+    };
+    let mut stat: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: `path` is a valid C string and `stat` a writable statvfs.
+    if unsafe { libc::statvfs(path.as_ptr(), &mut stat) } != 0 {
+        return String::new();
+    }
+    let free = stat.f_bavail as u64 * stat.f_frsize as u64;
+    if free < 64 << 20 {
+        format!(
+            "; the file system of {} has {free} bytes free: make room and run again",
+            dir.display()
+        )
+    } else {
+        String::new()
+    }
 }

@@ -102,7 +102,9 @@ fn main() -> ExitCode {
                     || c.downcast_ref::<wearcoef::io::IoError>().is_some()
                     || matches!(
                         c.downcast_ref::<SweepError>(),
-                        Some(SweepError::Input(_)) | Some(SweepError::BadLoad { .. })
+                        Some(SweepError::Input(_))
+                            | Some(SweepError::BadLoad { .. })
+                            | Some(SweepError::DegenerateSurface { .. })
                     )
             });
             ExitCode::from(if is_input { 2 } else { 1 })

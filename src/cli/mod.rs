@@ -44,7 +44,77 @@ pub fn load(path: &Path) -> anyhow::Result<Pipeline> {
     Ok(Pipeline::load(path)?)
 }
 
+/// Check a command's output files before any work is done: each names a file (not a
+/// directory, a device or a pipe) in a directory that exists, and no two name the same
+/// file. `outputs` pairs each option with the user's path; errors name both (exit 2).
+pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<(), InputError> {
+    let mut seen: Vec<(&str, PathBuf)> = Vec::new();
+    for &(option, path) in outputs {
+        let bad = |why: String| InputError(format!("{option} {}: {why}", path.display()));
+        let Some(name) = path.file_name() else {
+            return Err(bad("names no file".into()));
+        };
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let dir = match dir.canonicalize() {
+            Ok(d) if d.is_dir() => d,
+            Ok(_) => return Err(bad(format!("{} is not a directory", dir.display()))),
+            Err(_) => {
+                return Err(bad(format!(
+                    "the directory {} does not exist; create it first",
+                    dir.display()
+                )))
+            }
+        };
+        if let Ok(meta) = std::fs::metadata(path) {
+            if !meta.is_file() {
+                return Err(bad(format!(
+                    "exists and is not a regular file ({}); name a file to write",
+                    if meta.is_dir() {
+                        "a directory"
+                    } else {
+                        "a device, pipe or socket"
+                    }
+                )));
+            }
+        }
+        let full = dir.join(name);
+        if let Some((other, _)) = seen.iter().find(|(_, p)| *p == full) {
+            return Err(bad(format!(
+                "is also the path of {other}; give each output its own file"
+            )));
+        }
+        seen.push((option, full));
+    }
+    Ok(())
+}
+
+/// Check a directory option before any work: it is a directory, or does not exist yet and
+/// its nearest existing ancestor is a directory (so it can be created). Exit 2 otherwise.
+pub fn check_dir(option: &str, path: &Path) -> Result<(), InputError> {
+    let mut at = path;
+    loop {
+        match std::fs::metadata(at) {
+            Ok(meta) if meta.is_dir() => return Ok(()),
+            Ok(_) => {
+                return Err(InputError(format!(
+                    "{option} {}: {} exists and is not a directory; name a directory",
+                    path.display(),
+                    at.display()
+                )))
+            }
+            Err(_) => match at.parent() {
+                Some(parent) if !parent.as_os_str().is_empty() => at = parent,
+                _ => return Ok(()),
+            },
+        }
+    }
+}
+
 /// Write through a temporary sibling file and rename, so a failure leaves no partial file.
+/// An error names `path`, never the temporary (exit 1: the input was fine, the write failed).
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> anyhow::Result<()>,
@@ -59,11 +129,27 @@ pub fn write_atomically(
         name.to_string_lossy(),
         std::process::id()
     ));
-    let result = write(&tmp).and_then(|_| {
-        std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
-    });
-    if result.is_err() {
+    let result = write(&tmp).and_then(|_| Ok(std::fs::rename(&tmp, path)?));
+    if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
+        let cause = format!("{:#}", e).replace(&tmp.display().to_string(), "");
+        anyhow::bail!(
+            "cannot write {}: {}",
+            path.display(),
+            cause.trim_start_matches([':', ' '])
+        );
     }
-    result
+    Ok(())
+}
+
+/// Refuse work whose estimated peak memory exceeds this machine's, before allocating it.
+pub fn check_memory(what: &str, bytes: u64, fix: &str) -> Result<(), InputError> {
+    match wearcoef::pipeline::cost::machine_memory_bytes() {
+        Some(total) if bytes > total => Err(InputError(format!(
+            "{what} needs about {:.1} GiB, more than this machine's {:.1} GiB; {fix}",
+            bytes as f64 / (1u64 << 30) as f64,
+            total as f64 / (1u64 << 30) as f64
+        ))),
+        _ => Ok(()),
+    }
 }

@@ -260,6 +260,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         out,
     } = args;
     let pipeline = load(&store.config)?;
+    if let Some(path) = &out {
+        super::check_outputs(&[("--out", path)])?;
+    }
     let origin = store.config.display().to_string();
     let (plan, model) = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
     print_plan(&plan, &model, json, out.as_ref())?;

@@ -59,6 +59,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         retry_failed,
     } = args;
     let pipeline = load(&store.config)?;
+    super::check_dir("--data", &store.data)?;
+    super::check_dir("--figures", &figures)?;
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if jobs == 0 {
         return Err(InputError("--jobs must be ≥ 1".into()).into());
@@ -378,15 +380,8 @@ pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
         )
         .into());
     }
-    if let Some(dir) = output.as_ref().and_then(|o| o.parent()) {
-        if !dir.as_os_str().is_empty() && !dir.is_dir() {
-            return Err(InputError(format!(
-                "--output {}: directory {} does not exist; create it first",
-                output.as_ref().unwrap().display(),
-                dir.display()
-            ))
-            .into());
-        }
+    if let Some(path) = &output {
+        super::check_outputs(&[("--output", path)])?;
     }
     let data = require_store(&store.data)?;
     let pipeline = load(&store.config)?;

@@ -6,11 +6,11 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 use serde_json::json;
 
-use super::{write_atomically, InputError};
+use super::{check_memory, check_outputs, write_atomically, InputError};
 use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
 use wearcoef::contact::solver::SolverConfig;
-use wearcoef::contact::sweep::sweep_heights;
+use wearcoef::contact::sweep::{sweep_heights, MAX_W_OVER_W0};
 use wearcoef::grid::Grid;
 use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceParams};
@@ -122,6 +122,19 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
         .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
     // One map, or a stack of maps (one per load of a `solve --contact-out` sweep): one
     // result per map, a JSON array for a stack.
+    let (_, shape) = wearcoef::io::npy_header(&contact)?;
+    let pixels: u64 = shape.iter().map(|&d| d as u64).product();
+    let map_pixels = match shape[..] {
+        [rows, cols] if cols == rows.div_ceil(8) && cols != rows => (rows as u64).pow(2),
+        [.., rows, cols] => rows as u64 * cols as u64,
+        _ => pixels,
+    };
+    check_memory(
+        &format!("labelling {}", contact.display()),
+        // the file's bytes and the maps as booleans, then one labelling (cost model: 17 B/px)
+        (2 * pixels.max(map_pixels)).saturating_add(map_pixels.saturating_mul(17)),
+        "label a smaller map",
+    )?;
     let maps = wearcoef::io::read_contact_maps(&contact)?;
     let stacked = maps.len() > 1;
     let mut results = Vec::new();
@@ -227,6 +240,20 @@ pub fn surface(args: SurfaceArgs) -> anyhow::Result<ExitCode> {
         seed,
     };
     params.validate()?;
+    if n > wearcoef::config::MAX_N {
+        return Err(InputError(format!(
+            "--n {n}: at most {} grid nodes per side (as in pipeline.yaml)",
+            wearcoef::config::MAX_N
+        ))
+        .into());
+    }
+    check_outputs(&[("--output", &output)])?;
+    let nodes = (n * n) as u64;
+    check_memory(
+        &format!("a {n}² surface"),
+        6 * 8 * nodes,
+        "choose a smaller --n",
+    )?;
     let fft = Fft2::new(n);
     let mut scratch = fft.make_scratch();
     let s = surface::generate(&params, &fft, &mut scratch)?;
@@ -279,6 +306,64 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
+    if let Some((i, w)) = args
+        .loads
+        .iter()
+        .enumerate()
+        .find(|(_, w)| **w > MAX_W_OVER_W0)
+    {
+        return Err(InputError(format!(
+            "--loads: load {} is {w:e}; W/W0 must be ≤ {MAX_W_OVER_W0} (contact is complete well before W/W0 = 10; larger loads only lose digits to rounding)",
+            i + 1
+        ))
+        .into());
+    }
+    if !(args.e_star.is_finite() && args.e_star > 0.0) {
+        return Err(InputError(format!("--e-star {} must be finite and > 0", args.e_star)).into());
+    }
+    if !(args.tol.is_finite() && args.tol > 0.0 && args.tol < 1.0) {
+        return Err(InputError(format!(
+            "--tol {}: the tolerance must lie in (0, 1), as in pipeline.yaml (1e-8 is the default)",
+            args.tol
+        ))
+        .into());
+    }
+    if args.max_iter == 0 {
+        return Err(InputError("--max-iter 0: at least one iteration is needed".into()).into());
+    }
+    let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
+    if let Some(p) = &args.pressure_out {
+        outputs.push(("--pressure-out", p));
+    }
+    if let Some(p) = &args.contact_out {
+        outputs.push(("--contact-out", p));
+    }
+    check_outputs(&outputs)?;
+    // The grid side from the header, checked against the file's size, before anything large
+    // is read or allocated.
+    let (_, shape) = wearcoef::io::npy_header(&args.surface)?;
+    if let [rows, cols] = shape[..] {
+        if rows == cols && rows > wearcoef::config::MAX_N {
+            return Err(InputError(format!(
+                "{}: {rows} × {cols} heights; at most {} grid nodes per side",
+                args.surface.display(),
+                wearcoef::config::MAX_N
+            ))
+            .into());
+        }
+        let nodes = (rows as u64).saturating_mul(cols as u64);
+        let loads = args.loads.len() as u64;
+        let fields = if args.pressure_out.is_some() {
+            8 * loads
+        } else {
+            0
+        } + if args.contact_out.is_some() { loads } else { 0 };
+        check_memory(
+            &format!("a {rows} × {cols} sweep of {loads} loads"),
+            nodes.saturating_mul(60 + fields),
+            "solve a smaller surface, or fewer loads with --pressure-out/--contact-out",
+        )?;
+    }
     let (n, heights) = wearcoef::io::read_square_f64(&args.surface)?;
     if n < 2 || n % 2 != 0 {
         return Err(InputError(format!(
@@ -286,12 +371,6 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
             args.surface.display()
         ))
         .into());
-    }
-    if !(args.e_star.is_finite() && args.e_star > 0.0) {
-        return Err(InputError(format!("--e-star {} must be finite and > 0", args.e_star)).into());
-    }
-    if !(args.tol.is_finite() && args.tol > 0.0) || args.max_iter == 0 {
-        return Err(InputError("--tol must be finite and > 0 and --max-iter ≥ 1".into()).into());
     }
     Grid::unit(n)?;
     if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| !v.is_finite()) {

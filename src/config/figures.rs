@@ -203,11 +203,14 @@ impl FigureDecl {
             ));
         }
         for (i, &w) in self.loads.iter().chain(&self.inset_load).enumerate() {
-            if !(w.is_finite() && w > 0.0) {
+            if !(w.is_finite() && w > 0.0 && w <= crate::contact::sweep::MAX_W_OVER_W0) {
                 return Err(invalid(
                     &format!(".loads[{i}]"),
                     w.to_string(),
-                    "loads W/W0 must be finite and > 0".into(),
+                    format!(
+                        "loads W/W0 must be finite and in (0, {}]",
+                        crate::contact::sweep::MAX_W_OVER_W0
+                    ),
                 ));
             }
         }

@@ -10,6 +10,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use crate::contact::sweep::MAX_W_OVER_W0;
 use crate::surface::{Method, SurfaceParams};
 
 mod cluster;
@@ -182,6 +183,19 @@ impl StudyPlan {
     }
 }
 
+/// Directory names the store keeps for itself beside `data/<profile>/`.
+pub const RESERVED_PROFILE_NAMES: [&str; 3] = ["cache", "failed", "campaigns"];
+
+/// A profile, study or figure name: 1–64 ASCII letters, digits, `_` or `-`, starting with a
+/// letter or digit.
+pub fn is_plain_name(name: &str) -> bool {
+    (1..=64).contains(&name.len())
+        && name.starts_with(|c: char| c.is_ascii_alphanumeric())
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
 /// Largest grid side accepted (memory guard: 65536² doubles are 32 GiB).
 pub const MAX_N: usize = 32768;
 
@@ -240,6 +254,34 @@ impl Pipeline {
                 "0".into(),
                 "must be ≥ 1 (a few thousand is ample)",
             ));
+        }
+        // Names become directory and file names (data/<profile>/, figures/<profile>/,
+        // campaigns, figure files): a plain word, so nothing lands outside --data or --figures.
+        let groups = [
+            ("profiles", self.profiles.keys().collect::<Vec<_>>()),
+            ("studies", self.studies.keys().collect()),
+            ("figures", self.figures.keys().collect()),
+        ];
+        for (group, names) in groups {
+            for name in names {
+                if !is_plain_name(name) {
+                    return Err(invalid(
+                        format!("{group}.{name}"),
+                        format!("{name:?}"),
+                        "a name is 1 to 64 letters, digits, '_' or '-', starting with a letter or digit (it becomes a directory or file name)",
+                    ));
+                }
+                if group == "profiles" && RESERVED_PROFILE_NAMES.contains(&name.as_str()) {
+                    return Err(invalid(
+                        format!("profiles.{name}"),
+                        format!("{name:?}"),
+                        &format!(
+                            "the data directory already uses {} for itself; rename the profile",
+                            RESERVED_PROFILE_NAMES.join(", ")
+                        ),
+                    ));
+                }
+            }
         }
         if self.profiles.is_empty() {
             return Err(invalid(
@@ -596,11 +638,16 @@ fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, C
         return Err(invalid(".values", "[]".into(), "give at least one load"));
     }
     for (i, &w) in values.iter().enumerate() {
-        if !(w.is_finite() && w > 0.0) {
+        if !(w.is_finite() && w > 0.0 && w <= MAX_W_OVER_W0) {
+            let field = match (&loads.values, i) {
+                (Some(_), _) => format!(".values[{i}]"),
+                (None, 0) => ".min".to_string(),
+                (None, _) => ".max".to_string(),
+            };
             return Err(invalid(
-                &format!(".values[{i}]"),
+                &field,
                 w.to_string(),
-                "every load W/W0 must be finite and > 0",
+                &format!("every load W/W0 must be finite and in (0, {MAX_W_OVER_W0}] (contact is complete well before W/W0 = 10)"),
             ));
         }
         if i > 0 && w <= values[i - 1] {

@@ -412,7 +412,14 @@ pub fn write_csv(path: &Path, df: &DataFrame) -> anyhow::Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    result
+    result.map_err(|e| {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        anyhow::anyhow!(
+            "cannot write {}: {e:#}{}",
+            path.display(),
+            crate::io::disk_note(dir)
+        )
+    })
 }
 
 /// Write `df` as CSV records to `w`.

@@ -318,8 +318,17 @@ impl CostModel {
     }
 }
 
-/// Total memory of this machine (`MemTotal` of /proc/meminfo), if known.
+/// Total memory of this machine (`MemTotal` of /proc/meminfo), if known; the environment
+/// variable `WEARCOEF_MEMORY_BYTES` overrides it (plan for a smaller share of a node).
 pub fn machine_memory_bytes() -> Option<u64> {
+    if let Ok(v) = std::env::var("WEARCOEF_MEMORY_BYTES") {
+        match v.trim().parse() {
+            Ok(bytes) => return Some(bytes),
+            Err(_) => eprintln!(
+                "warning: WEARCOEF_MEMORY_BYTES={v:?} is not a whole number of bytes; using /proc/meminfo"
+            ),
+        }
+    }
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

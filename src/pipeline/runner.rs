@@ -188,7 +188,7 @@ impl Outcome {
         let mut text = String::new();
         if !self.failed.is_empty() {
             text.push_str(&format!(
-                "{} instance(s) failed (recorded under failed/ in the store; `wearcoef status` lists them):\n  {}",
+                "{} instance(s) failed (a failure of the computation itself, such as a solve that did not converge, is recorded under failed/ in the store and listed by `wearcoef status`):\n  {}",
                 self.failed.len(),
                 self.failed.join("\n  ")
             ));
@@ -453,14 +453,31 @@ fn build(
         Ok(results) => results,
         Err(e) => {
             let message = format!(
-                "stage {} (studies {}, realization {}, key {}) failed: {e:#}",
+                "stage {} ({}, realization {}, key {}) failed: {e:#}",
                 inst.stage,
-                inst.studies.join(", "),
+                inst.name.as_ref().map_or_else(
+                    || format!("studies {}", inst.studies.join(", ")),
+                    |n| n.clone()
+                ),
                 inst.realization.map_or("-".to_string(), |r| r.to_string()),
                 &inst.key[..12.min(inst.key.len())]
             );
-            // The failure is data: kept for status, the catalog and an audit, never as
-            // an entry that looks valid (the temporary entry is dropped).
+            // A failure of the computation itself (a solve that does not converge, a
+            // degenerate input) is data: kept for status, the catalog and an audit, never
+            // as an entry that looks valid (the temporary entry is dropped). A failure of
+            // the machine (a full disk, a permission) is not the instance's: it is only
+            // reported, and the next run tries again.
+            if !is_computational(&e) {
+                drop(entry);
+                let note = if message.contains("bytes free") {
+                    String::new()
+                } else {
+                    crate::io::disk_note(store.root())
+                };
+                return Err(anyhow::Error::new(ComputeFailed(format!(
+                    "{message}{note} (not recorded as a failure: the next run tries again)"
+                ))));
+            }
             store.record_failure(&Failure {
                 stage: inst.stage.clone(),
                 key: inst.key.clone(),
@@ -518,6 +535,16 @@ fn build(
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct ComputeFailed(pub String);
+
+/// Whether a stage's error is a property of its inputs and parameters (a sweep that does not
+/// converge, a degenerate surface), which the same computation would meet again.
+fn is_computational(e: &anyhow::Error) -> bool {
+    use crate::contact::sweep::SweepError;
+    e.chain().any(|c| {
+        c.downcast_ref::<SweepError>()
+            .is_some_and(|s| !matches!(s, SweepError::Callback(_)))
+    })
+}
 
 /// What a failed computation reported, as JSON: the contact sweep's non-convergence
 /// (load, W/W0, solver status, iterations, last error, tolerance), else `null`.

@@ -527,8 +527,11 @@ impl Store {
         std::fs::create_dir_all(dir).map_err(io_err(dir))?;
         let tmp = dir.join(format!(".{}.tmp-{}", failure.key, std::process::id()));
         let text = serde_json::to_string_pretty(failure).expect("a failure serialises");
-        std::fs::write(&tmp, text + "\n").map_err(io_err(&tmp))?;
-        std::fs::rename(&tmp, &path).map_err(io_err(&path))
+        let written = std::fs::write(&tmp, text + "\n").and_then(|_| std::fs::rename(&tmp, &path));
+        if written.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        written.map_err(io_err(&path))
     }
 
     /// The failure record of an instance, if any (an unreadable one counts as none).

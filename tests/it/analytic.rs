@@ -281,3 +281,54 @@ fn archard_contact_area_matches_quadrature_over_the_spheres() {
     let ratio = elastic.contact_area(2.0 * w) / elastic.contact_area(w);
     assert!((ratio - 2f64.powf(0.8)).abs() < 1e-14);
 }
+
+/// Areas spanning more than the doubles' range (A_s = 1e-300, A_m = 1e300: A_m/A_s
+/// overflows) stay exact: against quadrature in u = ln(A/A_s), with both integrals scaled
+/// by exp(−e ℓ) when the exponent e grows (so the reference never overflows either).
+#[test]
+fn areas_spanning_more_than_the_double_range_stay_exact() {
+    let (a_s, a_m) = (1e-300_f64, 1e300_f64);
+    let ell = a_m.ln() - a_s.ln();
+    // Fraction above A* of the e-th tail, (plateau mass `p`): reference by quadrature.
+    // Composite 10-point Gauss–Legendre on panels of width ≤ 0.5/|e| (e·width ≤ ½: the
+    // exponential is resolved to rounding on each panel).
+    let composite = |f: &dyn Fn(f64) -> f64, a: f64, b: f64, e: f64| {
+        let panels = ((b - a) * 2.0 * e.abs().max(1.0)).ceil().max(1.0) as usize;
+        let h = (b - a) / panels as f64;
+        (0..panels)
+            .map(|i| integrate(f, a + i as f64 * h, a + (i + 1) as f64 * h, 1.0))
+            .sum::<f64>()
+    };
+    let reference = |e: f64, a_star: f64, p: f64| {
+        let lo = a_star.ln() - a_s.ln();
+        let shift = if e > 0.0 { e * ell } else { 0.0 };
+        let f = |u: f64| (e * u - shift).exp();
+        let num = composite(&f, lo, ell, e);
+        let den = p * (-shift).exp() + composite(&f, 0.0, ell, e);
+        num / den
+    };
+    let mut checked = 0;
+    for &alpha in &[-3.0, 0.5, 1.0, 1.0 + 1e-7, 1.5, 2.0, 2.0 - 1e-7, 2.5, 4.0] {
+        let model = PlateauPowerLaw::new(alpha, a_s, a_m).unwrap();
+        for &a_star in &[1e-250, 1.0, 1e250] {
+            let k = model.k_archard(a_star).unwrap();
+            let kk = model.k_upscaled(a_star).unwrap();
+            let (want_k, want_kk) = (
+                reference(1.0 - alpha, a_star, 1.0),
+                reference(2.0 - alpha, a_star, 0.5),
+            );
+            for (name, got, want) in [("K", k, want_k), ("𝒦", kk, want_kk)] {
+                assert!(
+                    got.is_finite() && (0.0..=1.0).contains(&got),
+                    "{name} α={alpha} A*={a_star}: {got}"
+                );
+                assert!(
+                    (got - want).abs() <= 1e-10 * want.abs() || (got - want).abs() < 1e-300,
+                    "{name} α={alpha} A*={a_star}: {got} vs quadrature {want}"
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 27);
+}

@@ -1,6 +1,7 @@
 //! Integration tests (one binary to save link time).
 
 mod analytic;
+mod bad_input;
 mod cli;
 mod clusters;
 mod config;

@@ -72,6 +72,31 @@ fn e_fn(e: f64, x: f64) -> f64 {
     }
 }
 
+/// `ln(a/b)` for positive `a`, `b`: from the ratio when it neither over- nor underflows
+/// (accurate when `a ≈ b`), else as a difference of logarithms (areas spanning more than
+/// 10^308, e.g. `A_s = 1e-300`, `A_m = 1e300`).
+fn ln_ratio(a: f64, b: f64) -> f64 {
+    let ratio = a / b;
+    if ratio.is_normal() {
+        ratio.ln()
+    } else {
+        a.ln() - b.ln()
+    }
+}
+
+/// `(A*/A_s)^e E(e, x) / (plateau + E(e, ℓ))` with `ln(A*/A_s) + x = ℓ`: the fraction of the
+/// `e`-th tail above `A*` (K with `e = ε`, `plateau = 1`; 𝒦 with `e = η`, `plateau = ½`). For
+/// `e > 0` numerator and denominator are multiplied by `e·exp(−e ℓ)`, giving
+/// `E(−e, x) / (plateau·exp(−e ℓ) + E(−e, ℓ))`: every term bounded, so ranges with
+/// `e ℓ > 709` (where `E(e, ℓ)` overflows) stay exact instead of `inf/inf`.
+fn tail_fraction(e: f64, ln_r: f64, x: f64, ell: f64, plateau: f64) -> f64 {
+    if e > 0.0 {
+        e_fn(-e, x) / (plateau * (-e * ell).exp() + e_fn(-e, ell))
+    } else {
+        (e * ln_r).exp() * e_fn(e, x) / (plateau + e_fn(e, ell))
+    }
+}
+
 impl PlateauPowerLaw {
     /// A validated model.
     pub fn new(alpha: f64, a_s: f64, a_m: f64) -> Result<Self, ModelError> {
@@ -96,7 +121,7 @@ impl PlateauPowerLaw {
     }
 
     fn ell_m(&self) -> f64 {
-        (self.a_m / self.a_s).ln()
+        ln_ratio(self.a_m, self.a_s)
     }
 
     /// Normalisation `C` (A.2); 0 in the limit `A_m → ∞` with `α ≤ 1`.
@@ -156,11 +181,12 @@ impl PlateauPowerLaw {
             return Ok(0.0);
         }
         let eps = 1.0 - alpha;
-        let denom = 1.0 + e_fn(eps, self.ell_m());
+        let ell = self.ell_m();
         Ok(if a_star <= a_s {
-            1.0 - r / denom
+            1.0 - r / (1.0 + e_fn(eps, ell))
         } else {
-            r.powf(eps) * e_fn(eps, (self.a_m / a_star).ln()) / denom
+            let x = ln_ratio(self.a_m, a_star);
+            tail_fraction(eps, ln_ratio(a_star, a_s), x, ell, 1.0)
         })
     }
 
@@ -183,11 +209,12 @@ impl PlateauPowerLaw {
             return Ok(0.0);
         }
         let eta = 2.0 - alpha;
-        let e_m = e_fn(eta, self.ell_m());
+        let ell = self.ell_m();
         Ok(if a_star <= a_s {
-            1.0 - r * r / (1.0 + 2.0 * e_m)
+            1.0 - r * r / (1.0 + 2.0 * e_fn(eta, ell))
         } else {
-            r.powf(eta) * e_fn(eta, (self.a_m / a_star).ln()) / (0.5 + e_m)
+            let x = ln_ratio(self.a_m, a_star);
+            tail_fraction(eta, ln_ratio(a_star, a_s), x, ell, 0.5)
         })
     }
 }

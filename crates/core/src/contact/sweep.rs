@@ -35,8 +35,10 @@ pub enum SweepError {
         error: f64,
         tolerance: f64,
     },
-    #[error("load {index}: W/W0 = {value} must be finite and ≥ 0")]
+    #[error("load {index}: W/W0 = {value} must be finite and in [0, {MAX_W_OVER_W0}] (past W/W0 ≈ 10 the contact is complete; larger loads only lose digits to rounding)")]
     BadLoad { index: usize, value: f64 },
+    #[error("the surface's rms slope is {rms_slope:e}, so the reference load W0 = E*·rms slope·L² is {}: a flat or constant surface has no W/W0 scale, and heights whose squares under- or overflow (rms slope outside [{MIN_RMS_SLOPE:e}, {MAX_RMS_SLOPE:e}]) cannot be solved accurately; rescale the heights (the pipeline normalises them to unit rms slope)", if *rms_slope == 0.0 { "zero" } else if rms_slope.is_finite() { "out of the solvable range" } else { "not finite" })]
+    DegenerateSurface { rms_slope: f64 },
     #[error("{0}")]
     Callback(String),
     #[error(transparent)]
@@ -63,8 +65,30 @@ pub fn sweep_heights(
     }
     let grid = Grid::unit(n)?;
     let slope = crate::surface::rms_slope(&grid, heights);
+    check_rms_slope(slope)?;
     let op = ElasticOperator::new(grid, e_star);
     Ok((slope, sweep(&op, heights, slope, loads, cfg, on_load)?))
+}
+
+/// Largest load W/W0 a sweep accepts. Contact is complete well before W/W0 = 10 on a surface
+/// of unit rms slope; far beyond it the pressure's mean swamps its fluctuation, and the
+/// complementarity error stalls at rounding level (≈ 1e-8 at W/W0 = 1e8 on a 16² grid).
+pub const MAX_W_OVER_W0: f64 = 100.0;
+
+/// Smallest rms slope a sweep accepts: squares of pressures and gaps (∝ slope²) stay far
+/// from underflow.
+pub const MIN_RMS_SLOPE: f64 = 1e-150;
+/// Largest rms slope a sweep accepts: their squares stay far from overflow.
+pub const MAX_RMS_SLOPE: f64 = 1e150;
+
+/// A surface whose rms slope gives no usable W0 (flat, constant, under- or overflowing
+/// heights) is an input error, never an empty "converged" contact.
+pub fn check_rms_slope(rms_slope: f64) -> Result<(), SweepError> {
+    if (MIN_RMS_SLOPE..=MAX_RMS_SLOPE).contains(&rms_slope) {
+        Ok(())
+    } else {
+        Err(SweepError::DegenerateSurface { rms_slope })
+    }
 }
 
 /// Solve every load of `loads` (W/W0) on `heights` with rms slope `rms_slope`. After each
@@ -81,10 +105,11 @@ pub fn sweep(
     if let Some((index, &value)) = loads
         .iter()
         .enumerate()
-        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+        .find(|(_, w)| !(0.0..=MAX_W_OVER_W0).contains(*w))
     {
         return Err(SweepError::BadLoad { index, value });
     }
+    check_rms_slope(rms_slope)?;
     let mut solver = Solver::new(op, heights)?;
     let nodes = heights.len() as f64;
     let mut out = Vec::with_capacity(loads.len());

@@ -1,0 +1,678 @@
+//! Bad input, as a hostile user would give it: one table per category, every row a command
+//! that must be refused plainly (exit 2 for usage, configuration and input errors, 1 for a
+//! failure of the machine or the store), with a message naming the field or the user's path,
+//! no panic, and nothing written: the working directory holds exactly what it held before.
+//!
+//! Categories: names that become paths; degenerate surfaces; parameters outside their
+//! domain; sizes that cannot fit in memory; output paths; a damaged store; closed pipes and
+//! full disks. (Closed pipes: `cli::closed_stdout_pipe_exits_0_without_a_panic`.)
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use crate::{bin, small_pipeline};
+
+/// One row: what to set up, the command, and what must come back.
+struct Case {
+    name: &'static str,
+    /// pipeline.yaml's text (None: the small two-study pipeline).
+    pipeline: Option<String>,
+    args: Vec<String>,
+    env: Vec<(&'static str, &'static str)>,
+    code: i32,
+    /// Every one must appear in stderr.
+    says: Vec<&'static str>,
+}
+
+fn case(name: &'static str, args: &str, code: i32, says: &[&'static str]) -> Case {
+    Case {
+        name,
+        pipeline: None,
+        args: args.split_whitespace().map(String::from).collect(),
+        env: Vec::new(),
+        code,
+        says: says.to_vec(),
+    }
+}
+
+/// Every file and directory under `dir`, relative.
+fn tree(dir: &Path) -> BTreeSet<PathBuf> {
+    fn walk(root: &Path, at: &Path, out: &mut BTreeSet<PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(at) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            out.insert(p.strip_prefix(root).unwrap().to_path_buf());
+            if p.is_dir() {
+                walk(root, &p, out);
+            }
+        }
+    }
+    let mut out = BTreeSet::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+/// Heights files every case can name: a smooth egg-box and its degenerate variants.
+fn write_inputs(dir: &Path) {
+    let n = 16;
+    let egg = |scale: f64| -> Vec<f64> {
+        (0..n * n)
+            .map(|i| {
+                let (r, c) = ((i / n) as f64, (i % n) as f64);
+                let k = 2.0 * std::f64::consts::PI / n as f64;
+                scale * ((k * r).cos() + (k * c).cos())
+            })
+            .collect()
+    };
+    let w = |name: &str, v: Vec<f64>| wearcoef::io::write_heights(&dir.join(name), n, v).unwrap();
+    w("ok.npy", egg(1.0));
+    w("flat.npy", vec![0.0; n * n]);
+    w("constant.npy", vec![5.0; n * n]);
+    w("underflow.npy", egg(1e-200));
+    w("overflow.npy", egg(1e200));
+    let mut nan = egg(1.0);
+    nan[3 * n + 4] = f64::NAN;
+    w("nan.npy", nan);
+    let mut inf = egg(1.0);
+    inf[5] = f64::INFINITY;
+    w("inf.npy", inf);
+    // A header that promises 200000² doubles (320 GB) over 64 bytes of data.
+    write_forged_npy(&dir.join("forged.npy"), "<f8", "(200000, 200000)");
+    write_forged_npy(&dir.join("forged_map.npy"), "|u1", "(100000, 100000)");
+    std::fs::write(dir.join("junk.npy"), b"not a numpy file").unwrap();
+    std::fs::write(dir.join("junk.parquet"), b"not a parquet file").unwrap();
+    std::fs::create_dir(dir.join("sub")).unwrap();
+}
+
+fn write_forged_npy(path: &Path, descr: &str, shape: &str) {
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.as_bytes());
+    bytes.extend([0u8; 64]);
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Run one case in a fresh directory and check its contract.
+fn check(c: &Case) {
+    let root = tempfile::tempdir().unwrap();
+    let dir = root.path().join("work");
+    std::fs::create_dir(&dir).unwrap();
+    let text = c
+        .pipeline
+        .clone()
+        .unwrap_or_else(|| small_pipeline(0.8, "x"));
+    std::fs::write(dir.join("pipeline.yaml"), text).unwrap();
+    write_inputs(&dir);
+    let before = tree(root.path());
+    let mut cmd = bin();
+    cmd.current_dir(&dir).args(&c.args);
+    for (k, v) in &c.env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().expect("wearcoef runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let who = format!("case {} (wearcoef {})", c.name, c.args.join(" "));
+    assert_eq!(out.status.code(), Some(c.code), "{who}: stderr {stderr}");
+    assert!(!stderr.contains("panicked"), "{who}: {stderr}");
+    assert!(
+        !stderr.contains(".tmp"),
+        "{who}: names a temporary: {stderr}"
+    );
+    for needle in &c.says {
+        assert!(
+            stderr.contains(needle),
+            "{who}: stderr lacks {needle:?}: {stderr}"
+        );
+    }
+    let after = tree(root.path());
+    let added: Vec<_> = after.difference(&before).collect();
+    assert!(added.is_empty(), "{who}: wrote {added:?}");
+}
+
+/// Names become directories (data/<profile>/, figures/<profile>/, campaigns) and file
+/// names: anything but a plain word, or a name the store keeps for itself, is refused
+/// before anything is written, so nothing lands outside --data or --figures.
+#[test]
+fn names_that_would_become_paths_are_refused() {
+    let base = small_pipeline(0.8, "x");
+    let with = |from: &str, to: &str| {
+        assert!(base.contains(from), "{from}");
+        Some(base.replace(from, to))
+    };
+    let cases = [
+        Case {
+            pipeline: with(
+                "profiles: {t: \"test\"}",
+                "profiles: {\"../escape\": \"test\"}",
+            ),
+            ..case(
+                "profile ../escape",
+                "run --profile ../escape",
+                2,
+                &["profiles.../escape", "becomes a directory"],
+            )
+        },
+        Case {
+            pipeline: with(
+                "profiles: {t: \"test\"}",
+                "profiles: {t: \"test\", cache: \"x\"}",
+            ),
+            ..case(
+                "profile cache",
+                "run --profile cache",
+                2,
+                &["profiles.cache", "rename the profile"],
+            )
+        },
+        Case {
+            pipeline: with(
+                "profiles: {t: \"test\"}",
+                "profiles: {t: \"test\", failed: \"x\"}",
+            ),
+            ..case("profile failed", "run --profile t", 2, &["profiles.failed"])
+        },
+        Case {
+            pipeline: with(
+                "profiles: {t: \"test\"}",
+                "profiles: {t: \"test\", \"a/b\": \"x\"}",
+            ),
+            ..case("profile a/b", "run --profile t", 2, &["profiles.a/b"])
+        },
+        Case {
+            pipeline: with("  a:\n    description", "  \"../a\":\n    description"),
+            ..case("study ../a", "run --profile t", 2, &["studies.../a"])
+        },
+        Case {
+            pipeline: with("  fig6: {kind", "  \"../fig\": {kind"),
+            ..case("figure ../fig", "run --profile t", 2, &["figures.../fig"])
+        },
+        Case {
+            pipeline: with("  fig6: {kind", "  \".hidden\": {kind"),
+            ..case(
+                "figure .hidden",
+                "plan --profile t",
+                2,
+                &["figures..hidden"],
+            )
+        },
+        case(
+            "undeclared profile",
+            "run --profile ../t",
+            2,
+            &["unknown profile '../t'"],
+        ),
+        case(
+            "undeclared profile, plan",
+            "plan --profile ../t",
+            2,
+            &["unknown profile"],
+        ),
+    ];
+    for c in &cases {
+        check(c);
+    }
+}
+
+/// A surface with no usable W0 (flat, constant, heights whose squares under- or
+/// overflow) or with non-finite heights is an input error, never a "converged" empty
+/// contact.
+#[test]
+fn degenerate_surfaces_are_refused() {
+    let cases = [
+        case(
+            "flat",
+            "solve --surface flat.npy --loads 0.01",
+            2,
+            &["rms slope", "zero", "flat or constant"],
+        ),
+        case(
+            "constant",
+            "solve --surface constant.npy --loads 0.01",
+            2,
+            &["rms slope", "zero"],
+        ),
+        case(
+            "underflowing heights",
+            "solve --surface underflow.npy --loads 0.01",
+            2,
+            &["rms slope", "rescale the heights"],
+        ),
+        case(
+            "overflowing heights",
+            "solve --surface overflow.npy --loads 0.01",
+            2,
+            &["rms slope", "not finite"],
+        ),
+        case(
+            "NaN height",
+            "solve --surface nan.npy --loads 0.01",
+            2,
+            &["nan.npy", "row 3, column 4", "finite"],
+        ),
+        case(
+            "infinite height",
+            "solve --surface inf.npy --loads 0.01",
+            2,
+            &["inf.npy", "row 0, column 5"],
+        ),
+        case(
+            "not a .npy",
+            "solve --surface junk.npy --loads 0.01",
+            2,
+            &["junk.npy", "not a .npy file"],
+        ),
+        case(
+            "missing surface",
+            "solve --surface nosuch.npy --loads 0.01",
+            2,
+            &["nosuch.npy"],
+        ),
+    ];
+    for c in &cases {
+        check(c);
+    }
+}
+
+/// Every tool holds its parameters to their domain as strictly as pipeline.yaml does.
+#[test]
+fn parameters_outside_their_domain_are_refused_on_every_tool() {
+    let s = "solve --surface ok.npy --loads 0.01";
+    let surf = "surface --n 16 --lambda-l-px 8 --lambda-s-px 2 --hurst 0.8 -o h.npy";
+    let model = "model --a-s 1 --a-m 100";
+    let big_load = small_pipeline(0.8, "x").replace("values: [0.01, 0.02]", "values: [0.01, 500]");
+    let tol = small_pipeline(0.8, "x").replace("tolerance: 1.0e-10", "tolerance: 1.5");
+    let cases = vec![
+        case(
+            "tolerance ≥ 1",
+            &format!("{s} --tol 1.5"),
+            2,
+            &["--tol 1.5", "(0, 1)"],
+        ),
+        case("tolerance 0", &format!("{s} --tol 0"), 2, &["--tol 0"]),
+        case(
+            "tolerance NaN",
+            &format!("{s} --tol NaN"),
+            2,
+            &["--tol NaN"],
+        ),
+        case(
+            "no iterations",
+            &format!("{s} --max-iter 0"),
+            2,
+            &["--max-iter 0"],
+        ),
+        case("modulus 0", &format!("{s} --e-star 0"), 2, &["--e-star 0"]),
+        case(
+            "negative load",
+            "solve --surface ok.npy --loads=-0.1",
+            2,
+            &["load 1 is -0.1"],
+        ),
+        case(
+            "NaN load",
+            "solve --surface ok.npy --loads NaN",
+            2,
+            &["load 1 is NaN"],
+        ),
+        case(
+            "load past complete contact",
+            "solve --surface ok.npy --loads 0.01,1e300",
+            2,
+            &["load 2 is 1e300", "≤ 100"],
+        ),
+        case("Hurst 1", &surf.replace("0.8", "1"), 2, &["hurst = 1"]),
+        case(
+            "λs below Nyquist",
+            &surf.replace("--lambda-s-px 2", "--lambda-s-px 1"),
+            2,
+            &["lambda_s_px = 1"],
+        ),
+        case(
+            "λl above the box",
+            &surf.replace("--lambda-l-px 8", "--lambda-l-px 32"),
+            2,
+            &["lambda_l_px = 32"],
+        ),
+        case(
+            "odd grid",
+            &surf.replace("--n 16", "--n 17"),
+            2,
+            &["n = 17"],
+        ),
+        case(
+            "roll-off below λl",
+            &format!("{surf} --rolloff-lambda-px 4"),
+            2,
+            &["rolloff_lambda_px = 4"],
+        ),
+        case(
+            "α NaN",
+            &format!("{model} --alpha NaN --a-star 10"),
+            2,
+            &["alpha = NaN"],
+        ),
+        case(
+            "A_s 0",
+            "model --alpha 1.5 --a-s 0 --a-m 100 --a-star 10",
+            2,
+            &["A_s = 0"],
+        ),
+        case(
+            "A_m below A_s",
+            "model --alpha 1.5 --a-s 10 --a-m 1 --a-star 10",
+            2,
+            &["A_m = 1"],
+        ),
+        case(
+            "negative A*",
+            &format!("{model} --alpha 1.5 --a-star=-1"),
+            2,
+            &["A* = -1"],
+        ),
+        case(
+            "connectivity 6",
+            "clusters --contact ok.npy --connectivity 6",
+            2,
+            &["--connectivity"],
+        ),
+        case(
+            "map of heights",
+            "clusters --contact ok.npy",
+            2,
+            &["ok.npy", "contact map"],
+        ),
+        case(
+            "too few resamples",
+            "fit --areas junk.parquet --resamples 0",
+            2,
+            &["--resamples 0"],
+        ),
+        case(
+            "not a table",
+            "fit --areas junk.parquet",
+            2,
+            &["junk.parquet"],
+        ),
+        case("jobs 0", "run --profile t --jobs 0", 2, &["--jobs"]),
+        Case {
+            pipeline: Some(big_load),
+            ..case(
+                "pipeline load past complete contact",
+                "run --profile t",
+                2,
+                &["studies.a.loads.values[1]", "(0, 100]"],
+            )
+        },
+        Case {
+            pipeline: Some(tol),
+            ..case(
+                "pipeline tolerance ≥ 1",
+                "run --profile t",
+                2,
+                &["solver.tolerance"],
+            )
+        },
+    ];
+    for c in &cases {
+        check(c);
+    }
+}
+
+/// Work that cannot fit in memory is refused from its estimate, before anything is
+/// allocated; a file whose header promises more than it holds is never believed.
+#[test]
+fn sizes_that_cannot_fit_are_refused_before_allocating() {
+    let small_machine = vec![("WEARCOEF_MEMORY_BYTES", "1000000000")];
+    let cases = [
+        case(
+            "grid above the limit",
+            "surface --n 1048576 --lambda-l-px 8 --lambda-s-px 2 --hurst 0.8 -o h.npy",
+            2,
+            &["--n 1048576", "32768"],
+        ),
+        Case {
+            env: small_machine.clone(),
+            ..case(
+                "surface beyond memory",
+                "surface --n 32768 --lambda-l-px 8 --lambda-s-px 2 --hurst 0.8 -o h.npy",
+                2,
+                &["32768² surface", "GiB, more than this machine's"],
+            )
+        },
+        Case {
+            env: vec![("WEARCOEF_MEMORY_BYTES", "1000")],
+            ..case(
+                "pipeline beyond memory",
+                "run --profile t",
+                2,
+                &["more than this machine's", "profile t"],
+            )
+        },
+        case(
+            "forged header",
+            "solve --surface forged.npy --loads 0.01",
+            2,
+            &["forged.npy", "promises shape (200000, 200000)"],
+        ),
+        case(
+            "forged map header",
+            "clusters --contact forged_map.npy",
+            2,
+            &["forged_map.npy", "holds 64 bytes"],
+        ),
+    ];
+    for c in &cases {
+        check(c);
+    }
+    // With room to spare the same kind of estimate lets the work through.
+    let dir = tempfile::tempdir().unwrap();
+    write_inputs(dir.path());
+    let out = bin()
+        .current_dir(dir.path())
+        .args(["solve", "--surface", "ok.npy", "--loads", "0.01"])
+        .env("WEARCOEF_MEMORY_BYTES", "1000000000")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Output paths are checked before any work, and errors name the user's path (never a
+/// temporary file's): a missing directory, a directory or device in place of a file, two
+/// outputs at one path.
+#[test]
+fn bad_output_paths_are_refused_before_any_work() {
+    let s = "solve --surface ok.npy --loads 0.01,0.02";
+    let surf = "surface --n 16 --lambda-l-px 8 --lambda-s-px 2 --hurst 0.8";
+    let cases = [
+        case(
+            "missing directory",
+            &format!("{surf} -o no/such/dir/h.npy"),
+            2,
+            &["--output no/such/dir/h.npy", "does not exist"],
+        ),
+        case(
+            "a directory",
+            &format!("{surf} -o sub"),
+            2,
+            &["--output sub", "not a regular file"],
+        ),
+        case(
+            "a device",
+            &format!("{surf} -o /dev/null"),
+            2,
+            &["--output /dev/null", "device"],
+        ),
+        case(
+            "two outputs, one path",
+            &format!("{s} --pressure-out f.npy --contact-out ./f.npy"),
+            2,
+            &["--contact-out ./f.npy", "also the path of --pressure-out"],
+        ),
+        case(
+            "pressure into a missing directory",
+            &format!("{s} --pressure-out nodir/p.npy"),
+            2,
+            &["--pressure-out nodir/p.npy"],
+        ),
+        case(
+            "catalog into a missing directory",
+            "catalog --profile t --data . -o nodir/c.csv",
+            2,
+            &["--output nodir/c.csv"],
+        ),
+        case(
+            "figures onto a file",
+            "run --profile t --figures ok.npy",
+            2,
+            &["--figures ok.npy", "not a directory"],
+        ),
+        case(
+            "data onto a file",
+            "run --profile t --data ok.npy/store",
+            2,
+            &["--data ok.npy/store", "not a directory"],
+        ),
+    ];
+    for c in &cases {
+        check(c);
+    }
+    // /dev/null is still a device afterwards (an atomic rename over it would replace it).
+    let meta = std::fs::metadata("/dev/null").unwrap();
+    assert!(!meta.is_file());
+}
+
+/// A cached input whose bytes no longer match its manifest is never used: the run stops,
+/// names the file and the fix, and computes nothing from it.
+#[test]
+fn a_damaged_store_entry_is_never_reused() {
+    for damage in ["flip a byte", "truncate"] {
+        let (_t, dir) = crate::workdir(&small_pipeline(0.8, "x"));
+        let first = crate::run_in(&dir, &["run", "--profile", "t", "--quiet"]);
+        assert!(first.status.success());
+        let surfaces: Vec<_> = std::fs::read_dir(dir.join("data/cache/surface"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        // Damage every surface and drop every sweep that was built on one.
+        for s in &surfaces {
+            let heights = s.join("heights.npy");
+            let mut bytes = std::fs::read(&heights).unwrap();
+            match damage {
+                "flip a byte" => *bytes.last_mut().unwrap() ^= 0x40,
+                _ => bytes.truncate(bytes.len() - 8),
+            }
+            std::fs::write(&heights, bytes).unwrap();
+        }
+        std::fs::remove_dir_all(dir.join("data/cache/contact")).unwrap();
+        let out = crate::run_in(&dir, &["run", "--profile", "t", "--quiet"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{damage}: {stderr}");
+        assert!(
+            stderr.contains("heights.npy") && stderr.contains("clean --corrupt"),
+            "{damage}: {stderr}"
+        );
+        let sweeps = std::fs::read_dir(dir.join("data/cache/contact"))
+            .map(|d| d.count())
+            .unwrap_or(0);
+        assert_eq!(
+            sweeps, 0,
+            "{damage}: a sweep was computed from a damaged surface"
+        );
+        assert!(
+            !dir.join("data/failed").exists(),
+            "{damage}: a damaged input is not the sweep's failure"
+        );
+    }
+}
+
+/// `sh` with a tmpfs of `size` mounted at `mount` in a private mount namespace (it vanishes
+/// with the command): runs `script`, which sees the mount point as $1. Needs root or
+/// unprivileged user namespaces; `None` where neither exists (a failure when CI is set).
+fn with_small_disk(mount: &Path, size: &str, script: &str) -> Option<Output> {
+    let root = unsafe { libc::geteuid() } == 0;
+    let mut cmd = Command::new("unshare");
+    cmd.arg(if root { "-m" } else { "-rm" });
+    cmd.args(["sh", "-c"])
+        .arg(format!(
+            "mount -t tmpfs -o size={size} tmpfs \"$1\" || exit 97\n{script}"
+        ))
+        .arg("sh")
+        .arg(mount)
+        .env("WEARCOEF", env!("CARGO_BIN_EXE_wearcoef"));
+    let out = cmd.output().ok().filter(|o| o.status.code() != Some(97));
+    if out.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set and no tmpfs can be mounted in a private namespace (unshare, root)"
+        );
+        eprintln!("skipped: no tmpfs can be mounted here (run as root, or allow user namespaces)");
+    }
+    out
+}
+
+/// A full disk is an error naming the user's path, never a panic, and leaves no partial
+/// file, no temporary and no failure record behind; a full standard output likewise.
+#[test]
+fn full_disks_and_full_pipes_are_errors_without_partial_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let mount = dir.path().join("disk");
+    std::fs::create_dir(&mount).unwrap();
+    std::fs::write(dir.path().join("pipeline.yaml"), small_pipeline(0.8, "x")).unwrap();
+    // A 512 KiB surface onto 64 KiB; then a whole run onto 100 KiB. Each lists what is left.
+    let script = r#"
+cd "$1/.."
+"$WEARCOEF" surface --n 256 --lambda-l-px 64 --lambda-s-px 4 --hurst 0.8 -o "$1/h.npy"
+echo "surface exit $?"
+echo "left: $(ls -A "$1")"
+"$WEARCOEF" run --profile t --data "$1/data" --figures "$1/figures" --quiet --jobs 1
+echo "run exit $?"
+echo "temporaries: $(find "$1" -name '.*' | wc -l)"
+echo "failure records: $(find "$1" -path '*failed*' -name '*.json' | wc -l)"
+"#;
+    let Some(out) = with_small_disk(&mount, "100k", script) else {
+        return;
+    };
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let all = format!("stdout:\n{stdout}\nstderr:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{all}");
+    assert!(stdout.contains("surface exit 1"), "{all}");
+    assert!(
+        stderr.contains(&format!("cannot write {}/h.npy", mount.display()))
+            && stderr.contains("No space left on device"),
+        "{all}"
+    );
+    assert!(
+        stdout.contains("left: \n"),
+        "a partial surface is left: {all}"
+    );
+    assert!(stdout.contains("run exit 1"), "{all}");
+    assert!(stderr.contains("bytes free: make room"), "{all}");
+    assert!(stdout.contains("temporaries: 0"), "{all}");
+    assert!(stdout.contains("failure records: 0"), "{all}");
+
+    // Standard output on a full device.
+    let out = bin()
+        .current_dir(dir.path())
+        .args([
+            "model", "--alpha", "1.5", "--a-s", "1", "--a-m", "100", "--a-star", "10",
+        ])
+        .stdout(std::fs::File::create("/dev/full").unwrap())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("No space left on device") && !stderr.contains("panicked"));
+}
