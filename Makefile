@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy clean
+.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling bench-iteration-growth speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -49,7 +49,7 @@ slurm-stop:
 fmt:
 	cargo fmt --all
 
-bench: bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling speed-accuracy
+bench: bench-fft bench-solver bench-peers bench-iteration bench-iteration-growth bench-warm-start bench-labelling speed-accuracy
 
 bench-fft:
 	bash benches/fft_compare.sh
@@ -64,6 +64,12 @@ bench-iteration:
 # Warm starts of a load sweep compared: scaled (the default), cold, extrapolated.
 bench-warm-start:
 	cargo bench --bench warm_start -- 2 256 512 1024
+
+# Iterations per load of the paper's 30-load sweep on the λl/λs = 128 spectrum against the
+# box size (L/λl = 1 and 2 by default; BOXES="1 2 4" adds 4096²).
+BOXES ?= 1 2
+bench-iteration-growth:
+	bash benches/iteration_growth.sh $(BOXES)
 
 # Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
 bench-labelling:

@@ -186,14 +186,14 @@ impl StudyPlan {
 /// Directory names the store keeps for itself beside `data/<profile>/`.
 pub const RESERVED_PROFILE_NAMES: [&str; 3] = ["cache", "failed", "campaigns"];
 
-/// A profile, study or figure name: 1–64 ASCII letters, digits, `_` or `-`, starting with a
-/// letter or digit.
+/// A profile, study or figure name: 1–64 ASCII letters, digits, `_`, `-` or `.`, starting
+/// with a letter or digit (so never `.`, `..` or a hidden file).
 pub fn is_plain_name(name: &str) -> bool {
     (1..=64).contains(&name.len())
         && name.starts_with(|c: char| c.is_ascii_alphanumeric())
         && name
             .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
 
 /// Largest grid side accepted (memory guard: 65536² doubles are 32 GiB).
@@ -268,7 +268,7 @@ impl Pipeline {
                     return Err(invalid(
                         format!("{group}.{name}"),
                         format!("{name:?}"),
-                        "a name is 1 to 64 letters, digits, '_' or '-', starting with a letter or digit (it becomes a directory or file name)",
+                        "a name is 1 to 64 letters, digits, '_', '-' or '.', starting with a letter or digit (it becomes a directory or file name)",
                     ));
                 }
                 if group == "profiles" && RESERVED_PROFILE_NAMES.contains(&name.as_str()) {

@@ -41,7 +41,8 @@ wait_idle() {
     done
 }
 
-# Byte-identical stores and figures, manifests equal but for their timings (`*_seconds`).
+# Byte-identical stores and figures, manifests equal but for their timings (`*_seconds`, and
+# `results_sha256`, which covers `wall_seconds`).
 compare() { # reference dir, other dir
     local a=$1 b=$2
     (cd "$a/data/cache" && find . -path '*/.tmp-*' -prune -o -type f -print | sort) > "$work/files_a"
@@ -52,11 +53,15 @@ compare() { # reference dir, other dir
         if [[ $f == */manifest.json ]]; then
             python3 - "$a/data/cache/$f" "$b/data/cache/$f" <<'PY' || fail "manifest $f differs"
 import json, sys
-def untimed(v):  # every timing is named *_seconds
+def untimed(v):  # every timing is named *_seconds; results_sha256 hashes wall_seconds too
     if isinstance(v, dict):
-        return {k: untimed(x) for k, x in v.items() if not k.endswith("_seconds")}
+        return {k: untimed(x) for k, x in v.items() if not k.endswith("_seconds") and k != "results_sha256"}
     return [untimed(x) for x in v] if isinstance(v, list) else v
 a, b = (untimed(json.load(open(p))) for p in sys.argv[1:])
+if a != b:
+    for k in sorted(set(a) | set(b)):
+        if a.get(k) != b.get(k):
+            print(f"  {k}: {json.dumps(a.get(k))[:300]} != {json.dumps(b.get(k))[:300]}", file=sys.stderr)
 sys.exit(0 if a == b else 1)
 PY
         else

@@ -84,17 +84,25 @@ fn ln_ratio(a: f64, b: f64) -> f64 {
     }
 }
 
-/// `(A*/A_s)^e E(e, x) / (plateau + E(e, ℓ))` with `ln(A*/A_s) + x = ℓ`: the fraction of the
-/// `e`-th tail above `A*` (K with `e = ε`, `plateau = 1`; 𝒦 with `e = η`, `plateau = ½`). For
-/// `e > 0` numerator and denominator are multiplied by `e·exp(−e ℓ)`, giving
-/// `E(−e, x) / (plateau·exp(−e ℓ) + E(−e, ℓ))`: every term bounded, so ranges with
-/// `e ℓ > 709` (where `E(e, ℓ)` overflows) stay exact instead of `inf/inf`.
-fn tail_fraction(e: f64, ln_r: f64, x: f64, ell: f64, plateau: f64) -> f64 {
-    if e > 0.0 {
+/// `(A*/A_s)^e E(e, x) / (plateau + E(e, ℓ))` with `r = A*/A_s`, `ln(A*/A_s) + x = ℓ`: the
+/// fraction of the `e`-th tail above `A*` (K with `e = ε`, `plateau = 1`; 𝒦 with `e = η`,
+/// `plateau = ½`). Where `e ℓ > 700`, `E(e, ℓ)` would overflow: numerator and denominator
+/// are then multiplied by `e·exp(−e ℓ)`, giving `E(−e, x) / (plateau·exp(−e ℓ) + E(−e, ℓ))`,
+/// every term bounded. Elsewhere the direct form is used (bit for bit what earlier versions
+/// computed), with `r^e` from `ln r` when `r` itself overflows.
+fn tail_fraction(e: f64, r: f64, ln_r: f64, x: f64, ell: f64, plateau: f64) -> f64 {
+    let fraction = if e > 0.0 && e * ell > 700.0 {
         e_fn(-e, x) / (plateau * (-e * ell).exp() + e_fn(-e, ell))
     } else {
-        (e * ln_r).exp() * e_fn(e, x) / (plateau + e_fn(e, ell))
-    }
+        let r_e = if r.is_normal() {
+            r.powf(e)
+        } else {
+            (e * ln_r).exp()
+        };
+        r_e * e_fn(e, x) / (plateau + e_fn(e, ell))
+    };
+    // A fraction; rounding may leave it a few ulps outside.
+    fraction.clamp(0.0, 1.0)
 }
 
 impl PlateauPowerLaw {
@@ -186,7 +194,7 @@ impl PlateauPowerLaw {
             1.0 - r / (1.0 + e_fn(eps, ell))
         } else {
             let x = ln_ratio(self.a_m, a_star);
-            tail_fraction(eps, ln_ratio(a_star, a_s), x, ell, 1.0)
+            tail_fraction(eps, r, ln_ratio(a_star, a_s), x, ell, 1.0)
         })
     }
 
@@ -214,7 +222,7 @@ impl PlateauPowerLaw {
             1.0 - r * r / (1.0 + 2.0 * e_fn(eta, ell))
         } else {
             let x = ln_ratio(self.a_m, a_star);
-            tail_fraction(eta, ln_ratio(a_star, a_s), x, ell, 0.5)
+            tail_fraction(eta, r, ln_ratio(a_star, a_s), x, ell, 0.5)
         })
     }
 }
