@@ -25,8 +25,6 @@ use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::{num_complex::Complex64, Fft, FftPlanner};
 
-/// Side of the square tiles used by the cache-blocked transpose.
-const TILE: usize = 32;
 /// Columns gathered together by [`Fft2::convolve_start`] (four complex values = one
 /// 64-byte cache line per row).
 const GATHER: usize = 4;
@@ -266,16 +264,29 @@ impl Fft2 {
         assert_eq!(blocks.len(), self.block_count(), "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
-        // 2. transpose (n × h) → (h × n).
-        transpose(&scratch.rows, output, n, h);
-        // 3. complex FFT along y for every kx.
-        let cpb = h.div_ceil(self.block_count());
-        output.par_chunks_mut(cpb * n).for_each(|cols| {
-            let len = self.col_forward.get_inplace_scratch_len();
-            with_work(0, len, 0, |_, complex, _| {
-                self.col_forward.process_with_scratch(cols, complex)
+        // 2. columns GATHER at a time: gathered from the rows straight into their place in
+        //    the kx-major output (one cache line per row, prefetched), then transformed
+        //    along y while in cache. No separate transpose pass: the rows, 16 (n/2 + 1)
+        //    bytes apart, were walked once per column group, not once per transpose tile.
+        let gpb = Self::groups_per_block(n, self.block_count());
+        let rows = SharedRows(scratch.rows.as_mut_ptr());
+        output
+            .par_chunks_mut(gpb * GATHER * n)
+            .enumerate()
+            .for_each(|(b, block)| {
+                let len = self.col_forward.get_inplace_scratch_len();
+                with_work(0, len, 0, |_, complex, _| {
+                    for (g, cols) in block.chunks_mut(GATHER * n).enumerate() {
+                        let kx0 = (b * gpb + g) * GATHER;
+                        // SAFETY: columns kx0.. < h of the rows are only read here, and
+                        // nothing writes `scratch.rows` during this loop.
+                        unsafe { gather_columns(rows.get(), n, h, kx0, cols) };
+                        for col in cols.chunks_exact_mut(n) {
+                            self.col_forward.process_with_scratch(col, complex);
+                        }
+                    }
+                });
             });
-        });
     }
 
     /// Inverse transform of the half spectrum `spectrum` into the real field `output`.
@@ -324,17 +335,28 @@ impl Fft2 {
         let h = n / 2 + 1;
         self.check(n * n, spectrum.len(), scratch);
         assert_eq!(blocks.len(), self.block_count(), "one state per work block");
-        let cpb = h.div_ceil(self.block_count());
-        // 1. inverse complex FFT along y for every kx.
-        spectrum.par_chunks_mut(cpb * n).for_each(|cols| {
-            let len = self.col_inverse.get_inplace_scratch_len();
-            with_work(0, len, 0, |_, complex, _| {
-                self.col_inverse.process_with_scratch(cols, complex)
+        // 1. inverse complex FFT along y for every kx, GATHER columns at a time, each
+        //    group scattered into the rows while in cache (no separate transpose pass).
+        let gpb = Self::groups_per_block(n, self.block_count());
+        let rows = SharedRows(scratch.rows.as_mut_ptr());
+        spectrum
+            .par_chunks_mut(gpb * GATHER * n)
+            .enumerate()
+            .for_each(|(b, block)| {
+                let len = self.col_inverse.get_inplace_scratch_len();
+                with_work(0, len, 0, |_, complex, _| {
+                    for (g, cols) in block.chunks_mut(GATHER * n).enumerate() {
+                        let kx0 = (b * gpb + g) * GATHER;
+                        for col in cols.chunks_exact_mut(n) {
+                            self.col_inverse.process_with_scratch(col, complex);
+                        }
+                        // SAFETY: columns kx0.. < h belong to this group alone, and
+                        // nothing else touches `scratch.rows` during this loop.
+                        unsafe { scatter_columns(rows.get(), n, h, kx0, cols) };
+                    }
+                });
             });
-        });
-        // 2. transpose (h × n) → (n × h).
-        transpose(spectrum, &mut scratch.rows, h, n);
-        // 3. c2r along x for every row.
+        // 2. c2r along x for every row.
         self.c2r_rows(blocks, consume, scratch);
     }
 
@@ -618,8 +640,9 @@ unsafe fn scatter4_avx(rows: *mut Complex64, h: usize, kx0: usize, cols: &[Compl
     }
 }
 
-/// The row-transformed data shared by the column tasks of [`Fft2::convolve_start`], each
-/// of which reads and writes only its own columns.
+/// The row-transformed data shared by the column tasks of [`Fft2::forward_rows`],
+/// [`Fft2::inverse_rows`] and [`Fft2::convolve_start`], each of which reads or writes only its
+/// own columns.
 struct SharedRows(*mut Complex64);
 
 // SAFETY: the tasks access disjoint elements (see `convolve_start`).
@@ -631,29 +654,6 @@ impl SharedRows {
     fn get(&self) -> *mut Complex64 {
         self.0
     }
-}
-
-/// Cache-blocked out-of-place transpose of a `rows × cols` row-major matrix.
-fn transpose(src: &[Complex64], dst: &mut [Complex64], rows: usize, cols: usize) {
-    debug_assert_eq!(src.len(), rows * cols);
-    debug_assert_eq!(dst.len(), rows * cols);
-    // dst is cols × rows; split it into bands of TILE destination rows.
-    dst.par_chunks_mut(TILE * rows)
-        .enumerate()
-        .for_each(|(band, dst_band)| {
-            let c0 = band * TILE;
-            let band_rows = dst_band.len() / rows;
-            for r0 in (0..rows).step_by(TILE) {
-                let r1 = (r0 + TILE).min(rows);
-                for dc in 0..band_rows {
-                    let c = c0 + dc;
-                    let out = &mut dst_band[dc * rows + r0..dc * rows + r1];
-                    for (o, r) in out.iter_mut().zip(r0..r1) {
-                        *o = src[r * cols + c];
-                    }
-                }
-            }
-        });
 }
 
 #[cfg(test)]
