@@ -306,13 +306,31 @@ impl Fft2 {
             "real field must have n² values"
         );
         let n = self.n;
-        let block_len = self.rows_per_block() * n;
-        self.inverse_rows(
-            spectrum,
-            output.par_chunks_mut(block_len),
-            |rows: &mut &mut [f64], r, row| rows[r * n..(r + 1) * n].copy_from_slice(row),
-            scratch,
-        );
+        let h = n / 2 + 1;
+        self.check(n * n, spectrum.len(), scratch);
+        self.inverse_columns(spectrum, scratch);
+        // c2r straight into the output rows (no row buffer to copy from, unlike
+        // `inverse_rows`; the same transform of the same values).
+        let rpb = self.rows_per_block();
+        let len = self.c2r.get_scratch_len();
+        scratch
+            .rows
+            .par_chunks_mut(rpb * h)
+            .zip(output.par_chunks_mut(rpb * n))
+            .for_each(|(rows_in, rows_out)| {
+                with_work(0, len, 0, |_, complex, _| {
+                    for (row_in, row_out) in rows_in
+                        .chunks_exact_mut(h)
+                        .zip(rows_out.chunks_exact_mut(n))
+                    {
+                        row_in[0].im = 0.0;
+                        row_in[h - 1].im = 0.0;
+                        self.c2r
+                            .process_with_scratch(row_in, row_out, &mut complex[..len])
+                            .expect("c2r lengths are fixed and imaginary parts were cleared");
+                    }
+                });
+            });
     }
 
     /// Inverse transform whose result is handed over row by row instead of stored, so that
@@ -331,12 +349,20 @@ impl Fft2 {
         I: IndexedParallelIterator<Item = S>,
         F: Fn(&mut S, usize, &[f64]) + Sync,
     {
+        self.check(self.n * self.n, spectrum.len(), scratch);
+        assert_eq!(blocks.len(), self.block_count(), "one state per work block");
+        // 1. inverse complex FFT along y for every kx, into the rows.
+        self.inverse_columns(spectrum, scratch);
+        // 2. c2r along x for every row.
+        self.c2r_rows(blocks, consume, scratch);
+    }
+
+    /// Inverse complex FFT along y of every column kx of `spectrum`, GATHER columns at a
+    /// time, each group scattered into `scratch.rows` while in cache (no separate transpose
+    /// pass). `spectrum` holds garbage afterwards.
+    fn inverse_columns(&self, spectrum: &mut [Complex64], scratch: &mut Fft2Scratch) {
         let n = self.n;
         let h = n / 2 + 1;
-        self.check(n * n, spectrum.len(), scratch);
-        assert_eq!(blocks.len(), self.block_count(), "one state per work block");
-        // 1. inverse complex FFT along y for every kx, GATHER columns at a time, each
-        //    group scattered into the rows while in cache (no separate transpose pass).
         let gpb = Self::groups_per_block(n, self.block_count());
         let rows = SharedRows(scratch.rows.as_mut_ptr());
         spectrum
@@ -356,8 +382,6 @@ impl Fft2 {
                     }
                 });
             });
-        // 2. c2r along x for every row.
-        self.c2r_rows(blocks, consume, scratch);
     }
 
     /// First half of a convolution fused with the transforms: the real field is produced
