@@ -280,3 +280,13 @@ pub fn disk_note(dir: &std::path::Path) -> String {
         String::new()
     }
 }
+
+/// "cannot write `path`: `cause`", with [`disk_note`] of its directory when that file system
+/// is (nearly) full.
+pub fn cannot_write(path: &Path, cause: &str) -> String {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    format!("cannot write {}: {cause}{}", path.display(), disk_note(dir))
+}

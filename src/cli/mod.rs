@@ -133,11 +133,10 @@ pub fn write_atomically(
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
         let cause = format!("{:#}", e).replace(&tmp.display().to_string(), "");
-        anyhow::bail!(
-            "cannot write {}: {}",
-            path.display(),
+        anyhow::bail!(wearcoef::io::cannot_write(
+            path,
             cause.trim_start_matches([':', ' '])
-        );
+        ));
     }
     Ok(())
 }

@@ -412,14 +412,7 @@ pub fn write_csv(path: &Path, df: &DataFrame) -> anyhow::Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    result.map_err(|e| {
-        let dir = path.parent().unwrap_or(Path::new("."));
-        anyhow::anyhow!(
-            "cannot write {}: {e:#}{}",
-            path.display(),
-            crate::io::disk_note(dir)
-        )
-    })
+    result.map_err(|e| anyhow::anyhow!(crate::io::cannot_write(path, &format!("{e:#}"))))
 }
 
 /// Write `df` as CSV records to `w`.

@@ -303,14 +303,7 @@ pub fn write_with_metadata(
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    result.map_err(|e| {
-        let dir = path.parent().unwrap_or(Path::new("."));
-        anyhow::anyhow!(
-            "cannot write {}: {e:#}{}",
-            path.display(),
-            crate::io::disk_note(dir)
-        )
-    })
+    result.map_err(|e| anyhow::anyhow!(crate::io::cannot_write(path, &format!("{e:#}"))))
 }
 
 /// The `ARROW:schema` entry of a Parquet file of `df` (what polars writes itself: the Arrow IPC
