@@ -61,7 +61,8 @@ bench-solver:
 bench-iteration:
 	cargo bench --bench iteration_cost
 
-# Warm starts of a load sweep compared: scaled (the default), cold, extrapolated.
+# Warm starts of a load sweep compared: scaled (the default), cold, extrapolated, and nested
+# (the load solved on the grid of n/2 first).
 bench-warm-start:
 	cargo bench --bench warm_start -- 2 256 512 1024
 

@@ -7,6 +7,10 @@
 //! - `linear`: `p_k + r (p_k − p_{k−1})` clipped at 0, `r = (W − W_k)/(W_k − W_{k−1})`;
 //! - `geometric`: per node `p_k (p_k/p_{k−1})^r` with `r = ln(W/W_k)/ln(W_k/W_{k−1})`
 //!   where both are positive, `p_k W/W_k` elsewhere (a power law in the load per node);
+//! - `nested`: the same load solved first on the grid of n/2 (the heights at every other
+//!   node, a sweep of its own with scaled starts), its pressure injected into the 2 × 2
+//!   fine nodes of each coarse node; the coarse iterations are counted apart (each costs
+//!   about a quarter of a fine one) and their time is included;
 //!
 //! each then scaled to the load by the solver. Prints, per grid size, iterations and
 //! convolutions per load, the sweep time relative to `scaled` (same process, strategies
@@ -30,10 +34,17 @@ enum Start {
     Cold,
     Linear,
     Geometric,
+    Nested,
 }
 
 impl Start {
-    const ALL: [Start; 4] = [Start::Scaled, Start::Cold, Start::Linear, Start::Geometric];
+    const ALL: [Start; 5] = [
+        Start::Scaled,
+        Start::Cold,
+        Start::Linear,
+        Start::Geometric,
+        Start::Nested,
+    ];
 
     fn name(self) -> &'static str {
         match self {
@@ -41,6 +52,7 @@ impl Start {
             Start::Cold => "cold (uniform)",
             Start::Linear => "linear extrapolation",
             Start::Geometric => "geometric extrapolation",
+            Start::Nested => "nested (n/2 first)",
         }
     }
 }
@@ -48,6 +60,8 @@ impl Start {
 /// Totals of one sweep: iterations, convolutions, seconds, contact pixel counts per load.
 struct Sweep {
     iterations: usize,
+    /// Iterations on the grid of n/2 (nested starts only).
+    coarse_iterations: usize,
     convolutions: usize,
     seconds: f64,
     pixels: Vec<usize>,
@@ -61,8 +75,17 @@ fn sweep(op: &ElasticOperator, heights: &[f64], means: &[f64], start: Start) -> 
     let mut solver = Solver::new(op, heights).expect("finite heights");
     let mut previous: Option<(f64, Vec<f64>)> = None;
     let mut guess = vec![0.0; heights.len()];
+    // The nested start's coarse problem: every other node's height on the grid of n/2.
+    let n = (heights.len() as f64).sqrt() as usize;
+    let m = n / 2;
+    let coarse_heights: Vec<f64> = (0..m * m)
+        .map(|k| heights[2 * (k / m) * n + 2 * (k % m)])
+        .collect();
+    let coarse_op = ElasticOperator::new(Grid::unit(m).expect("n/2 is even"), 1.0);
+    let mut coarse = Solver::new(&coarse_op, &coarse_heights).expect("finite heights");
     let mut out = Sweep {
         iterations: 0,
+        coarse_iterations: 0,
         convolutions: 0,
         seconds: 0.0,
         pixels: Vec::with_capacity(means.len()),
@@ -102,6 +125,20 @@ fn sweep(op: &ElasticOperator, heights: &[f64], means: &[f64], start: Start) -> 
                 solver.set_start(&guess).expect("a valid start");
             }
         }
+        if start == Start::Nested {
+            let report = coarse.solve(load, &cfg).expect("valid load");
+            assert!(
+                report.converged(),
+                "coarse load {load}: {:?}",
+                report.status
+            );
+            out.coarse_iterations += report.iterations;
+            let pc = coarse.pressure();
+            for (k, g) in guess.iter_mut().enumerate() {
+                *g = pc[(k / n) / 2 * m + (k % n) / 2];
+            }
+            solver.set_start(&guess).expect("a valid start");
+        }
         let report = solver.solve(load, &cfg).expect("valid load");
         out.seconds += begin.elapsed().as_secs_f64();
         assert!(report.converged(), "load {load}: {:?}", report.status);
@@ -131,8 +168,8 @@ fn main() {
         "threads: {} (RAYON_NUM_THREADS), rounds: {rounds}",
         pool.current_num_threads()
     );
-    println!("| N | start | iterations / load | convolutions / load | sweep time / scaled (median) | same pixel counts as scaled |");
-    println!("|---|---|---|---|---|---|");
+    println!("| N | start | iterations / load | convolutions / load | coarse iterations / load | sweep time / scaled (median) | same pixel counts as scaled |");
+    println!("|---|---|---|---|---|---|---|");
     for &n in &sizes {
         let heights = common::peers_surface(n);
         let grid = Grid::unit(n).expect("n is even");
@@ -170,10 +207,11 @@ fn main() {
             let mut r = ratios[k].clone();
             r.sort_by(f64::total_cmp);
             println!(
-                "| {n} | {} | {:.1} | {:.1} | {:.2} | {} |",
+                "| {n} | {} | {:.1} | {:.1} | {:.1} | {:.2} | {} |",
                 start.name(),
                 run.iterations as f64 / loads,
                 run.convolutions as f64 / loads,
+                run.coarse_iterations as f64 / loads,
                 r[r.len() / 2],
                 if run.pixels == base_pixels {
                     "yes"
