@@ -392,8 +392,8 @@ impl Fft2 {
     /// `column_values[kx]`), transformed back along y while still in cache and written
     /// back. [`Self::convolve_finish`] must follow before `scratch` is used again.
     /// Compared with [`Self::forward`], a multiplier pass and [`Self::inverse`], this does
-    /// without the spectrum buffer, both transposes and three passes over the spectrum, and
-    /// gives bit-identical results: every 1-D transform and product is the same computation
+    /// without the spectrum buffer, a column scatter and gather between the two transforms
+    /// and a pass over the spectrum for the multiplier, and gives bit-identical results: every 1-D transform and product is the same computation
     /// on the same values.
     pub fn convolve_start<S, I, F, C>(
         &self,
