@@ -345,50 +345,27 @@ fn typed_column(name: &str, values: &[Option<&Value>]) -> Option<Column> {
         return None;
     }
     let name: PlSmallStr = name.into();
+    // One column of `get` applied to every value (null stays null).
+    fn of<T>(values: &[Option<&Value>], get: impl Fn(&Value) -> Option<T>) -> Vec<Option<T>> {
+        values.iter().map(|v| v.and_then(&get)).collect()
+    }
     let col = if present.iter().all(|v| v.is_boolean()) {
-        Column::new(
-            name,
-            values
-                .iter()
-                .map(|v| v.and_then(Value::as_bool))
-                .collect::<Vec<_>>(),
-        )
+        Column::new(name, of(values, Value::as_bool))
     } else if present.iter().all(|v| v.is_u64()) {
-        Column::new(
-            name,
-            values
-                .iter()
-                .map(|v| v.and_then(Value::as_u64))
-                .collect::<Vec<_>>(),
-        )
+        Column::new(name, of(values, Value::as_u64))
     } else if present.iter().all(|v| v.as_i64().is_some()) {
-        Column::new(
-            name,
-            values
-                .iter()
-                .map(|v| v.and_then(Value::as_i64))
-                .collect::<Vec<_>>(),
-        )
+        Column::new(name, of(values, Value::as_i64))
     } else if present.iter().all(|v| v.is_number()) {
-        Column::new(
-            name,
-            values
-                .iter()
-                .map(|v| v.and_then(Value::as_f64))
-                .collect::<Vec<_>>(),
-        )
+        Column::new(name, of(values, Value::as_f64))
     } else {
         Column::new(
             name,
-            values
-                .iter()
-                .map(|v| {
-                    v.map(|v| match v {
-                        Value::String(s) => s.clone(),
-                        other => other.to_string(),
-                    })
+            of(values, |v| {
+                Some(match v {
+                    Value::String(s) => s.clone(),
+                    other => other.to_string(),
                 })
-                .collect::<Vec<_>>(),
+            }),
         )
     };
     Some(col)
