@@ -10,16 +10,22 @@
 //! Tamaas's measure (which divides by the `ddof = 1` deviation), so a tolerance here is at
 //! least as strict as the same tolerance there.
 //!
-//! **Preconditioning** (the default, [`SolverConfig::preconditioned`]): the gradient on the
-//! contact set is replaced by `z = P K⁻¹ P g` (`K⁻¹`: the multiplier `E*|q|/2`, 0 at q = 0;
-//! `P`: zero off the contact set and centred on it), with `β = ⟨g, z⟩/⟨g, z⟩_old` — the
-//! preconditioned conjugate gradient, projected as below. `K⁻¹` is the exact inverse in
-//! full contact and approximates the inverse of the restricted operator elsewhere; the
-//! iteration count then grows slowly with n (a 16-load 2048² sweep: 1090 iterations against
-//! 5399), at one more convolution per iteration. `K⁻¹ P g` is summed over the contact set
-//! as its rows leave the inverse FFT (its mean, `⟨g, z⟩` and `Σ g t_old`), so the direction
-//! pass only subtracts the mean and the line-search numerator `⟨g, t⟩` follows from those
-//! sums.
+//! **Preconditioning** (the default, [`SolverConfig::preconditioned`]): the gradient is
+//! replaced by `z = P K⁻¹ P g` on the free set `F` (`K⁻¹`: the multiplier `E*|q|/2`, 0 at
+//! q = 0; `P`: zero off F and centred on it), with `β = ⟨g, z⟩/⟨g, z⟩_old` — the
+//! preconditioned conjugate gradient, projected as below. `F` is the contact set and the
+//! nodes off it that interpenetrate (`g` below the contact set's mean level): the direction
+//! raises their pressure with the same preconditioned step, instead of re-admitting them
+//! one by one afterwards as the plain iteration does, and the conjugate direction is kept
+//! unless more than [`RESTART_FRACTION`] of the contact set changed (or the direction would
+//! barely descend, [`DESCENT_FRACTION`]). Together these halve the iterations spent finding
+//! the contact set (28 % fewer in all on the paper's spectrum at 1024², 38 % at 2048²;
+//! docs/BENCHMARKS.md). `K⁻¹` is the exact inverse in full contact and approximates the
+//! inverse of the restricted operator elsewhere; the iteration count then grows slowly with
+//! n, at one more convolution per iteration. `K⁻¹ P g` is summed over F as its rows leave
+//! the inverse FFT (its mean, `⟨g, z⟩`, `Σ g t_old` and the old direction's mean), so the
+//! direction pass only subtracts the means and the line-search numerator `⟨g, t⟩` follows
+//! from those sums.
 //!
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
 //! A sweep's warm start scales the previous converged state, `p` and `K p` alike
@@ -46,9 +52,11 @@
 //! **Defined behaviour where the method breaks down**:
 //! - zero load: `p = 0`, no contact, converged in 0 iterations;
 //! - flat surface (σ_h = 0): uniform `p = p̄`, full contact, converged in 0 iterations;
-//! - single-node contact set: the centred gradient vanishes and the CG step is 0/0; the step
-//!   falls back to a Jacobi-scaled steepest descent on the re-admitted nodes (`τ = 1/K_ii`),
-//!   and a single-node solution that is the discrete optimum has error exactly 0;
+//! - single-node contact set: in the plain iteration the centred gradient vanishes and the
+//!   CG step is 0/0; the step falls back to a Jacobi-scaled steepest descent on the
+//!   re-admitted nodes (`τ = 1/K_ii`). In the preconditioned one the free set also holds
+//!   the interpenetrating nodes, so the gradient vanishes only when no node interpenetrates;
+//!   either way a single-node solution that is the discrete optimum has error exactly 0;
 //! - all pressure projected away: reset to the uniform pressure, restart;
 //! - non-finite heights or loads, wrong lengths: an error before solving;
 //! - no progress for `stall_window` iterations, or a non-finite error: `Stalled`;
@@ -73,6 +81,17 @@ use rows::{GradientStats, UpdateAcc, LANES};
 /// 32–128 save 10–20 % of the convolutions but cost as much in summation
 /// (docs/BENCHMARKS.md).
 pub const MAX_SPARSE: usize = 6;
+/// The preconditioned iteration keeps its conjugate direction unless more than this
+/// fraction of the contact set left or entered it in the last step (restarting at every
+/// change, as the plain iteration does, costs 28 % more iterations on the paper's spectrum at
+/// 1024²; docs/BENCHMARKS.md).
+pub const RESTART_FRACTION: f64 = 0.03;
+
+/// A kept conjugate direction must descend at least this fraction as steeply as the
+/// preconditioned gradient, `⟨g, t⟩ ≥ DESCENT_FRACTION ⟨g, z⟩`; otherwise the iteration
+/// restarts.
+pub const DESCENT_FRACTION: f64 = 0.5;
+
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub const RESYNC: usize = 32;
 
@@ -152,7 +171,7 @@ pub struct Solver<'a> {
     /// Per block: accumulators of the update pass fused with the inverse FFT.
     update_acc: Vec<UpdateAcc>,
     /// Per-block lane sums of [`Solver::precondition`].
-    precondition_acc: Vec<[[f64; LANES]; 5]>,
+    precondition_acc: Vec<[[f64; LANES]; 6]>,
     /// Per block: the nodes whose projection departed from the linear step, `(node, Δ)` in
     /// node order, up to the list's capacity (one node in [`CHANGES_PER_NODE`] of the
     /// block; never reallocated).
@@ -210,7 +229,7 @@ impl<'a> Solver<'a> {
             lane_sums: vec![[0.0; LANES]; blocks],
             block_stats: vec![GradientStats::EMPTY; blocks],
             update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
-            precondition_acc: vec![[[0.0; LANES]; 5]; blocks],
+            precondition_acc: vec![[[0.0; LANES]; 6]; blocks],
             changes: (0..blocks)
                 .map(|_| Vec::with_capacity((chunk / CHANGES_PER_NODE).max(MAX_SPARSE)))
                 .collect(),
@@ -373,20 +392,37 @@ impl<'a> Solver<'a> {
             } else {
                 None
             };
-            let g_dot = preconditioned.map_or(g_norm, |(_, g_dot, _, _)| g_dot);
-            let beta = if restart || g_norm_old <= 0.0 {
+            let g_dot = preconditioned.map_or(g_norm, |sums| sums.g_dot_z);
+            let mut beta = if restart || g_norm_old <= 0.0 {
                 0.0
             } else {
                 g_dot / g_norm_old
             };
             g_norm_old = g_dot;
             let (denominator, numerator) = match preconditioned {
-                // Σ_S g t = ⟨g, z − z̄⟩ + β (Σ_S g t_old − t̄ Σ_S g), from the sums of
-                // `precondition`, so the direction pass reads t, p and z only.
-                Some((z_mean, g_dot, g_t_old, g_sum)) => (
-                    self.preconditioned_direction_and_transform(z_mean, beta, direction_mean),
-                    g_dot + beta * (g_t_old - direction_mean * g_sum),
-                ),
+                Some(sums) => {
+                    // The old direction is centred on the current free set.
+                    direction_mean = sums.t_old_mean;
+                    // Σ_F g t = ⟨g, z − z̄⟩ + β (Σ_F g t_old − t̄ Σ_F g), from the sums of
+                    // `precondition`, so the direction pass need not sum.
+                    let conjugate = |beta: f64| {
+                        sums.g_dot_z + beta * (sums.g_dot_t_old - direction_mean * sums.g_sum)
+                    };
+                    // A conjugate direction kept across changes of the set may descend
+                    // little or not at all: then restart from the preconditioned gradient.
+                    if conjugate(beta) < DESCENT_FRACTION * sums.g_dot_z {
+                        beta = 0.0;
+                    }
+                    (
+                        self.preconditioned_direction_and_transform(
+                            sums.z_mean,
+                            beta,
+                            direction_mean,
+                            level,
+                        ),
+                        conjugate(beta),
+                    )
+                }
                 None => self.direction_and_transform(level, beta, direction_mean),
             };
             report.convolutions += 1;
@@ -401,14 +437,22 @@ impl<'a> Solver<'a> {
             // nodes; speculatively update the deflection linearly (u − τ K t) and gather the
             // next gradient statistics.
             let new_shift = level;
-            let (totals, linear_stats) = self.update_from_transform(tau, level, new_shift);
+            let (totals, linear_stats) =
+                self.update_from_transform(tau, level, new_shift, !cfg.preconditioned);
             let total = totals.sum_p;
             direction_mean = if totals.contact_nodes > 0.0 {
                 totals.sum_t_kept / totals.contact_nodes
             } else {
                 0.0
             };
-            restart = totals.readmitted > 0;
+            // The plain iteration restarts whenever a node is re-admitted (Polonsky & Keer);
+            // the preconditioned one only when the free set changed by more than
+            // RESTART_FRACTION of the contact set.
+            restart = if cfg.preconditioned {
+                totals.changed as f64 > RESTART_FRACTION * totals.contact_nodes
+            } else {
+                totals.readmitted > 0
+            };
             shift = new_shift;
             if total <= 0.0 {
                 self.pressure.fill(target);

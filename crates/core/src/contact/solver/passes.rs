@@ -162,8 +162,8 @@ impl Solver<'_> {
     }
 
     /// Pass 3 fused with the second half of `K t` (whose rows arrive from the inverse FFT):
-    /// `p ← max(p − τ t, 0)` on S; nodes with `p = 0` and `g − level < 0` are re-admitted
-    /// with `p = −τ (g − level)`. Records the nodes where the result departs from the
+    /// `p ← max(p − τ t, 0)`; if `readmit`, nodes with `p = 0` and `g − level < 0` are
+    /// re-admitted with `p = −τ (g − level)`. Records the nodes where the result departs from the
     /// linear step. Also `u ← u − τ K t` and the gradient statistics of
     /// [`gradient_row`] for the new state with `g = u − h − next_shift` (exact if no
     /// node changed). Returns the pass's totals and those statistics.
@@ -172,12 +172,14 @@ impl Solver<'_> {
         tau: f64,
         level: f64,
         next_shift: f64,
+        readmit: bool,
     ) -> (UpdateTotals, GradientStats) {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let args = UpdateArgs {
             tau,
             level,
             next_shift,
+            readmit,
         };
         let blocks = self
             .pressure

@@ -10,15 +10,15 @@ use super::rows::{avx2_dispatch, lanes, padded, LANES};
 use super::Solver;
 
 impl Solver<'_> {
-    /// The preconditioned gradient `z = P K⁻¹ P (g − ḡ_S)` (`P`: zero off the contact set
-    /// S, centred on S; `g − ḡ_S = u − h − level`). Each row of `K⁻¹ P (g − ḡ_S)` is
-    /// stored raw in `self.preconditioned` as it leaves the inverse FFT, and summed over S
-    /// in the same pass: `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t_old` (`g` centred). The
-    /// centring is left to the direction pass, which subtracts the mean. Returns
-    /// `(mean of z over S, ⟨g − ḡ_S, z − z̄_S⟩_S, Σ_S g t_old, Σ_S g)`. Summed in a fixed order
-    /// (four lanes per block, then the blocks in order), so bit-identical whatever the number
-    /// of threads.
-    pub(super) fn precondition(&mut self, level: f64) -> (f64, f64, f64, f64) {
+    /// The preconditioned gradient `z = P K⁻¹ P g` on the free set
+    /// `F = {p > 0} ∪ {p = 0, g < 0}` (the contact set and the nodes that interpenetrate;
+    /// `g = u − h − level`, `level` the mean of `u − h` over the contact set; `P`: zero off
+    /// F, centred on F). Each row of `K⁻¹ P g` is stored raw in `self.preconditioned` as it
+    /// leaves the inverse FFT, and summed over F in the same pass: `Σ z`, `|F|`, `Σ g z`,
+    /// `Σ g`, `Σ g t_old`, `Σ t_old`. The centring is left to the direction pass, which
+    /// subtracts the mean. Summed in a fixed order (four lanes per block, then the blocks
+    /// in order), so bit-identical whatever the number of threads.
+    pub(super) fn precondition(&mut self, level: f64) -> PreconditionSums {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let produce = self
             .pressure
@@ -41,7 +41,7 @@ impl Solver<'_> {
                 .zip(self.precondition_acc.par_iter_mut()),
             |((((zc, pc), wc), tc), acc), r, row| {
                 if r == 0 {
-                    **acc = [[0.0; LANES]; 5];
+                    **acc = [[0.0; LANES]; 6];
                 }
                 let at = r * n..(r + 1) * n;
                 dispatch_precondition_output(
@@ -56,46 +56,57 @@ impl Solver<'_> {
             },
             &mut self.ws,
         );
-        let mut sums = [0.0; 5];
+        let mut sums = [0.0; 6];
         for acc in &self.precondition_acc {
             for (s, lanes) in sums.iter_mut().zip(acc) {
                 *s += lanes.iter().sum::<f64>();
             }
         }
-        let [sz, count, sgz, sg, sgt] = sums;
-        let mean = if count > 0.0 { sz / count } else { 0.0 };
-        // Σ_S g (z − z̄) = Σ_S g z − z̄ Σ_S g (Σ_S g is zero up to rounding).
-        (mean, sgz - mean * sg, sgt, sg)
+        let [sz, count, sgz, sg, sgt, st] = sums;
+        let (z_mean, t_mean) = if count > 0.0 {
+            (sz / count, st / count)
+        } else {
+            (0.0, 0.0)
+        };
+        // Σ_F g (z − z̄) = Σ_F g z − z̄ Σ_F g.
+        PreconditionSums {
+            z_mean,
+            g_dot_z: sgz - z_mean * sg,
+            g_dot_t_old: sgt,
+            g_sum: sg,
+            t_old_mean: t_mean,
+        }
     }
 
     /// [`Self::direction_and_transform`] with the preconditioned gradient:
-    /// `t ← (z − z̄_S) + β (t − t̄_S)` on S, 0 elsewhere (`z` raw from
-    /// [`Self::precondition`], `z̄_S = z_mean`), each row handed to the forward FFT as it is
-    /// made. Returns `⟨t, K t⟩`.
+    /// `t ← (z − z̄_F) + β (t − t̄_F)` on the free set F, 0 elsewhere (`z` raw from
+    /// [`Self::precondition`], `z̄_F = z_mean`, `t̄_F = direction_mean`), each row handed to
+    /// the forward FFT as it is made. Returns `⟨t, K t⟩`.
     pub(super) fn preconditioned_direction_and_transform(
         &mut self,
         z_mean: f64,
         beta: f64,
         direction_mean: f64,
+        level: f64,
     ) -> f64 {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let blocks = self
             .direction
             .par_chunks_mut(chunk)
             .zip(self.pressure.par_chunks(chunk))
-            .zip(self.preconditioned.par_chunks(chunk));
+            .zip(self.preconditioned.par_chunks(chunk))
+            .zip(self.separation.par_chunks(chunk));
         self.op.start_rows(
             blocks,
-            |((tc, pc), zc), r, row| {
+            |(((tc, pc), zc), wc), r, row| {
                 let at = r * n..(r + 1) * n;
                 dispatch_preconditioned_direction(
-                    z_mean,
-                    beta,
-                    direction_mean,
+                    [z_mean, beta, direction_mean, level],
                     &mut tc[at.clone()],
                     row,
                     &pc[at.clone()],
-                    &zc[at],
+                    &zc[at.clone()],
+                    &wc[at],
                 );
             },
             &mut self.ws,
@@ -105,18 +116,18 @@ impl Solver<'_> {
 
 avx2_dispatch! {
     /// One row of the preconditioner's input, with AVX2 where available:
-    /// `o = w − level` on S = {p > 0}, 0 elsewhere.
+    /// `o = w − level` on the free set F, 0 elsewhere.
     fn dispatch_precondition_input(level: f64, o: &mut [f64], p: &[f64], w: &[f64]) {
         for ((o, &p), &w) in o.iter_mut().zip(p).zip(w) {
-            *o = if p > 0.0 { w - level } else { 0.0 };
+            *o = if free(p, w, level) { w - level } else { 0.0 };
         }
     }
 }
 
 avx2_dispatch! {
     /// One row of `K⁻¹ P g` as it leaves the inverse FFT, with AVX2 where available: stored
-    /// in `z`, and with `g = w − level`, `Σ z`, `|S|`, `Σ g z`, `Σ g`, `Σ g t` over
-    /// S = {p > 0} added to `acc` (lane `k mod LANES` takes node `k`).
+    /// in `z`, and with `g = w − level`, `Σ z`, `|F|`, `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over
+    /// the free set F added to `acc` (lane `k mod LANES` takes node `k`).
     fn dispatch_precondition_output(
         level: f64,
         row: &[f64],
@@ -124,7 +135,7 @@ avx2_dispatch! {
         p: &[f64],
         w: &[f64],
         t: &[f64],
-        acc: &mut [[f64; LANES]; 5],
+        acc: &mut [[f64; LANES]; 6],
     ) {
         z.copy_from_slice(row);
         let n = row.len();
@@ -141,13 +152,13 @@ avx2_dispatch! {
             );
         }
         if whole < n {
-            // Padding: p = 0 puts the extra lanes off S.
+            // Padding: p = 0 and w = +∞ put the extra lanes off F.
             let at = whole..n;
             precondition_sums(
                 level,
                 &padded(&row[at.clone()], 0.0),
                 &padded(&p[at.clone()], 0.0),
-                &padded(&w[at.clone()], 0.0),
+                &padded(&w[at.clone()], f64::INFINITY),
                 &padded(&t[at], 0.0),
                 acc,
             );
@@ -163,10 +174,10 @@ fn precondition_sums(
     p: &[f64; LANES],
     w: &[f64; LANES],
     t: &[f64; LANES],
-    acc: &mut [[f64; LANES]; 5],
+    acc: &mut [[f64; LANES]; 6],
 ) {
     for k in 0..LANES {
-        let on = p[k] > 0.0;
+        let on = free(p[k], w[k], level);
         let g = if on { w[k] - level } else { 0.0 };
         let zk = if on { z[k] } else { 0.0 };
         acc[0][k] += zk;
@@ -174,23 +185,24 @@ fn precondition_sums(
         acc[2][k] += g * zk;
         acc[3][k] += g;
         acc[4][k] += if on { g * t[k] } else { 0.0 };
+        acc[5][k] += if on { t[k] } else { 0.0 };
     }
 }
 
 avx2_dispatch! {
     /// One row of the preconditioned direction, with AVX2 where available:
-    /// `t ← (z − z̄) + β (t − t̄)` on S = {p > 0}, 0 elsewhere, copied into `row`.
+    /// `t ← (z − z̄) + β (t − t̄)` on the free set F, 0 elsewhere, copied into `row`.
     fn dispatch_preconditioned_direction(
-        z_mean: f64,
-        beta: f64,
-        direction_mean: f64,
+        coefficients: [f64; 4],
         t: &mut [f64],
         row: &mut [f64],
         p: &[f64],
         z: &[f64],
+        w: &[f64],
     ) {
-        for (((t, o), &p), &z) in t.iter_mut().zip(row.iter_mut()).zip(p).zip(z) {
-            *t = if p > 0.0 {
+        let [z_mean, beta, direction_mean, level] = coefficients;
+        for ((((t, o), &p), &z), &w) in t.iter_mut().zip(row.iter_mut()).zip(p).zip(z).zip(w) {
+            *t = if free(p, w, level) {
                 (z - z_mean) + beta * (*t - direction_mean)
             } else {
                 0.0
@@ -198,4 +210,26 @@ avx2_dispatch! {
             *o = *t;
         }
     }
+}
+
+/// Membership of the free set `F = {p > 0} ∪ {p = 0, w − level < 0}`: the contact set and
+/// the nodes that interpenetrate, whose pressure the next step may raise.
+#[inline(always)]
+fn free(p: f64, w: f64, level: f64) -> bool {
+    p > 0.0 || w < level
+}
+
+/// The sums of [`Solver::precondition`] over the free set `F`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PreconditionSums {
+    /// Mean of `z` over F.
+    pub z_mean: f64,
+    /// `⟨g, z − z̄⟩_F`, the preconditioned gradient's norm.
+    pub g_dot_z: f64,
+    /// `Σ_F g t_old`.
+    pub g_dot_t_old: f64,
+    /// `Σ_F g`.
+    pub g_sum: f64,
+    /// Mean of the previous direction over F.
+    pub t_old_mean: f64,
 }

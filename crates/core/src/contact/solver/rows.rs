@@ -343,6 +343,10 @@ pub(super) struct UpdateArgs {
     pub tau: f64,
     pub level: f64,
     pub next_shift: f64,
+    /// Re-admit interpenetrating nodes off the contact set with `p = −τ (w − level)` (the
+    /// plain iteration, whose direction is zero off the contact set; the preconditioned
+    /// one raises them through its direction on the free set instead).
+    pub readmit: bool,
 }
 
 /// Accumulators of the update pass over one block.
@@ -382,7 +386,7 @@ fn update_lanes(
         let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
         let kept = if stepped > 0.0 { stepped } else { 0.0 };
         let gc = wn[l] - level;
-        let new = if kept == 0.0 && gc < 0.0 {
+        let new = if a.readmit && kept == 0.0 && gc < 0.0 {
             -tau * gc
         } else {
             kept
