@@ -1,5 +1,5 @@
-//! Cost of one solver iteration in units of one FFT pair of our own (the target:
-//! ≤ 1.5), measured so that the machine's drift cancels: each round times the 30-load
+//! Cost of one solver iteration in units of one FFT pair of our own, for the plain and the
+//! preconditioned (default) iteration, measured so that the machine's drift cancels: each round times the 30-load
 //! sweep (W/W0 log-spaced in [0.001, 0.06], tolerance 1e-8, warm-started, as
 //! `make bench-peers`) and, right after each load's solve, a few plain FFT pairs
 //! (`Fft2::forward` then `Fft2::inverse`, plans and buffers made once) on the same thread
@@ -33,8 +33,8 @@ fn main() {
     } else {
         vec![256, 512, 1024]
     };
-    println!("| N | threads | iteration / FFT pair (median) | range over {rounds} rounds | convolution / FFT pair (median) | convolutions / iteration | iterations / load |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| N | iteration | threads | iteration / FFT pair (median) | range over {rounds} rounds | convolution / FFT pair (median) | convolutions / iteration | iterations / load |");
+    println!("|---|---|---|---|---|---|---|---|");
     for &n in &sizes {
         let fft = Fft2::new(n);
         let mut scratch = fft.make_scratch();
@@ -43,16 +43,20 @@ fn main() {
         let op = ElasticOperator::new(grid, 1.0);
         let slope = surface::rms_slope(&grid, &heights);
         let loads = common::peers_loads();
-        // The plain iteration: the target is its cost in FFT pairs.
-        let cfg = SolverConfig {
-            tolerance: 1e-8,
-            preconditioned: false,
-            ..SolverConfig::default()
-        };
         let mut spectrum = fft.make_spectrum();
         let mut ws = op.make_workspace();
         let mut out = vec![0.0; n * n];
-        for threads in [1usize, 2] {
+        for (preconditioned, threads) in [(false, 1usize), (false, 2), (true, 1), (true, 2)] {
+            let cfg = SolverConfig {
+                tolerance: 1e-8,
+                preconditioned,
+                ..SolverConfig::default()
+            };
+            let variant = if preconditioned {
+                "preconditioned"
+            } else {
+                "plain"
+            };
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
@@ -106,7 +110,7 @@ fn main() {
             ratios.sort_by(f64::total_cmp);
             conv_ratios.sort_by(f64::total_cmp);
             println!(
-                "| {n} | {threads} | {:.2} | {:.2}–{:.2} | {:.2} | {:.2} | {:.1} |",
+                "| {n} | {variant} | {threads} | {:.2} | {:.2}–{:.2} | {:.2} | {:.2} | {:.1} |",
                 ratios[ratios.len() / 2],
                 ratios[0],
                 ratios[ratios.len() - 1],

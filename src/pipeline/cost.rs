@@ -118,19 +118,22 @@ fn line(points: &[(f64, f64)]) -> (f64, Option<f64>) {
 const ANALYSIS_BYTES: u64 = 1 << 30;
 
 impl Default for CostModel {
-    /// Coefficients measured on the development machine (2 cores, AVX2) from a default-profile
-    /// store of 2026-11-24, whose instances ran two at a time on the 2 cores, so their wall
-    /// time is about one core's CPU time.
+    /// Coefficients measured on the development machine (2 cores, AVX2) on 2026-11-25: the
+    /// seconds per unit of work from a default-profile store (instances two at a time on the
+    /// 2 cores, so wall time is about one core's CPU time); the iterations per load and their
+    /// growth with n from the paper's own spectrum (`make bench-iteration-growth BOXES="1 2
+    /// 4"`: 28.5, 40.7 and 42.8 iterations per load at 1024², 2048² and 4096², fitted as
+    /// 28.5 (n/1024)^0.29), which dominates the paper campaign.
     fn default() -> Self {
         Self {
-            surface_per_n2logn: 9.0e-9,
-            contact_per_iteration_n2logn: 6.7e-9,
-            iterations_per_load_1024: 54.0,
-            iterations_exponent: 0.43,
-            clusters_per_load_n2: 1.8e-8,
+            surface_per_n2logn: 5.8e-9,
+            contact_per_iteration_n2logn: 2.85e-9,
+            iterations_per_load_1024: 28.5,
+            iterations_exponent: 0.29,
+            clusters_per_load_n2: 3.8e-9,
             families: BTreeMap::new(),
             per_instance: [
-                ("statistics", 1.1),
+                ("statistics", 0.39),
                 ("analytic", 0.005),
                 ("audits", 0.1),
                 ("figures", 0.1),
