@@ -268,22 +268,35 @@ impl Fft2 {
         //    the kx-major output (one cache line per row, prefetched), then transformed
         //    along y while in cache. No separate transpose pass: the rows, 16 (n/2 + 1)
         //    bytes apart, were walked once per column group, not once per transpose tile.
-        let gpb = Self::groups_per_block(n, self.block_count());
         let rows = SharedRows(scratch.rows.as_mut_ptr());
-        output
-            .par_chunks_mut(gpb * GATHER * n)
+        self.for_each_column_group(output, &self.col_forward, |kx0, cols, complex| {
+            // SAFETY: columns kx0.. < h of the rows are only read here, and nothing writes
+            // `scratch.rows` during this loop.
+            unsafe { gather_columns(rows.get(), n, h, kx0, cols) };
+            for col in cols.chunks_exact_mut(n) {
+                self.col_forward.process_with_scratch(col, complex);
+            }
+        });
+    }
+
+    /// Run `each(kx0, columns, fft scratch)` on every group of GATHER columns of the kx-major
+    /// `data` (n values per column), the groups split over the fixed work blocks, with the
+    /// in-place scratch of `fft` per thread.
+    fn for_each_column_group(
+        &self,
+        data: &mut [Complex64],
+        fft: &Arc<dyn Fft<f64>>,
+        each: impl Fn(usize, &mut [Complex64], &mut [Complex64]) + Sync,
+    ) {
+        let n = self.n;
+        let gpb = Self::groups_per_block(n, self.block_count());
+        let len = fft.get_inplace_scratch_len();
+        data.par_chunks_mut(gpb * GATHER * n)
             .enumerate()
             .for_each(|(b, block)| {
-                let len = self.col_forward.get_inplace_scratch_len();
                 with_work(0, len, 0, |_, complex, _| {
                     for (g, cols) in block.chunks_mut(GATHER * n).enumerate() {
-                        let kx0 = (b * gpb + g) * GATHER;
-                        // SAFETY: columns kx0.. < h of the rows are only read here, and
-                        // nothing writes `scratch.rows` during this loop.
-                        unsafe { gather_columns(rows.get(), n, h, kx0, cols) };
-                        for col in cols.chunks_exact_mut(n) {
-                            self.col_forward.process_with_scratch(col, complex);
-                        }
+                        each((b * gpb + g) * GATHER, cols, complex);
                     }
                 });
             });
@@ -363,25 +376,15 @@ impl Fft2 {
     fn inverse_columns(&self, spectrum: &mut [Complex64], scratch: &mut Fft2Scratch) {
         let n = self.n;
         let h = n / 2 + 1;
-        let gpb = Self::groups_per_block(n, self.block_count());
         let rows = SharedRows(scratch.rows.as_mut_ptr());
-        spectrum
-            .par_chunks_mut(gpb * GATHER * n)
-            .enumerate()
-            .for_each(|(b, block)| {
-                let len = self.col_inverse.get_inplace_scratch_len();
-                with_work(0, len, 0, |_, complex, _| {
-                    for (g, cols) in block.chunks_mut(GATHER * n).enumerate() {
-                        let kx0 = (b * gpb + g) * GATHER;
-                        for col in cols.chunks_exact_mut(n) {
-                            self.col_inverse.process_with_scratch(col, complex);
-                        }
-                        // SAFETY: columns kx0.. < h belong to this group alone, and
-                        // nothing else touches `scratch.rows` during this loop.
-                        unsafe { scatter_columns(rows.get(), n, h, kx0, cols) };
-                    }
-                });
-            });
+        self.for_each_column_group(spectrum, &self.col_inverse, |kx0, cols, complex| {
+            for col in cols.chunks_exact_mut(n) {
+                self.col_inverse.process_with_scratch(col, complex);
+            }
+            // SAFETY: columns kx0.. < h belong to this group alone, and nothing else
+            // touches `scratch.rows` during this loop.
+            unsafe { scatter_columns(rows.get(), n, h, kx0, cols) };
+        });
     }
 
     /// First half of a convolution fused with the transforms: the real field is produced
