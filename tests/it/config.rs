@@ -182,7 +182,7 @@ fn unknown_profile_is_an_error_listing_the_known_ones() {
 
 #[test]
 fn the_shipped_pipeline_is_valid_for_every_profile() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+    let path = crate::repo_root().join("pipeline.yaml");
     let p = Pipeline::load(&path).unwrap();
     for profile in [
         "quick",
@@ -300,7 +300,7 @@ fn a_study_computes_the_loads_its_figures_ask_for() {
 /// and paper profiles; fig3_ll128 also feeds Figs. 4b and 5, so it sweeps.
 #[test]
 fn figure_3_studies_compute_only_the_loads_figure_3_draws() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+    let path = crate::repo_root().join("pipeline.yaml");
     let pipeline = Pipeline::load(&path).unwrap();
     let fig3 = &pipeline.figures["fig3_fig4a"];
     let inset = fig3.inset_load.unwrap();
@@ -332,7 +332,7 @@ fn figure_3_studies_compute_only_the_loads_figure_3_draws() {
 /// realizations at more loads over the same range.
 #[test]
 fn load_resolution_studies_are_the_default_fig3_ll128_sweep_and_a_finer_one() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.yaml");
+    let path = crate::repo_root().join("pipeline.yaml");
     let pipeline = Pipeline::load(&path).unwrap();
     let default = pipeline.plan("default", "pipeline.yaml").unwrap();
     let check = pipeline

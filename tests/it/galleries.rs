@@ -2,7 +2,6 @@
 //! compared by instance keys (content hashes of the jobs), not pixels.
 
 use std::collections::BTreeSet;
-use std::path::Path;
 
 use wearcoef::config::Pipeline;
 use wearcoef::pipeline::gallery::{expected, Provenance, PROVENANCE};
@@ -18,7 +17,7 @@ fn keys_only(mut p: Provenance) -> Provenance {
 
 #[test]
 fn committed_galleries_match_what_their_profiles_would_draw() {
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let repo = &crate::repo_root();
     let pipeline = Pipeline::load(&repo.join("pipeline.yaml")).unwrap();
     let mut checked = 0;
     for entry in std::fs::read_dir(repo.join("figures")).unwrap() {

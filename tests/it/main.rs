@@ -20,6 +20,15 @@ mod surface;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// The repository root, read when the test runs (cargo sets `CARGO_MANIFEST_DIR` for test
+/// processes): a target directory shared between clones (.ci/run's) may hold this binary
+/// built from identical sources at another path, whose compile-time path is gone.
+pub fn repo_root() -> PathBuf {
+    std::env::var_os("CARGO_MANIFEST_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))
+}
+
 /// The wearcoef binary built for these tests.
 pub fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_wearcoef"))
