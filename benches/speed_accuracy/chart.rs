@@ -22,6 +22,7 @@ pub fn write_csv(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
         "error",
         "error_over_scatter",
         "seconds",
+        "fft_pairs",
         "cost_relative_to_reference",
         "pipeline_setting",
         "chart_choice",
@@ -39,6 +40,7 @@ pub fn write_csv(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
                     raw.to_string(),
                     scaled.to_string(),
                     pt.seconds.to_string(),
+                    pt.convolutions.map(|c| c.to_string()).unwrap_or_default(),
                     pt.cost.to_string(),
                     (pt.code == "wearcoef" && pt.setting == p.current).to_string(),
                     (pt.code == "wearcoef" && Some(pt.setting) == p.choice).to_string(),
@@ -213,4 +215,85 @@ pub fn draw(dir: &Path, panels: &[Panel]) -> anyhow::Result<()> {
         layout: Layout::Grid { columns: 3 },
     };
     figure.write(dir, "speed_accuracy")
+}
+
+/// The panels as Markdown tables (printed by `make speed-accuracy`; docs/BENCHMARKS.md quotes
+/// them): per setting its cost, FFT pairs, worst error and each quantity's error, in units of
+/// the scatter ("exact": 0; "none": undefined where the reference has a value).
+pub fn markdown(panels: &[Panel]) -> String {
+    let mut out = String::new();
+    for p in panels {
+        out.push_str(&format!("{}\n\n", p.title));
+        out.push_str("| code | setting | cost / reference | FFT pairs | worst error / scatter | worst quantity |");
+        for q in Quantity::ALL {
+            out.push_str(&format!(" {} |", plain(q.symbol())));
+        }
+        out.push_str("\n|---|---|---|---|---|---|");
+        out.push_str(&"---|".repeat(Quantity::ALL.len()));
+        out.push('\n');
+        for pt in &p.points {
+            let ours = pt.code == "wearcoef";
+            let mark = match (
+                ours && pt.setting == p.current,
+                ours && Some(pt.setting) == p.choice,
+            ) {
+                (true, true) => " (pipeline.yaml = chart)",
+                (true, false) => " (pipeline.yaml)",
+                (false, true) => " (chart)",
+                _ => "",
+            };
+            let worst = pt.worst();
+            let worst_q = pt
+                .errors
+                .iter()
+                .filter(|e| !e.3.is_nan() && e.3 == worst && worst > 0.0)
+                .map(|e| plain(e.0.label()))
+                .next()
+                .unwrap_or_else(|| "—".into());
+            out.push_str(&format!(
+                "| {} | {}{mark} | {:.3} | {} | {} | {worst_q} |",
+                pt.code,
+                setting_text(p.knob, pt.setting),
+                pt.cost,
+                pt.convolutions.map_or("—".into(), |c| c.to_string()),
+                error_text(worst),
+            ));
+            for q in Quantity::ALL {
+                let cell = if pt.undefined().contains(&q) {
+                    "none".to_string()
+                } else {
+                    pt.error(q).map_or("—".into(), error_text)
+                };
+                out.push_str(&format!(" {cell} |"));
+            }
+            out.push('\n');
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Markup (`_x`, `^{…}`) as plain text for Markdown.
+fn plain(s: &str) -> String {
+    wearcoef::figures::plot::text::flat(s)
+}
+
+fn setting_text(knob: &str, v: f64) -> String {
+    if knob == "tolerance" {
+        format!("1e{}", v.log10().round() as i32)
+    } else {
+        wearcoef::figures::plot::number(v)
+    }
+}
+
+/// An error in scatter units with two significant digits; 0 as "exact".
+fn error_text(e: f64) -> String {
+    if e == 0.0 {
+        "exact".into()
+    } else if e >= 10.0 {
+        format!("{e:.0}")
+    } else {
+        let digits = (1 - e.log10().floor() as i32).max(0) as usize;
+        format!("{e:.digits$}")
+    }
 }

@@ -56,6 +56,9 @@ impl Setup {
 pub struct Sweep {
     /// Seconds of the solves and the labelling.
     pub seconds: f64,
+    /// Applications of the elastic operator (FFT pairs) over the sweep: the solver's work,
+    /// counted exactly (None for a peer, which does not report it).
+    pub convolutions: Option<usize>,
     /// Contact fraction A_c/A per load.
     pub area: Vec<f64>,
     /// Areas (pixels) of the clusters that do not wrap around the box, per load.
@@ -91,6 +94,7 @@ pub fn ours(h: &[f64], n: usize, loads: &[f64], tolerance: f64) -> Sweep {
     .unwrap_or_else(|e| panic!("sweep at tolerance {tolerance:e} failed: {e}"));
     Sweep {
         seconds: start.elapsed().as_secs_f64(),
+        convolutions: Some(results.iter().map(|r| r.report.convolutions).sum()),
         area: results.iter().map(|r| r.area_fraction).collect(),
         clusters,
     }
@@ -140,6 +144,7 @@ pub fn tamaas(
     }
     Ok(Sweep {
         seconds,
+        convolutions: None,
         area,
         clusters,
     })
