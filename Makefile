@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling bench-iteration-growth speed-accuracy clean
+.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -49,7 +49,7 @@ slurm-stop:
 fmt:
 	cargo fmt --all
 
-bench: bench-fft bench-solver bench-peers bench-iteration bench-iteration-growth bench-warm-start bench-labelling speed-accuracy
+bench: bench-fft bench-solver bench-peers bench-iteration bench-iteration-growth bench-deflation-probe bench-warm-start bench-labelling speed-accuracy
 
 bench-fft:
 	bash benches/fft_compare.sh
@@ -71,6 +71,15 @@ bench-warm-start:
 BOXES ?= 1 2
 bench-iteration-growth:
 	bash benches/iteration_growth.sh $(BOXES)
+
+# Conjugate-gradient iterations on a fixed contact set against the box, with the solver's
+# preconditioner alone, deflated by block indicators, and split orthogonally (numpy probe).
+bench-deflation-probe:
+	cargo build --release --locked --quiet
+	venv="$${WEARCOEF_BENCH_VENV:-$(CARGO_TARGET_DIR)/bench-venv}"; \
+	  "$$venv/bin/python" -c "import numpy, scipy" 2>/dev/null || \
+	  { python3 -m venv "$$venv" && "$$venv/bin/pip" install --quiet numpy scipy; }; \
+	  "$$venv/bin/python" benches/deflation_probe.py $(BIN) $(CARGO_TARGET_DIR)/deflation-probe $(BOXES)
 
 # Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
 bench-labelling:

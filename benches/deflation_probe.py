@@ -1,0 +1,159 @@
+"""Where the preconditioned iteration's count grows with the box: a probe on a fixed contact set.
+
+`make bench-deflation-probe` (arguments: the wearcoef binary, a work directory, then box sizes
+L/λ_l). For each box it makes the paper spectrum's surface (λ_l = 1024 Δl, λ_s = 8 Δl, H = 0.8,
+seed 3128, n = 1024·L/λ_l) and its contact set F at W/W0 = 0.02 with `wearcoef surface` and
+`wearcoef solve` (a 2-load sweep, tol 1e-8), then solves the linear problem the solver's last
+phase solves, on that fixed F: minimise ½⟨p, K p⟩ − ⟨p, h⟩ over p supported on F with a fixed
+mean, by conjugate gradients to a relative residual of 1e-8, with
+
+- M = P K⁻¹ P, the solver's preconditioner (P: restrict to F, centre);
+- the same M deflated by block indicators on F (blocks of 256² nodes, the balancing
+  Neumann–Neumann form M_D = (I − Q A) M (I − A Q) + Q, Q = Z E⁺ Zᵀ, E = Zᵀ A Z, with A Z
+  computed exactly, one convolution per block);
+- an orthogonal two-level split, (I − Π) M (I − Π) + Z E⁺ Zᵀ (Π: block means on F), which
+  needs no A Z in its application.
+
+It prints the iteration counts; it is a probe of where the count grows, not a solver (A Z costs
+one convolution per block).
+"""
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.fft as sf
+
+BLOCK = 256
+WORKERS = 2
+
+
+def contact_set(wearcoef, work, boxes):
+    n = 1024 * boxes
+    surface = work / f"surface_{n}.npy"
+    contact = work / f"contact_{n}.npy"
+    if not contact.exists():
+        subprocess.run([wearcoef, "surface", "--n", str(n), "--lambda-l-px", "1024",
+                        "--lambda-s-px", "8", "--hurst", "0.8", "--seed", "3128",
+                        "-o", str(surface)], check=True)
+        subprocess.run([wearcoef, "solve", "--surface", str(surface), "--loads", "0.005,0.02",
+                        "--tol", "1e-8", "--contact-out", str(contact), "--json"], check=True,
+                       stdout=subprocess.DEVNULL)
+    return np.load(surface), np.load(contact)[-1].astype(bool)
+
+
+def probe(h, F):
+    n = h.shape[0]
+    qx = np.fft.fftfreq(n, 1.0 / n)[:, None]
+    qy = np.fft.rfftfreq(n, 1.0 / n)[None, :]
+    q = np.sqrt(qx**2 + qy**2)
+    k_hat = np.where(q > 0, 1.0 / np.where(q > 0, q, 1.0), 0.0)
+
+    def conv(x, m):
+        return sf.irfft2(sf.rfft2(x, workers=WORKERS) * m, s=(n, n), workers=WORKERS)
+
+    def P(x):
+        y = np.where(F, x, 0.0)
+        y[F] -= y[F].mean()
+        return y
+
+    def A(x):
+        return P(conv(x, k_hat))
+
+    def M(x):
+        return P(conv(P(x), q))
+
+    b = P(h - conv(np.where(F, 1.0, 0.0), k_hat))
+
+    def pcg(precondition, tol=1e-8, maxit=2000):
+        x = np.zeros_like(b)
+        r = b.copy()
+        z = precondition(r)
+        d = z.copy()
+        rz = np.vdot(r, z)
+        for it in range(1, maxit + 1):
+            ad = A(d)
+            a = rz / np.vdot(d, ad)
+            x += a * d
+            r -= a * ad
+            if np.linalg.norm(r) < tol * np.linalg.norm(b):
+                return it
+            z = precondition(r)
+            rz_new = np.vdot(r, z)
+            d = z + (rz_new / rz) * d
+            rz = rz_new
+        return maxit
+
+    idx = np.flatnonzero(F)
+    n_f = len(idx)
+    block_of = ((np.arange(n) // BLOCK)[:, None] * (n // BLOCK)
+                + (np.arange(n) // BLOCK)[None, :]).ravel()[idx]
+    blocks, pos = np.unique(block_of, return_inverse=True)
+    Z = np.zeros((len(blocks), n_f))
+    Z[pos, np.arange(n_f)] = 1.0
+    counts = Z.sum(axis=1)
+
+    def full(v):
+        out = np.zeros(n * n)
+        out[idx] = v
+        return out.reshape(n, n)
+
+    def on_f(v):
+        return v.ravel()[idx]
+
+    AZ = np.array([on_f(A(full(z))) for z in Z])
+    E = Z @ AZ.T
+    E = 0.5 * (E + E.T)
+    # Coarse inverse on the mean-zero space (Σ c_I y_I = 0): the problem is posed there.
+    u = counts / np.linalg.norm(counts)
+    proj = np.eye(len(counts)) - np.outer(u, u)
+    E_inv = np.linalg.pinv(proj @ E @ proj, rcond=1e-10, hermitian=True)
+
+    def coarse(r):
+        return full(Z.T @ (proj @ (E_inv @ (proj @ (Z @ on_f(r))))))
+
+    def deflated(r):
+        y = proj @ (E_inv @ (proj @ (Z @ on_f(r))))
+        r_d = r - full(AZ.T @ y)
+        s = M(r_d)
+        w = proj @ (E_inv @ (proj @ (AZ @ on_f(s))))
+        return P(s - full(Z.T @ w) + full(Z.T @ y))
+
+    def block_means(r):
+        return full(((Z @ on_f(r)) / counts)[pos])
+
+    def orthogonal(r):
+        s = M(r - block_means(r))
+        return P(s - block_means(s) + coarse(r))
+
+    return {
+        "n": n,
+        "contact_fraction": n_f / n / n,
+        "blocks": len(blocks),
+        "preconditioned": pcg(M),
+        "deflated": pcg(deflated),
+        "two_level_orthogonal": pcg(orthogonal),
+    }
+
+
+def main():
+    wearcoef, work = sys.argv[1], Path(sys.argv[2])
+    work.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for boxes in [int(b) for b in sys.argv[3:]]:
+        start = time.time()
+        h, F = contact_set(wearcoef, work, boxes)
+        row = {"l_over_lambda_l": boxes, **probe(h, F), "seconds": round(time.time() - start, 1)}
+        print(json.dumps(row), flush=True)
+        rows.append(row)
+    print("| L/λ_l | n | contact fraction | blocks of 256² | M = P K⁻¹ P | deflated | orthogonal two-level |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['l_over_lambda_l']} | {r['n']} | {r['contact_fraction']:.4f} | {r['blocks']} "
+              f"| {r['preconditioned']} | {r['deflated']} | {r['two_level_orthogonal']} |")
+
+
+if __name__ == "__main__":
+    main()
