@@ -86,14 +86,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             out!("{}", serde_json::to_string(&pending)?)?;
         } else {
             for p in &pending {
-                out!(
-                    "{:<10} {:<24} {:>3} {} {}",
-                    p.stage,
-                    p.name.clone().unwrap_or_else(|| p.studies.join(",")),
-                    p.realization.map_or("-".to_string(), |r| format!("r{r}")),
-                    &p.key[..12],
-                    p.reason
-                )?;
+                out!("{} {}", p.id.columns(12), p.reason)?;
             }
             out!(
                 "wearcoef run --profile {} would compute {} instance(s)",
@@ -208,14 +201,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     if keys {
         out!()?;
         for i in &instances {
-            out!(
-                "{:<10} {:<24} {:>3} {} {}",
-                i.stage,
-                i.name.clone().unwrap_or_else(|| i.studies.join(",")),
-                i.realization.map_or("-".to_string(), |r| format!("r{r}")),
-                i.key,
-                i.state
-            )?;
+            out!("{} {}", i.id.columns(usize::MAX), i.state)?;
         }
     }
     out!()?;

@@ -35,14 +35,47 @@ pub struct Status {
     pub instances: Vec<InstanceState>,
 }
 
-/// One instance of a profile and whether the store holds it.
+/// What names one instance of a profile: its stage and key, and the studies, realization and
+/// figure it belongs to (as the plan lists them).
 #[derive(Debug, Clone, Serialize)]
-pub struct InstanceState {
+pub struct InstanceId {
     pub stage: String,
     pub key: String,
     pub studies: Vec<String>,
     pub realization: Option<u32>,
     pub name: Option<String>,
+}
+
+impl InstanceId {
+    fn of(inst: &crate::pipeline::plan::Instance) -> Self {
+        Self {
+            stage: inst.stage.clone(),
+            key: inst.key.clone(),
+            studies: inst.studies.clone(),
+            realization: inst.realization,
+            name: inst.name.clone(),
+        }
+    }
+
+    /// Stage, figure or studies, realization and the first `key_chars` of the key, in
+    /// aligned columns (`wearcoef status --keys`, `run --dry-run`).
+    pub fn columns(&self, key_chars: usize) -> String {
+        format!(
+            "{:<10} {:<24} {:>3} {}",
+            self.stage,
+            self.name.clone().unwrap_or_else(|| self.studies.join(",")),
+            self.realization
+                .map_or("-".to_string(), |r| format!("r{r}")),
+            &self.key[..key_chars.min(self.key.len())]
+        )
+    }
+}
+
+/// One instance of a profile and whether the store holds it.
+#[derive(Debug, Clone, Serialize)]
+pub struct InstanceState {
+    #[serde(flatten)]
+    pub id: InstanceId,
     /// `present`, `missing` or `failed` (missing, with a failure recorded).
     pub state: String,
     /// The recorded failure of a failed instance.
@@ -121,11 +154,7 @@ pub fn status(
             status.totals.failed += 1;
         }
         status.instances.push(InstanceState {
-            stage: inst.stage.clone(),
-            key: inst.key.clone(),
-            studies: inst.studies.clone(),
-            realization: inst.realization,
-            name: inst.name.clone(),
+            id: InstanceId::of(inst),
             state: state.to_string(),
             error: failure.map(|f| f.error),
         });
@@ -146,11 +175,8 @@ pub fn status(
 /// An instance a run would compute, and why.
 #[derive(Debug, Clone, Serialize)]
 pub struct Pending {
-    pub stage: String,
-    pub key: String,
-    pub studies: Vec<String>,
-    pub realization: Option<u32>,
-    pub name: Option<String>,
+    #[serde(flatten)]
+    pub id: InstanceId,
     /// `missing`, `forced`, `changed parameter: …`, `stage version a → b`, `input changed`.
     pub reason: String,
 }
@@ -191,11 +217,7 @@ pub fn dry_run(
             why_missing(store, inst, &previous)
         };
         out.push(Pending {
-            stage: inst.stage.clone(),
-            key: inst.key.clone(),
-            studies: inst.studies.clone(),
-            realization: inst.realization,
-            name: inst.name.clone(),
+            id: InstanceId::of(inst),
             reason,
         });
     }
