@@ -6,6 +6,8 @@ use wearcoef::figures::plot::{
     power_of_ten, Dash, Layout, LegendAt, LinePlot, Marker, Panels, Series, YAxis,
 };
 
+use wearcoef::figures::plot::text::flat;
+
 use crate::measure::Quantity;
 use crate::{Panel, Point};
 
@@ -35,7 +37,7 @@ pub fn write_csv(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
                     p.knob.to_string(),
                     pt.code.to_string(),
                     pt.setting.to_string(),
-                    wearcoef::figures::plot::text::flat(q.label()),
+                    flat(q.label()),
                     detail.clone(),
                     raw.to_string(),
                     scaled.to_string(),
@@ -226,7 +228,7 @@ pub fn markdown(panels: &[Panel]) -> String {
         out.push_str(&format!("{}\n\n", p.title));
         out.push_str("| code | setting | cost / reference | FFT pairs | worst error / scatter | worst quantity |");
         for q in Quantity::ALL {
-            out.push_str(&format!(" {} |", plain(q.symbol())));
+            out.push_str(&format!(" {} |", flat(q.symbol())));
         }
         out.push_str("\n|---|---|---|---|---|---|");
         out.push_str(&"---|".repeat(Quantity::ALL.len()));
@@ -247,13 +249,13 @@ pub fn markdown(panels: &[Panel]) -> String {
                 .errors
                 .iter()
                 .filter(|e| !e.3.is_nan() && e.3 == worst && worst > 0.0)
-                .map(|e| plain(e.0.label()))
+                .map(|e| flat(e.0.label()))
                 .next()
                 .unwrap_or_else(|| "—".into());
             out.push_str(&format!(
                 "| {} | {}{mark} | {:.3} | {} | {} | {worst_q} |",
                 pt.code,
-                setting_text(p.knob, pt.setting),
+                flat(&setting_label(p.knob, pt.setting)),
                 pt.cost,
                 pt.convolutions.map_or("—".into(), |c| c.to_string()),
                 error_text(worst),
@@ -271,19 +273,6 @@ pub fn markdown(panels: &[Panel]) -> String {
         out.push('\n');
     }
     out
-}
-
-/// Markup (`_x`, `^{…}`) as plain text for Markdown.
-fn plain(s: &str) -> String {
-    wearcoef::figures::plot::text::flat(s)
-}
-
-fn setting_text(knob: &str, v: f64) -> String {
-    if knob == "tolerance" {
-        format!("1e{}", v.log10().round() as i32)
-    } else {
-        wearcoef::figures::plot::number(v)
-    }
 }
 
 /// An error in scatter units with two significant digits; 0 as "exact".

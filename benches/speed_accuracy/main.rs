@@ -427,17 +427,15 @@ fn realizations_panel(setup: Setup, total: usize, tolerance: f64, current: f64) 
     }
 }
 
-/// The default profile's tolerance of `study` (pipeline.yaml).
-fn current_tolerance(config: &Path, study: &str) -> f64 {
+/// The default profile's solver tolerance of each study (pipeline.yaml, read once).
+fn default_tolerances(config: &Path) -> std::collections::BTreeMap<String, f64> {
     let pipeline = wearcoef::config::Pipeline::load(config).expect("pipeline.yaml");
-    let plans = pipeline
+    pipeline
         .plan("default", &config.display().to_string())
-        .expect("default profile");
-    plans
-        .iter()
-        .find(|p| p.name == study)
-        .unwrap_or_else(|| panic!("study {study} not in the default profile"))
-        .tolerance
+        .expect("default profile")
+        .into_iter()
+        .map(|p| (p.name, p.tolerance))
+        .collect()
 }
 
 fn main() {
@@ -497,11 +495,17 @@ fn main() {
             equivalent: 28.0,
         },
     ];
+    let tolerances = default_tolerances(&config);
+    let current_tolerance = |study: &str| -> f64 {
+        *tolerances
+            .get(study)
+            .unwrap_or_else(|| panic!("study {study} not in the default profile"))
+    };
     let mut panels = Vec::new();
     for (i, fam) in families.iter().enumerate() {
-        let current = current_tolerance(&config, fam.studies[0]);
+        let current = current_tolerance(fam.studies[0]);
         for study in fam.studies {
-            let own = current_tolerance(&config, study);
+            let own = current_tolerance(study);
             assert_eq!(
                 own, current,
                 "pipeline.yaml: {study} has tolerance {own:e}, {} has {current:e}; a family carries one choice",
@@ -520,7 +524,7 @@ fn main() {
         );
         panels.push(panel);
     }
-    let tol = current_tolerance(&config, "b2_r8");
+    let tol = current_tolerance("b2_r8");
     let res: Vec<(f64, Setup)> = [2.0, 4.0, 8.0, 16.0]
         .iter()
         .map(|&r| (r, h08(8.0, 4.0, r)))
