@@ -76,10 +76,8 @@ bench-iteration-growth:
 # preconditioner alone, deflated by block indicators, and split orthogonally (numpy probe).
 bench-deflation-probe:
 	cargo build --release --locked --quiet
-	venv="$${WEARCOEF_BENCH_VENV:-$(CARGO_TARGET_DIR)/bench-venv}"; \
-	  "$$venv/bin/python" -c "import numpy, scipy" 2>/dev/null || \
-	  { python3 -m venv "$$venv" && "$$venv/bin/pip" install --quiet numpy scipy; }; \
-	  "$$venv/bin/python" benches/deflation_probe.py $(BIN) $(CARGO_TARGET_DIR)/deflation-probe $(BOXES)
+	"$$(bash benches/venv.sh numpy scipy)" benches/deflation_probe.py $(BIN) \
+	  $(CARGO_TARGET_DIR)/deflation-probe $(BOXES)
 
 # Periodic cluster labelling of wearcoef and scipy.ndimage.label on the same maps.
 bench-labelling:

@@ -24,10 +24,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-import scipy.fft as sf
 
-BLOCK = 256
-WORKERS = 2
+from solver_replica import Operator, coarse_space, deflated
 
 
 def contact_set(wearcoef, work, boxes):
@@ -46,13 +44,7 @@ def contact_set(wearcoef, work, boxes):
 
 def probe(h, F):
     n = h.shape[0]
-    qx = np.fft.fftfreq(n, 1.0 / n)[:, None]
-    qy = np.fft.rfftfreq(n, 1.0 / n)[None, :]
-    q = np.sqrt(qx**2 + qy**2)
-    k_hat = np.where(q > 0, 1.0 / np.where(q > 0, q, 1.0), 0.0)
-
-    def conv(x, m):
-        return sf.irfft2(sf.rfft2(x, workers=WORKERS) * m, s=(n, n), workers=WORKERS)
+    op = Operator(n)
 
     def P(x):
         y = np.where(F, x, 0.0)
@@ -60,12 +52,12 @@ def probe(h, F):
         return y
 
     def A(x):
-        return P(conv(x, k_hat))
+        return P(op.conv(x, op.k_hat))
 
     def M(x):
-        return P(conv(P(x), q))
+        return P(op.conv(P(x), op.k_inv_hat))
 
-    b = P(h - conv(np.where(F, 1.0, 0.0), k_hat))
+    b = P(h - op.conv(np.where(F, 1.0, 0.0), op.k_hat))
 
     def pcg(precondition, tol=1e-8, maxit=2000):
         x = np.zeros_like(b)
@@ -86,54 +78,25 @@ def probe(h, F):
             rz = rz_new
         return maxit
 
-    idx = np.flatnonzero(F)
-    n_f = len(idx)
-    block_of = ((np.arange(n) // BLOCK)[:, None] * (n // BLOCK)
-                + (np.arange(n) // BLOCK)[None, :]).ravel()[idx]
-    blocks, pos = np.unique(block_of, return_inverse=True)
-    Z = np.zeros((len(blocks), n_f))
-    Z[pos, np.arange(n_f)] = 1.0
+    coarse = coarse_space(op, F)
+    idx, Z, _, E_inv = coarse
     counts = Z.sum(axis=1)
-
-    def full(v):
-        out = np.zeros(n * n)
-        out[idx] = v
-        return out.reshape(n, n)
-
-    def on_f(v):
-        return v.ravel()[idx]
-
-    AZ = np.array([on_f(A(full(z))) for z in Z])
-    E = Z @ AZ.T
-    E = 0.5 * (E + E.T)
-    # Coarse inverse on the mean-zero space (Σ c_I y_I = 0): the problem is posed there.
-    u = counts / np.linalg.norm(counts)
-    proj = np.eye(len(counts)) - np.outer(u, u)
-    E_inv = np.linalg.pinv(proj @ E @ proj, rcond=1e-10, hermitian=True)
-
-    def coarse(r):
-        return full(Z.T @ (proj @ (E_inv @ (proj @ (Z @ on_f(r))))))
-
-    def deflated(r):
-        y = proj @ (E_inv @ (proj @ (Z @ on_f(r))))
-        r_d = r - full(AZ.T @ y)
-        s = M(r_d)
-        w = proj @ (E_inv @ (proj @ (AZ @ on_f(s))))
-        return P(s - full(Z.T @ w) + full(Z.T @ y))
+    pos = np.argmax(Z, axis=0)
 
     def block_means(r):
-        return full(((Z @ on_f(r)) / counts)[pos])
+        return op.full(idx, ((Z @ r.ravel()[idx]) / counts)[pos])
 
     def orthogonal(r):
         s = M(r - block_means(r))
-        return P(s - block_means(s) + coarse(r))
+        y = E_inv @ (Z @ r.ravel()[idx])
+        return P(s - block_means(s) + op.full(idx, Z.T @ y))
 
     return {
         "n": n,
-        "contact_fraction": n_f / n / n,
-        "blocks": len(blocks),
+        "contact_fraction": len(idx) / n / n,
+        "blocks": len(counts),
         "preconditioned": pcg(M),
-        "deflated": pcg(deflated),
+        "deflated": pcg(lambda r: deflated(op, M, P, coarse, r)),
         "two_level_orthogonal": pcg(orthogonal),
     }
 

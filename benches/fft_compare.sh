@@ -6,12 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-/var/tmp/wearcoef-target}"
-venv="${WEARCOEF_BENCH_VENV:-$CARGO_TARGET_DIR/bench-venv}"
-if ! "$venv/bin/python" -c 'import numpy, pyfftw' 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet numpy pyfftw
-fi
-peers_json=$("$venv/bin/python" benches/fft_numpy.py 512 1024 2048 4096)
+python=$(bash benches/venv.sh numpy pyfftw)
+peers_json=$("$python" benches/fft_numpy.py 512 1024 2048 4096)
 cargo bench --bench fft -- --noplot >/dev/null
 python3 - "$peers_json" "$CARGO_TARGET_DIR/criterion" <<'PY'
 import json, os, sys

@@ -4,12 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-/var/tmp/wearcoef-target}"
-venv="${WEARCOEF_BENCH_VENV:-$CARGO_TARGET_DIR/bench-venv}"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import numpy, scipy" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet numpy scipy
-fi
+python=$(bash benches/venv.sh numpy scipy)
 cargo build --release --locked --quiet
 RAYON_NUM_THREADS=1 cargo bench --locked --bench labelling -- --noplot >/dev/null 2>&1
-OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$venv/bin/python" benches/labelling_scipy.py \
+OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$python" benches/labelling_scipy.py \
   "$CARGO_TARGET_DIR/release/wearcoef" "$CARGO_TARGET_DIR/label-maps" "$CARGO_TARGET_DIR/criterion"

@@ -1,6 +1,6 @@
 """A numpy replica of the contact solver's preconditioned iteration, to try changes to it.
 
-Usage (the bench venv has numpy and scipy; `make bench-deflation-probe` creates it):
+Usage (with numpy and scipy, e.g. the interpreter `bash benches/venv.sh numpy scipy` prints):
 
     python benches/solver_replica.py N SURFACE.npy LOADS [--deflate] [--start increment]
         [--trace] [--tol 1e-10]
@@ -40,6 +40,71 @@ RESTART_FRACTION = 0.03
 DESCENT_FRACTION = 0.5
 
 
+class Operator:
+    """The elastic operator of a periodic box of side 1 and E* = 1 on an n × n grid, by FFT:
+    û = 2 p̂ / (E* 2π|q|) for q in cycles per box side (K), and its inverse (K⁻¹); both 0 at
+    q = 0."""
+
+    def __init__(self, n, workers=2):
+        self.n, self.workers = n, workers
+        qx = np.fft.fftfreq(n, 1.0 / n)[:, None]
+        qy = np.fft.rfftfreq(n, 1.0 / n)[None, :]
+        self.q = np.sqrt(qx**2 + qy**2)
+        self.k_hat = np.where(self.q > 0, 1.0 / (np.pi * np.where(self.q > 0, self.q, 1.0)), 0.0)
+        self.k_inv_hat = np.pi * self.q
+
+    def conv(self, x, multiplier):
+        return sf.irfft2(sf.rfft2(x, workers=self.workers) * multiplier, s=(self.n, self.n),
+                         workers=self.workers)
+
+    def full(self, idx, values):
+        """A field that is `values` at the flat indices `idx` and 0 elsewhere."""
+        out = np.zeros(self.n * self.n)
+        out[idx] = values
+        return out.reshape(self.n, self.n)
+
+
+def coarse_space(op, F, block=BLOCK):
+    """Deflation space of the free set F: indicators of the block × block blocks on F (Z, one
+    row per block that F touches), A Z for A = P K P (P: restrict to F, centre; one
+    convolution per block), and the pseudo-inverse of E = Zᵀ A Z on the mean-zero space
+    Σ_I c_I y_I = 0. Returns (idx, Z, AZ, E_inv): idx the flat indices of F."""
+    n = op.n
+    idx = np.flatnonzero(F)
+    blocks = ((np.arange(n) // block)[:, None] * (n // block)
+              + (np.arange(n) // block)[None, :]).ravel()
+    _, pos = np.unique(blocks[idx], return_inverse=True)
+    Z = np.zeros((pos.max() + 1, len(idx)))
+    Z[pos, np.arange(len(idx))] = 1.0
+    AZ = np.array([op.conv(op.full(idx, z), op.k_hat).ravel()[idx] for z in Z])
+    return restricted(idx, Z, AZ, np.ones(len(idx), dtype=bool))
+
+
+def restricted(idx, Z, AZ, keep):
+    """(idx, Z, AZ, E_inv) of a coarse space restricted to the nodes `keep` of idx (A Z
+    centred on them, E = Zᵀ A Z inverted on the mean-zero space)."""
+    idx, Z, AZ = idx[keep], Z[:, keep], AZ[:, keep]
+    AZ = AZ - AZ.mean(axis=1, keepdims=True)
+    counts = Z.sum(axis=1)
+    Z, AZ, counts = Z[counts > 0], AZ[counts > 0], counts[counts > 0]
+    E = Z @ AZ.T
+    u = counts / np.linalg.norm(counts)
+    proj = np.eye(len(counts)) - np.outer(u, u)
+    E_inv = proj @ np.linalg.pinv(proj @ (0.5 * (E + E.T)) @ proj, rcond=1e-10,
+                                  hermitian=True) @ proj
+    return idx, Z, AZ, E_inv
+
+
+def deflated(op, M, P, coarse, r):
+    """The balancing Neumann–Neumann preconditioner (I − Q A) M (I − A Q) + Q applied to r,
+    Q = Z E⁺ Zᵀ, with M and the centring P on the free set."""
+    idx, Z, AZ, E_inv = coarse
+    y = E_inv @ (Z @ r.ravel()[idx])
+    s = M(P(r - op.full(idx, AZ.T @ y)))
+    v = E_inv @ (AZ @ s.ravel()[idx])
+    return P(s - op.full(idx, Z.T @ v) + op.full(idx, Z.T @ y))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("n", type=int)
@@ -56,70 +121,14 @@ def main():
     n = args.n
     h = np.load(args.surface)
     h_std = h.std()
-    qx = np.fft.fftfreq(n, 1.0 / n)[:, None]
-    qy = np.fft.rfftfreq(n, 1.0 / n)[None, :]
-    q = np.sqrt(qx**2 + qy**2)
-    # û = 2 p̂ / (E* 2π|q|) for q in cycles per box side.
-    k_hat = np.where(q > 0, 1.0 / (np.pi * np.where(q > 0, q, 1.0)), 0.0)
-    k_inv_hat = np.pi * q
-
-    def conv(x, m):
-        return sf.irfft2(sf.rfft2(x, workers=args.workers) * m, s=(n, n), workers=args.workers)
-
+    op = Operator(n, args.workers)
+    conv, k_hat, k_inv_hat = op.conv, op.k_hat, op.k_inv_hat
     # Spectral rms slope, as the solver's load scale W0 = E* · rms slope · L².
     h_hat = sf.rfft2(h, workers=args.workers)
     weights = np.full(h_hat.shape, 2.0)
     weights[:, 0] = 1.0
     weights[:, -1] = 1.0
-    slope = np.sqrt(np.sum(weights * np.abs(h_hat) ** 2 * (2 * np.pi * q) ** 2) / n**4)
-    block = ((np.arange(n) // BLOCK)[:, None] * (n // BLOCK)
-             + (np.arange(n) // BLOCK)[None, :]).ravel()
-
-    def deflation(F):
-        """The deflated preconditioner on free set F (exact coarse problem)."""
-        idx = np.flatnonzero(F)
-        ids, pos = np.unique(block[idx], return_inverse=True)
-        Z = np.zeros((len(ids), len(idx)))
-        Z[pos, np.arange(len(idx))] = 1.0
-        counts = Z.sum(axis=1)
-
-        def full(v):
-            out = np.zeros(n * n)
-            out[idx] = v
-            return out.reshape(n, n)
-
-        AZ = np.array([conv(full(z), k_hat).ravel()[idx] for z in Z])
-        AZ -= AZ.mean(axis=1, keepdims=True)
-        E = Z @ AZ.T
-        u = counts / np.linalg.norm(counts)
-        proj = np.eye(len(counts)) - np.outer(u, u)
-        E_inv = proj @ np.linalg.pinv(proj @ (0.5 * (E + E.T)) @ proj, rcond=1e-10,
-                                      hermitian=True) @ proj
-        return idx, Z, AZ, E_inv, full
-
-    def restrict(coarse, F):
-        """A coarse space built on an earlier free set, restricted to the current one (its
-        A Z stale on the nodes that changed); the space itself when F has not changed."""
-        idx, Z, AZ, E_inv, full = coarse
-        keep = F.ravel()[idx]
-        if keep.all() and len(idx) == F.sum():
-            return coarse
-        idx, Z, AZ = idx[keep], Z[:, keep], AZ[:, keep]
-        AZ = AZ - AZ.mean(axis=1, keepdims=True)
-        counts = Z.sum(axis=1)
-        Z, AZ, counts = Z[counts > 0], AZ[counts > 0], counts[counts > 0]
-        E = Z @ AZ.T
-        u = counts / np.linalg.norm(counts)
-        proj = np.eye(len(counts)) - np.outer(u, u)
-        E_inv = proj @ np.linalg.pinv(proj @ (0.5 * (E + E.T)) @ proj, rcond=1e-10,
-                                      hermitian=True) @ proj
-
-        def full(v):
-            out = np.zeros(n * n)
-            out[idx] = v
-            return out.reshape(n, n)
-
-        return idx, Z, AZ, E_inv, full
+    slope = np.sqrt(np.sum(weights * np.abs(h_hat) ** 2 * (2 * np.pi * op.q) ** 2) / n**4)
 
     def solve(p, target, trace):
         if p.sum() > 0 and args.start == "increment":
@@ -153,13 +162,13 @@ def main():
             r = P(g)
             if args.deflate:
                 if coarse_key is None or np.sum(coarse_key != F) > args.refresh * F.sum():
-                    coarse_key, coarse = F.copy(), deflation(F)
+                    coarse_key, coarse = F.copy(), coarse_space(op, F)
                     refreshes[0] += 1
-                idx, Z, AZ, E_inv, full = restrict(coarse, F)
-                y = E_inv @ (Z @ r.ravel()[idx])
-                s = P(conv(P(r - full(AZ.T @ y)), k_inv_hat))
-                v = E_inv @ (AZ @ s.ravel()[idx])
-                z = P(s - full(Z.T @ v) + full(Z.T @ y))
+                # The space built on an earlier F, restricted to the current one (A Z stale
+                # on the nodes that changed); itself when F has not changed.
+                keep = F.ravel()[coarse[0]]
+                current = coarse if keep.all() else restricted(*coarse[:3], keep)
+                z = deflated(op, lambda x: P(conv(x, k_inv_hat)), P, current, r)
             elif args.f32_preconditioner:
                 r32 = r.astype(np.float32)
                 z = P(sf.irfft2(sf.rfft2(r32, workers=args.workers) * k_inv_hat.astype(np.float32),
