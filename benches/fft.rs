@@ -1,22 +1,28 @@
 //! Criterion benchmark of the 2-D real FFT pair (forward r2c + inverse c2r) at
-//! N = 512 … 4096 with 1 and 2 threads. `make bench-fft` runs it next to numpy's
-//! rfft2/irfft2 on the same sizes and writes the comparison table.
+//! N = 512 … 4096: in double precision with 1 and 2 threads, in single precision (the
+//! solver's preconditioner) with 1. `make bench-fft` runs it next to FFTW and numpy on the
+//! same sizes and writes the comparison tables.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use wearcoef::spectral::Fft2;
+use wearcoef::spectral::{Fft2, Real};
 
 fn fft_pair(c: &mut Criterion) {
-    let mut group = c.benchmark_group("fft_pair");
+    pairs::<f64>(c, "fft_pair", &[1, 2]);
+    pairs::<f32>(c, "fft_pair_f32", &[1]);
+}
+
+fn pairs<T: Real>(c: &mut Criterion, name: &str, thread_counts: &[usize]) {
+    let mut group = c.benchmark_group(name);
     group.sample_size(20);
     for n in [512usize, 1024, 2048, 4096] {
-        let fft = Fft2::new(n);
+        let fft = Fft2::<T>::new(n);
         let mut scratch = fft.make_scratch();
         let mut spectrum = fft.make_spectrum();
-        let input: Vec<f64> = (0..n * n)
-            .map(|i| ((i * 7919) % 1013) as f64 / 1013.0 - 0.5)
+        let input: Vec<T> = (0..n * n)
+            .map(|i| T::narrow(((i * 7919) % 1013) as f64 / 1013.0 - 0.5))
             .collect();
-        let mut output = vec![0.0; n * n];
-        for threads in [1usize, 2] {
+        let mut output = vec![T::zero(); n * n];
+        for &threads in thread_counts {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()

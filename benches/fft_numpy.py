@@ -1,12 +1,13 @@
 """Time the 2-D real FFT pair (forward r2c + inverse c2r, float64) of numpy and of FFTW
-(pyFFTW, plans made with FFTW_MEASURE, 1 and 2 threads) on the sizes of benches/fft.rs.
+(pyFFTW, plans made with FFTW_MEASURE, 1 and 2 threads), and FFTW's float32 pair (1 thread),
+on the sizes of benches/fft.rs.
 
 Each timing is the median over 15 repeats of a loop long enough to last about 0.2 s. The
 FFTW plans work on preallocated aligned arrays and are executed without copies, as the
 Rust bench reuses its plans and buffers.
 
 Prints one JSON object: {"numpy": version, "pyfftw": version,
-"seconds": {"numpy": {N: s}, "fftw1": {N: s}, "fftw2": {N: s}}}.
+"seconds": {"numpy": {N: s}, "fftw1": {N: s}, "fftw2": {N: s}, "fftw1_f32": {N: s}}}.
 """
 import json
 import sys
@@ -25,7 +26,7 @@ def median_seconds(pair):
     return float(np.median(runs) / number)
 
 
-result = {"numpy": {}, "fftw1": {}, "fftw2": {}}
+result = {"numpy": {}, "fftw1": {}, "fftw2": {}, "fftw1_f32": {}}
 versions = {"numpy": np.__version__}
 try:
     import pyfftw
@@ -41,10 +42,14 @@ for n in sizes:
     )
     if pyfftw is None:
         continue
-    for threads in (1, 2):
-        real = pyfftw.empty_aligned((n, n), dtype="float64")
-        spec = pyfftw.empty_aligned((n, n // 2 + 1), dtype="complex128")
-        out = pyfftw.empty_aligned((n, n), dtype="float64")
+    for threads, real_type, complex_type, name in (
+        (1, "float64", "complex128", "fftw1"),
+        (2, "float64", "complex128", "fftw2"),
+        (1, "float32", "complex64", "fftw1_f32"),
+    ):
+        real = pyfftw.empty_aligned((n, n), dtype=real_type)
+        spec = pyfftw.empty_aligned((n, n // 2 + 1), dtype=complex_type)
+        out = pyfftw.empty_aligned((n, n), dtype=real_type)
         forward = pyfftw.FFTW(
             real, spec, axes=(0, 1), direction="FFTW_FORWARD",
             flags=("FFTW_MEASURE",), threads=threads,
@@ -59,10 +64,11 @@ for n in sizes:
             forward.execute()
             inverse.execute()
 
-        result[f"fftw{threads}"][n] = median_seconds(pair)
+        result[name][n] = median_seconds(pair)
         # Same result as numpy (FFTW's inverse is unnormalised, like ours).
         forward.execute()
         inverse.execute()
-        assert np.allclose(out / (n * n), a), "FFTW pair does not round-trip"
+        tolerance = 1e-4 if real_type == "float32" else 1e-8
+        assert np.allclose(out / (n * n), a, atol=tolerance), "FFTW pair does not round-trip"
 
 print(json.dumps({**versions, "seconds": result}))

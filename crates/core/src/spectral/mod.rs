@@ -18,12 +18,15 @@
 //! over the current rayon pool by rows; the result does not depend on the thread count
 //! (each 1-D transform is computed identically whatever thread runs it).
 
-use std::cell::RefCell;
 use std::sync::Arc;
 
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
-use rustfft::{num_complex::Complex64, Fft, FftPlanner};
+use rustfft::{num_complex::Complex, num_complex::Complex64, Fft, FftPlanner};
+
+mod real;
+pub use real::Real;
+use real::Work;
 
 /// Columns gathered together by [`Fft2::convolve_start`] (four complex values = one
 /// 64-byte cache line per row).
@@ -34,7 +37,7 @@ const PREFETCH_ROWS: usize = 16;
 /// A hint that the cache line holding `at` will be read soon (no effect on results; a
 /// no-op off x86-64).
 #[inline(always)]
-fn prefetch(at: *const Complex64) {
+fn prefetch<T>(at: *const Complex<T>) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: a prefetch never faults, whatever the address.
     unsafe {
@@ -44,34 +47,8 @@ fn prefetch(at: *const Complex64) {
     let _ = at;
 }
 
-/// Whether every value of `row` is ±0, scanning eight values at a time (the bit patterns
-/// without their sign bit are OR-ed, which vectorises; an early exit per group).
-fn all_zero(row: &[f64]) -> bool {
-    let mut groups = row.chunks_exact(8);
-    for group in &mut groups {
-        if group.iter().fold(0u64, |acc, v| acc | (v.to_bits() << 1)) != 0 {
-            return false;
-        }
-    }
-    groups.remainder().iter().all(|&v| v == 0.0)
-}
-
 /// Upper bound on the number of independent work blocks.
 const MAX_BLOCKS: usize = 64;
-
-/// Working rows of the 1-D transforms, one set per thread (not per work block: a block's
-/// task runs on one thread from start to end, and 64 blocks' worth of rows would cost
-/// 11·64·n doubles, more than 2 n² at n = 256).
-#[derive(Default)]
-struct Work {
-    real_row: Vec<f64>,
-    complex: Vec<Complex64>,
-    columns: Vec<Complex64>,
-}
-
-thread_local! {
-    static WORK: RefCell<Work> = RefCell::new(Work::default());
-}
 
 /// Run `f` with this thread's working buffers: a real row of `real` values, `complex` and
 /// `columns` complex values. They are grown (allocated) only when the thread first needs
@@ -79,16 +56,16 @@ thread_local! {
 /// reads, so results do not depend on which thread ran. If they are already in use on this
 /// thread (a transform started from inside a `produce` or `consume` callback), this call
 /// gets buffers of its own.
-fn with_work<R>(
+fn with_work<T: Real, R>(
     real: usize,
     complex: usize,
     columns: usize,
-    f: impl FnOnce(&mut [f64], &mut [Complex64], &mut [Complex64]) -> R,
+    f: impl FnOnce(&mut [T], &mut [Complex<T>], &mut [Complex<T>]) -> R,
 ) -> R {
-    fn fit(w: &mut Work, real: usize, complex: usize, columns: usize) {
-        let zero = Complex64::new(0.0, 0.0);
+    fn fit<T: Real>(w: &mut Work<T>, real: usize, complex: usize, columns: usize) {
+        let zero = Complex::new(T::zero(), T::zero());
         if w.real_row.len() < real {
-            w.real_row.resize(real, 0.0);
+            w.real_row.resize(real, T::zero());
         }
         if w.complex.len() < complex {
             w.complex.resize(complex, zero);
@@ -97,7 +74,7 @@ fn with_work<R>(
             w.columns.resize(columns, zero);
         }
     }
-    WORK.with(|cell| match cell.try_borrow_mut() {
+    T::with_thread_work(|cell| match cell.try_borrow_mut() {
         Ok(mut w) => {
             fit(&mut w, real, complex, columns);
             let w = &mut *w;
@@ -116,24 +93,44 @@ fn with_work<R>(
 }
 
 /// Planned forward and inverse 2-D real FFTs for an `n × n` grid.
-pub struct Fft2 {
+pub struct Fft2<T: Real = f64> {
     n: usize,
-    r2c: Arc<dyn RealToComplex<f64>>,
-    c2r: Arc<dyn ComplexToReal<f64>>,
-    col_forward: Arc<dyn Fft<f64>>,
-    col_inverse: Arc<dyn Fft<f64>>,
+    r2c: Arc<dyn RealToComplex<T>>,
+    c2r: Arc<dyn ComplexToReal<T>>,
+    col_forward: Arc<dyn Fft<T>>,
+    col_inverse: Arc<dyn Fft<T>>,
     /// Scratch length of the 1-D transforms (the largest of the four plans').
     complex_len: usize,
 }
 
-/// Working memory for one [`Fft2`]; reuse it across calls.
+/// Working memory for one [`Fft2`]; reuse it across calls. Its storage is double
+/// precision and sized for it, so that one scratch serves the plans of either precision
+/// for the same `n` (an `f32` transform uses the first half of the bytes).
 pub struct Fft2Scratch {
     n: usize,
-    /// Row-transformed data, `n` rows of `n/2+1` (y-major), between the two passes.
+    /// Row-transformed data, `n` rows of `n/2+1` (y-major) values of `Complex<T>`, between
+    /// the two passes.
     rows: Vec<Complex64>,
 }
 
-impl Fft2 {
+impl Fft2Scratch {
+    /// The row-transformed data as `n (n/2 + 1)` values of `Complex<T>`.
+    fn rows_mut<T: Real>(&mut self) -> &mut [Complex<T>] {
+        let len = self.n * (self.n / 2 + 1);
+        const {
+            assert!(
+                std::mem::size_of::<Complex<T>>() <= std::mem::size_of::<Complex64>()
+                    && std::mem::align_of::<Complex<T>>() <= std::mem::align_of::<Complex64>()
+            )
+        };
+        // SAFETY: the storage holds `len` values of Complex64, at least as large and as
+        // aligned as Complex<T> (checked above); T is f32 or f64 (the sealed `Real`), for
+        // which every bit pattern is a valid value; the borrow of `self` is held.
+        unsafe { std::slice::from_raw_parts_mut(self.rows.as_mut_ptr() as *mut Complex<T>, len) }
+    }
+}
+
+impl<T: Real> Fft2<T> {
     /// Plan the transforms for an `n × n` grid (`n` even, ≥ 2).
     ///
     /// # Panics
@@ -143,8 +140,8 @@ impl Fft2 {
             n >= 2 && n.is_multiple_of(2),
             "Fft2 needs an even n ≥ 2, got {n}"
         );
-        let mut real_planner = RealFftPlanner::<f64>::new();
-        let mut planner = FftPlanner::<f64>::new();
+        let mut real_planner = RealFftPlanner::<T>::new();
+        let mut planner = FftPlanner::<T>::new();
         let (r2c, c2r) = (
             real_planner.plan_fft_forward(n),
             real_planner.plan_fft_inverse(n),
@@ -181,8 +178,8 @@ impl Fft2 {
     }
 
     /// A zeroed half spectrum in this plan's layout.
-    pub fn make_spectrum(&self) -> Vec<Complex64> {
-        vec![Complex64::new(0.0, 0.0); self.spectrum_len()]
+    pub fn make_spectrum(&self) -> Vec<Complex<T>> {
+        vec![Complex::new(T::zero(), T::zero()); self.spectrum_len()]
     }
 
     /// Allocate the scratch these plans need: `(n/2 + 1)·n` complex values (about `n²`
@@ -191,13 +188,20 @@ impl Fft2 {
     /// a thread of another pool allocates them at its first transform.
     pub fn make_scratch(&self) -> Fft2Scratch {
         let n = self.n;
-        // Give every thread of the current pool its working rows now, so that no thread
-        // allocates them during the transforms that follow (e.g. in a solver's iterations).
-        rayon::broadcast(|_| with_work(n, self.complex_len, GATHER * n, |_, _, _| ()));
+        self.prepare_threads();
         Fft2Scratch {
             n,
             rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
         }
+    }
+
+    /// Give every thread of the current rayon pool its working rows for these plans now
+    /// (about `11 n` values), so that no thread allocates them during the transforms that
+    /// follow (e.g. in a solver's iterations). [`Self::make_scratch`] does this; a plan that
+    /// shares another plan's scratch calls it itself.
+    pub fn prepare_threads(&self) {
+        let n = self.n;
+        rayon::broadcast(|_| with_work::<T, _>(n, self.complex_len, GATHER * n, |_, _, _| ()));
     }
 
     /// Groups of [`GATHER`] columns of the half spectrum.
@@ -225,7 +229,7 @@ impl Fft2 {
 
     /// Forward transform of the real row-major field `input` (length `n²`) into `output`
     /// (length [`Self::spectrum_len`], kx-major). Not normalised.
-    pub fn forward(&self, input: &[f64], output: &mut [Complex64], scratch: &mut Fft2Scratch) {
+    pub fn forward(&self, input: &[T], output: &mut [Complex<T>], scratch: &mut Fft2Scratch) {
         assert_eq!(
             input.len(),
             self.n * self.n,
@@ -235,7 +239,7 @@ impl Fft2 {
         let block_len = self.rows_per_block() * n;
         self.forward_rows(
             input.par_chunks(block_len),
-            |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
+            |rows: &mut &[T], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
             output,
             scratch,
         );
@@ -251,12 +255,12 @@ impl Fft2 {
         &self,
         blocks: I,
         produce: F,
-        output: &mut [Complex64],
+        output: &mut [Complex<T>],
         scratch: &mut Fft2Scratch,
     ) where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
-        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+        F: Fn(&mut S, usize, &mut [T]) + Sync,
     {
         let n = self.n;
         let h = n / 2 + 1;
@@ -268,11 +272,11 @@ impl Fft2 {
         //    the kx-major output (one cache line per row, prefetched), then transformed
         //    along y while in cache. No separate transpose pass: the rows, 16 (n/2 + 1)
         //    bytes apart, were walked once per column group, not once per transpose tile.
-        let rows = SharedRows(scratch.rows.as_mut_ptr());
+        let rows = SharedRows(scratch.rows_mut::<T>().as_mut_ptr());
         self.for_each_column_group(output, &self.col_forward, |kx0, cols, complex| {
             // SAFETY: columns kx0.. < h of the rows are only read here, and nothing writes
             // `scratch.rows` during this loop.
-            unsafe { gather_columns(rows.get(), n, h, kx0, cols) };
+            unsafe { T::gather_columns(rows.get(), n, h, kx0, cols) };
             for col in cols.chunks_exact_mut(n) {
                 self.col_forward.process_with_scratch(col, complex);
             }
@@ -284,9 +288,9 @@ impl Fft2 {
     /// in-place scratch of `fft` per thread.
     fn for_each_column_group(
         &self,
-        data: &mut [Complex64],
-        fft: &Arc<dyn Fft<f64>>,
-        each: impl Fn(usize, &mut [Complex64], &mut [Complex64]) + Sync,
+        data: &mut [Complex<T>],
+        fft: &Arc<dyn Fft<T>>,
+        each: impl Fn(usize, &mut [Complex<T>], &mut [Complex<T>]) + Sync,
     ) {
         let n = self.n;
         let gpb = Self::groups_per_block(n, self.block_count());
@@ -309,8 +313,8 @@ impl Fft2 {
     /// Hermitian (real-field) subspace.
     pub fn inverse(
         &self,
-        spectrum: &mut [Complex64],
-        output: &mut [f64],
+        spectrum: &mut [Complex<T>],
+        output: &mut [T],
         scratch: &mut Fft2Scratch,
     ) {
         assert_eq!(
@@ -327,7 +331,7 @@ impl Fft2 {
         let rpb = self.rows_per_block();
         let len = self.c2r.get_scratch_len();
         scratch
-            .rows
+            .rows_mut::<T>()
             .par_chunks_mut(rpb * h)
             .zip(output.par_chunks_mut(rpb * n))
             .for_each(|(rows_in, rows_out)| {
@@ -336,8 +340,8 @@ impl Fft2 {
                         .chunks_exact_mut(h)
                         .zip(rows_out.chunks_exact_mut(n))
                     {
-                        row_in[0].im = 0.0;
-                        row_in[h - 1].im = 0.0;
+                        row_in[0].im = T::zero();
+                        row_in[h - 1].im = T::zero();
                         self.c2r
                             .process_with_scratch(row_in, row_out, &mut complex[..len])
                             .expect("c2r lengths are fixed and imaginary parts were cleared");
@@ -353,14 +357,14 @@ impl Fft2 {
     /// Hermitian projection as [`Self::inverse`].
     pub fn inverse_rows<S, I, F>(
         &self,
-        spectrum: &mut [Complex64],
+        spectrum: &mut [Complex<T>],
         blocks: I,
         consume: F,
         scratch: &mut Fft2Scratch,
     ) where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
-        F: Fn(&mut S, usize, &[f64]) + Sync,
+        F: Fn(&mut S, usize, &[T]) + Sync,
     {
         self.check(self.n * self.n, spectrum.len(), scratch);
         assert_eq!(blocks.len(), self.block_count(), "one state per work block");
@@ -373,17 +377,17 @@ impl Fft2 {
     /// Inverse complex FFT along y of every column kx of `spectrum`, GATHER columns at a
     /// time, each group scattered into `scratch.rows` while in cache (no separate transpose
     /// pass). `spectrum` holds garbage afterwards.
-    fn inverse_columns(&self, spectrum: &mut [Complex64], scratch: &mut Fft2Scratch) {
+    fn inverse_columns(&self, spectrum: &mut [Complex<T>], scratch: &mut Fft2Scratch) {
         let n = self.n;
         let h = n / 2 + 1;
-        let rows = SharedRows(scratch.rows.as_mut_ptr());
+        let rows = SharedRows(scratch.rows_mut::<T>().as_mut_ptr());
         self.for_each_column_group(spectrum, &self.col_inverse, |kx0, cols, complex| {
             for col in cols.chunks_exact_mut(n) {
                 self.col_inverse.process_with_scratch(col, complex);
             }
             // SAFETY: columns kx0.. < h belong to this group alone, and nothing else
             // touches `scratch.rows` during this loop.
-            unsafe { scatter_columns(rows.get(), n, h, kx0, cols) };
+            unsafe { T::scatter_columns(rows.get(), n, h, kx0, cols) };
         });
     }
 
@@ -408,8 +412,8 @@ impl Fft2 {
     ) where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
-        F: Fn(&mut S, usize, &mut [f64]) + Sync,
-        C: Fn(usize, &mut [Complex64]) -> f64 + Sync,
+        F: Fn(&mut S, usize, &mut [T]) + Sync,
+        C: Fn(usize, &mut [Complex<T>]) -> f64 + Sync,
     {
         let n = self.n;
         let h = n / 2 + 1;
@@ -420,7 +424,7 @@ impl Fft2 {
         self.r2c_rows(blocks, produce, scratch);
         // 2. columns, in place, GATHER at a time; block b takes groups b·gpb.. .
         let gpb = Self::groups_per_block(n, self.block_count());
-        let rows = SharedRows(scratch.rows.as_mut_ptr());
+        let rows = SharedRows(scratch.rows_mut::<T>().as_mut_ptr());
         column_values
             .par_chunks_mut(gpb * GATHER)
             .enumerate()
@@ -432,7 +436,7 @@ impl Fft2 {
                         let cols = &mut columns[..width * n];
                         // SAFETY: columns kx0..kx0 + width (< h) belong to this group
                         // alone, and nothing else touches `scratch.rows` during this loop.
-                        unsafe { gather_columns(rows.get(), n, h, kx0, cols) };
+                        unsafe { T::gather_columns(rows.get(), n, h, kx0, cols) };
                         for (j, col) in cols.chunks_exact_mut(n).enumerate() {
                             let len = self.col_forward.get_inplace_scratch_len();
                             self.col_forward
@@ -443,7 +447,7 @@ impl Fft2 {
                                 .process_with_scratch(col, &mut complex[..len]);
                         }
                         // SAFETY: as for the gather above.
-                        unsafe { scatter_columns(rows.get(), n, h, kx0, cols) };
+                        unsafe { T::scatter_columns(rows.get(), n, h, kx0, cols) };
                     }
                 });
             });
@@ -456,7 +460,7 @@ impl Fft2 {
     where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
-        F: Fn(&mut S, usize, &[f64]) + Sync,
+        F: Fn(&mut S, usize, &[T]) + Sync,
     {
         assert_eq!(scratch.n, self.n, "scratch was made for another grid size");
         assert_eq!(blocks.len(), self.block_count(), "one state per work block");
@@ -468,23 +472,23 @@ impl Fft2 {
     where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
-        F: Fn(&mut S, usize, &mut [f64]) + Sync,
+        F: Fn(&mut S, usize, &mut [T]) + Sync,
     {
         let h = self.n / 2 + 1;
         let rpb = self.rows_per_block();
         let len = self.r2c.get_scratch_len();
         scratch
-            .rows
+            .rows_mut::<T>()
             .par_chunks_mut(rpb * h)
             .zip(blocks)
             .for_each(|(rows_out, mut state)| {
                 with_work(self.n, len, 0, |real_row, complex, _| {
                     for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
                         produce(&mut state, r, real_row);
-                        if all_zero(real_row) {
+                        if T::all_zero(real_row) {
                             // A row of zeros (a row with no contact node, for the solver's
                             // fields) transforms to zeros: its FFT is skipped.
-                            row_out.fill(Complex64::new(0.0, 0.0));
+                            row_out.fill(Complex::new(T::zero(), T::zero()));
                         } else {
                             self.r2c
                                 .process_with_scratch(real_row, row_out, complex)
@@ -500,20 +504,20 @@ impl Fft2 {
     where
         S: Send,
         I: IndexedParallelIterator<Item = S>,
-        F: Fn(&mut S, usize, &[f64]) + Sync,
+        F: Fn(&mut S, usize, &[T]) + Sync,
     {
         let h = self.n / 2 + 1;
         let rpb = self.rows_per_block();
         let len = self.c2r.get_scratch_len();
         scratch
-            .rows
+            .rows_mut::<T>()
             .par_chunks_mut(rpb * h)
             .zip(blocks)
             .for_each(|(rows_in, mut state)| {
                 with_work(self.n, len, 0, |real_row, complex, _| {
                     for (r, row_in) in rows_in.chunks_exact_mut(h).enumerate() {
-                        row_in[0].im = 0.0;
-                        row_in[h - 1].im = 0.0;
+                        row_in[0].im = T::zero();
+                        row_in[h - 1].im = T::zero();
                         self.c2r
                             .process_with_scratch(row_in, real_row, complex)
                             .expect("c2r lengths are fixed and imaginary parts were cleared");
@@ -534,151 +538,18 @@ impl Fft2 {
     }
 }
 
-/// Copy columns `kx0 .. kx0 + w` of the row-major `n × h` complex array at `rows` into
-/// `cols` (`w = cols.len() / n ≤ GATHER` columns of length `n` one after the other),
-/// prefetching [`PREFETCH_ROWS`] rows ahead: rows are `h·16` bytes apart (more than a 4 KiB
-/// page from 512² on), which the hardware prefetchers do not follow. A group of four columns (one
-/// 64-byte line per row) is moved two rows at a time in 256-bit registers where the processor
-/// has AVX; the values moved are the same either way.
-///
-/// # Safety
-/// `rows` must be valid for reads of `n·h` values, `kx0 + w ≤ h`, and no other thread may
-/// write those columns meanwhile.
-unsafe fn gather_columns(
-    rows: *const Complex64,
-    n: usize,
-    h: usize,
-    kx0: usize,
-    cols: &mut [Complex64],
-) {
-    let w = cols.len() / n;
-    let ahead = |r: usize| {
-        if r + PREFETCH_ROWS < n {
-            prefetch(rows.wrapping_add((r + PREFETCH_ROWS) * h + kx0));
-            prefetch(rows.wrapping_add((r + PREFETCH_ROWS) * h + kx0 + w - 1));
-        }
-    };
-    #[cfg(target_arch = "x86_64")]
-    if w == GATHER && n.is_multiple_of(2) && std::is_x86_feature_detected!("avx") {
-        // SAFETY: AVX is present (checked); the bounds are the caller's.
-        unsafe { gather4_avx(rows, h, kx0, cols, &ahead) };
-        return;
-    }
-    for r in 0..n {
-        ahead(r);
-        for j in 0..w {
-            // SAFETY: `r·h + kx0 + j < n·h` (the caller's bounds).
-            cols[j * n + r] = unsafe { rows.add(r * h + kx0 + j).read() };
-        }
-    }
-}
-
-/// The inverse of [`gather_columns`]: `cols` written back into columns `kx0 ..` of `rows`.
-///
-/// # Safety
-/// As for [`gather_columns`], with writes.
-unsafe fn scatter_columns(
-    rows: *mut Complex64,
-    n: usize,
-    h: usize,
-    kx0: usize,
-    cols: &[Complex64],
-) {
-    let w = cols.len() / n;
-    #[cfg(target_arch = "x86_64")]
-    if w == GATHER && n.is_multiple_of(2) && std::is_x86_feature_detected!("avx") {
-        // SAFETY: AVX is present (checked); the bounds are the caller's.
-        unsafe { scatter4_avx(rows, h, kx0, cols) };
-        return;
-    }
-    for r in 0..n {
-        for j in 0..w {
-            // SAFETY: `r·h + kx0 + j < n·h` (the caller's bounds).
-            unsafe { rows.add(r * h + kx0 + j).write(cols[j * n + r]) };
-        }
-    }
-}
-
-/// [`gather_columns`] for four columns and an even `n`, two rows at a time: each row's four
-/// values are two 256-bit loads, regrouped by column with 128-bit lane permutes.
-///
-/// # Safety
-/// AVX must be present; the bounds of [`gather_columns`].
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-unsafe fn gather4_avx(
-    rows: *const Complex64,
-    h: usize,
-    kx0: usize,
-    cols: &mut [Complex64],
-    ahead: &impl Fn(usize),
-) {
-    use std::arch::x86_64::{_mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd};
-    let n = cols.len() / GATHER;
-    let c = cols.as_mut_ptr() as *mut f64;
-    for r in (0..n).step_by(2) {
-        ahead(r);
-        ahead(r + 1);
-        // SAFETY: rows r and r + 1 < n, columns kx0..kx0 + 4 ≤ h (the caller's bounds);
-        // column j's values r, r + 1 are at 2(j·n + r) doubles in `cols`.
-        unsafe {
-            let a = rows.add(r * h + kx0) as *const f64;
-            let b = rows.add((r + 1) * h + kx0) as *const f64;
-            let (a01, a23) = (_mm256_loadu_pd(a), _mm256_loadu_pd(a.add(4)));
-            let (b01, b23) = (_mm256_loadu_pd(b), _mm256_loadu_pd(b.add(4)));
-            _mm256_storeu_pd(c.add(2 * r), _mm256_permute2f128_pd::<0x20>(a01, b01));
-            _mm256_storeu_pd(c.add(2 * (n + r)), _mm256_permute2f128_pd::<0x31>(a01, b01));
-            _mm256_storeu_pd(
-                c.add(2 * (2 * n + r)),
-                _mm256_permute2f128_pd::<0x20>(a23, b23),
-            );
-            _mm256_storeu_pd(
-                c.add(2 * (3 * n + r)),
-                _mm256_permute2f128_pd::<0x31>(a23, b23),
-            );
-        }
-    }
-}
-
-/// [`scatter_columns`] for four columns and an even `n`, two rows at a time.
-///
-/// # Safety
-/// AVX must be present; the bounds of [`scatter_columns`].
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-unsafe fn scatter4_avx(rows: *mut Complex64, h: usize, kx0: usize, cols: &[Complex64]) {
-    use std::arch::x86_64::{_mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd};
-    let n = cols.len() / GATHER;
-    let c = cols.as_ptr() as *const f64;
-    for r in (0..n).step_by(2) {
-        // SAFETY: as in `gather4_avx`.
-        unsafe {
-            let c0 = _mm256_loadu_pd(c.add(2 * r));
-            let c1 = _mm256_loadu_pd(c.add(2 * (n + r)));
-            let c2 = _mm256_loadu_pd(c.add(2 * (2 * n + r)));
-            let c3 = _mm256_loadu_pd(c.add(2 * (3 * n + r)));
-            let a = rows.add(r * h + kx0) as *mut f64;
-            let b = rows.add((r + 1) * h + kx0) as *mut f64;
-            _mm256_storeu_pd(a, _mm256_permute2f128_pd::<0x20>(c0, c1));
-            _mm256_storeu_pd(a.add(4), _mm256_permute2f128_pd::<0x20>(c2, c3));
-            _mm256_storeu_pd(b, _mm256_permute2f128_pd::<0x31>(c0, c1));
-            _mm256_storeu_pd(b.add(4), _mm256_permute2f128_pd::<0x31>(c2, c3));
-        }
-    }
-}
-
 /// The row-transformed data shared by the column tasks of [`Fft2::forward_rows`],
 /// [`Fft2::inverse_rows`] and [`Fft2::convolve_start`], each of which reads or writes only its
 /// own columns.
-struct SharedRows(*mut Complex64);
+struct SharedRows<T>(*mut Complex<T>);
 
 // SAFETY: the tasks access disjoint elements (see `convolve_start`).
-unsafe impl Send for SharedRows {}
-unsafe impl Sync for SharedRows {}
+unsafe impl<T> Send for SharedRows<T> {}
+unsafe impl<T> Sync for SharedRows<T> {}
 
-impl SharedRows {
+impl<T> SharedRows<T> {
     /// The pointer (a method, so that closures capture the whole wrapper).
-    fn get(&self) -> *mut Complex64 {
+    fn get(&self) -> *mut Complex<T> {
         self.0
     }
 }

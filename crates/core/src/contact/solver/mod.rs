@@ -177,8 +177,9 @@ pub struct Solver<'a> {
     /// block; never reallocated).
     changes: Vec<Vec<(usize, f64)>>,
     sparse: Vec<(usize, f64)>,
-    /// The preconditioned gradient `z` (allocated at the first preconditioned solve).
-    preconditioned: Vec<f64>,
+    /// The preconditioned gradient `z`, in single precision like the transform that makes
+    /// it (allocated at the first preconditioned solve).
+    preconditioned: Vec<f32>,
     has_solution: bool,
     /// Whether `separation` is `K p − h` for the current `pressure`, computed exactly (after
     /// a converged solve; not after [`Self::set_start`]).
@@ -187,8 +188,9 @@ pub struct Solver<'a> {
 
 impl<'a> Solver<'a> {
     /// Check the surface and allocate every buffer: 4 n² doubles (the transform's rows, `p`,
-    /// `w`, `t`), n²/8 for the lists of changed nodes, and one more n² at the first
-    /// preconditioned solve (`z`); besides the heights and the operator's kernel (n²/2).
+    /// `w`, `t`), n²/8 for the lists of changed nodes, and n²/2 more at the first
+    /// preconditioned solve (`z`, single precision); besides the heights and the operator's
+    /// kernel (n²/2).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
         let len = n * n;

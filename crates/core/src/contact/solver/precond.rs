@@ -32,7 +32,7 @@ impl Solver<'_> {
             },
             &mut self.ws,
         );
-        self.op.finish_rows(
+        self.op.finish_rows_inverse(
             self.preconditioned
                 .par_chunks_mut(chunk)
                 .zip(self.pressure.par_chunks(chunk))
@@ -116,10 +116,10 @@ impl Solver<'_> {
 
 avx2_dispatch! {
     /// One row of the preconditioner's input, with AVX2 where available:
-    /// `o = w − level` on the free set F, 0 elsewhere.
-    fn dispatch_precondition_input(level: f64, o: &mut [f64], p: &[f64], w: &[f64]) {
+    /// `o = w − level` on the free set F, 0 elsewhere, rounded to single precision.
+    fn dispatch_precondition_input(level: f64, o: &mut [f32], p: &[f64], w: &[f64]) {
         for ((o, &p), &w) in o.iter_mut().zip(p).zip(w) {
-            *o = if free(p, w, level) { w - level } else { 0.0 };
+            *o = if free(p, w, level) { (w - level) as f32 } else { 0.0 };
         }
     }
 }
@@ -130,8 +130,8 @@ avx2_dispatch! {
     /// the free set F added to `acc` (lane `k mod LANES` takes node `k`).
     fn dispatch_precondition_output(
         level: f64,
-        row: &[f64],
-        z: &mut [f64],
+        row: &[f32],
+        z: &mut [f32],
         p: &[f64],
         w: &[f64],
         t: &[f64],
@@ -144,7 +144,7 @@ avx2_dispatch! {
             let at = i..i + LANES;
             precondition_sums(
                 level,
-                &lanes(&row[at.clone()]),
+                &widened(&row[at.clone()]),
                 &lanes(&p[at.clone()]),
                 &lanes(&w[at.clone()]),
                 &lanes(&t[at]),
@@ -156,7 +156,7 @@ avx2_dispatch! {
             let at = whole..n;
             precondition_sums(
                 level,
-                &padded(&row[at.clone()], 0.0),
+                &widened(&row[at.clone()]),
                 &padded(&p[at.clone()], 0.0),
                 &padded(&w[at.clone()], f64::INFINITY),
                 &padded(&t[at], 0.0),
@@ -164,6 +164,16 @@ avx2_dispatch! {
             );
         }
     }
+}
+
+/// Up to [`LANES`] single-precision values in double precision (exactly), 0 past the end.
+#[inline(always)]
+fn widened(slice: &[f32]) -> [f64; LANES] {
+    let mut out = [0.0; LANES];
+    for (o, &v) in out.iter_mut().zip(slice) {
+        *o = v as f64;
+    }
+    out
 }
 
 /// [`dispatch_precondition_output`]'s sums for one block of [`LANES`] nodes.
@@ -197,13 +207,13 @@ avx2_dispatch! {
         t: &mut [f64],
         row: &mut [f64],
         p: &[f64],
-        z: &[f64],
+        z: &[f32],
         w: &[f64],
     ) {
         let [z_mean, beta, direction_mean, level] = coefficients;
         for ((((t, o), &p), &z), &w) in t.iter_mut().zip(row.iter_mut()).zip(p).zip(z).zip(w) {
             *t = if free(p, w, level) {
-                (z - z_mean) + beta * (*t - direction_mean)
+                (z as f64 - z_mean) + beta * (*t - direction_mean)
             } else {
                 0.0
             };
