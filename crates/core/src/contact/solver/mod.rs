@@ -22,7 +22,12 @@
 //! the contact set (28 % fewer in all on the paper's spectrum at 1024², 38 % at 2048²;
 //! docs/BENCHMARKS.md). `K⁻¹` is the exact inverse in full contact and approximates the
 //! inverse of the restricted operator elsewhere; the iteration count then grows slowly with
-//! n, at one more convolution per iteration. `K⁻¹ P g` is summed over F as its rows leave
+//! n, at one more convolution per iteration. That convolution runs in single precision
+//! ([`ElasticOperator::start_rows_inverse`]; `z` is stored as `f32`): the preconditioner is a
+//! fixed positive operator either way, the iteration counts are those of `f64`, and the
+//! transforms take about 0.6 of the time. Everything that defines the solution (`p`, `u`,
+//! `K t`, `K Δ`, the exact recomputation, every sum) stays in `f64`; a correction `K Δ` in
+//! `f32` was tried and stalls the iteration near 10⁻⁸. `K⁻¹ P g` is summed over F as its rows leave
 //! the inverse FFT (its mean, `⟨g, z⟩`, `Σ g t_old` and the old direction's mean), so the
 //! direction pass only subtracts the means and the line-search numerator `⟨g, t⟩` follows
 //! from those sums.
