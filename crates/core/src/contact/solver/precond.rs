@@ -80,33 +80,29 @@ impl Solver<'_> {
 
     /// [`Self::direction_and_transform`] with the preconditioned gradient:
     /// `t ← (z − z̄_F) + β (t − t̄_F)` on the free set F, 0 elsewhere (`z` raw from
-    /// [`Self::precondition`], `z̄_F = z_mean`, `t̄_F = direction_mean`), each row handed to
-    /// the forward FFT as it is made. Returns `⟨t, K t⟩`.
+    /// [`Self::precondition`] on F and marked off it, so that F is read from `z` alone;
+    /// `z̄_F = z_mean`, `t̄_F = direction_mean`), each row handed to the forward FFT as it is
+    /// made. Returns `⟨t, K t⟩`.
     pub(super) fn preconditioned_direction_and_transform(
         &mut self,
         z_mean: f64,
         beta: f64,
         direction_mean: f64,
-        level: f64,
     ) -> f64 {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let blocks = self
             .direction
             .par_chunks_mut(chunk)
-            .zip(self.pressure.par_chunks(chunk))
-            .zip(self.preconditioned.par_chunks(chunk))
-            .zip(self.separation.par_chunks(chunk));
+            .zip(self.preconditioned.par_chunks(chunk));
         self.op.start_rows(
             blocks,
-            |(((tc, pc), zc), wc), r, row| {
+            |(tc, zc), r, row| {
                 let at = r * n..(r + 1) * n;
                 dispatch_preconditioned_direction(
-                    [z_mean, beta, direction_mean, level],
+                    [z_mean, beta, direction_mean],
                     &mut tc[at.clone()],
                     row,
-                    &pc[at.clone()],
-                    &zc[at.clone()],
-                    &wc[at],
+                    &zc[at],
                 );
             },
             &mut self.ws,
@@ -126,8 +122,9 @@ avx2_dispatch! {
 
 avx2_dispatch! {
     /// One row of `K⁻¹ P g` as it leaves the inverse FFT, with AVX2 where available: stored
-    /// in `z`, and with `g = w − level`, `Σ z`, `|F|`, `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over
-    /// the free set F added to `acc` (lane `k mod LANES` takes node `k`).
+    /// in `z` on the free set F and marked off it (NaN, [`OFF_FREE_SET`]), so that the
+    /// direction pass needs neither `p` nor `w`; and with `g = w − level`, `Σ z`, `|F|`,
+    /// `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over F added to `acc` (lane `k mod LANES` takes node `k`).
     fn dispatch_precondition_output(
         level: f64,
         row: &[f32],
@@ -137,7 +134,9 @@ avx2_dispatch! {
         t: &[f64],
         acc: &mut [[f64; LANES]; 6],
     ) {
-        z.copy_from_slice(row);
+        for (((z, &v), &p), &w) in z.iter_mut().zip(row).zip(p).zip(w) {
+            *z = if free(p, w, level) { v } else { OFF_FREE_SET };
+        }
         let n = row.len();
         let whole = n - n % LANES;
         for i in (0..whole).step_by(LANES) {
@@ -201,18 +200,17 @@ fn precondition_sums(
 
 avx2_dispatch! {
     /// One row of the preconditioned direction, with AVX2 where available:
-    /// `t ← (z − z̄) + β (t − t̄)` on the free set F, 0 elsewhere, copied into `row`.
+    /// `t ← (z − z̄) + β (t − t̄)` on the free set F (where `z` is a number), 0 elsewhere
+    /// (where [`dispatch_precondition_output`] marked it), copied into `row`.
     fn dispatch_preconditioned_direction(
-        coefficients: [f64; 4],
+        coefficients: [f64; 3],
         t: &mut [f64],
         row: &mut [f64],
-        p: &[f64],
         z: &[f32],
-        w: &[f64],
     ) {
-        let [z_mean, beta, direction_mean, level] = coefficients;
-        for ((((t, o), &p), &z), &w) in t.iter_mut().zip(row.iter_mut()).zip(p).zip(z).zip(w) {
-            *t = if free(p, w, level) {
+        let [z_mean, beta, direction_mean] = coefficients;
+        for ((t, o), &z) in t.iter_mut().zip(row.iter_mut()).zip(z) {
+            *t = if !z.is_nan() {
                 (z as f64 - z_mean) + beta * (*t - direction_mean)
             } else {
                 0.0
@@ -221,6 +219,10 @@ avx2_dispatch! {
         }
     }
 }
+
+/// What `z` holds off the free set: NaN, which no value on F is (the inputs are finite; a
+/// non-finite state ends the solve as `Stalled` before a direction is made from it).
+const OFF_FREE_SET: f32 = f32::NAN;
 
 /// Membership of the free set `F = {p > 0} ∪ {p = 0, w − level < 0}`: the contact set and
 /// the nodes that interpenetrate, whose pressure the next step may raise.
