@@ -1,4 +1,6 @@
-//! Planned 2-D real-to-complex FFTs on square periodic grids.
+//! Planned 2-D real-to-complex FFTs on square periodic grids, in double precision
+//! (`Fft2`, i.e. `Fft2<f64>`: every transform of the pipeline) or single precision
+//! (`Fft2<f32>`: the contact solver's preconditioner; [`Real`]).
 //!
 //! Conventions (stated once here and in docs/CONVENTIONS.md):
 //! - Forward: `H[k] = Σ_j h[j] exp(−2πi j·k/n)`, **not normalised** (as numpy `rfft2` and

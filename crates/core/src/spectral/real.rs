@@ -21,9 +21,22 @@ pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
     #[doc(hidden)]
     fn with_thread_work<R>(f: impl FnOnce(&RefCell<Work<Self>>) -> R) -> R;
 
-    /// Whether every value of `row` is ±0 (sign bits ignored, early exit per group of 8).
+    /// The bit pattern without its sign bit (0 exactly for ±0).
     #[doc(hidden)]
-    fn all_zero(row: &[Self]) -> bool;
+    fn magnitude_bits(self) -> u64;
+
+    /// Whether every value of `row` is ±0, scanning eight values at a time (the bit patterns
+    /// without their sign bit are OR-ed, which vectorises; an early exit per group).
+    #[doc(hidden)]
+    fn all_zero(row: &[Self]) -> bool {
+        let mut groups = row.chunks_exact(8);
+        for group in &mut groups {
+            if group.iter().fold(0u64, |acc, v| acc | v.magnitude_bits()) != 0 {
+                return false;
+            }
+        }
+        groups.remainder().iter().all(|v| v.magnitude_bits() == 0)
+    }
 
     /// Copy columns `kx0 .. kx0 + w` of the row-major `n × h` array at `rows` into `cols`
     /// (`w = cols.len() / n ≤ GATHER` columns one after the other), prefetching
@@ -107,14 +120,9 @@ impl Real for f64 {
         WORK_F64.with(f)
     }
 
-    fn all_zero(row: &[f64]) -> bool {
-        let mut groups = row.chunks_exact(8);
-        for group in &mut groups {
-            if group.iter().fold(0u64, |acc, v| acc | (v.to_bits() << 1)) != 0 {
-                return false;
-            }
-        }
-        groups.remainder().iter().all(|&v| v == 0.0)
+    #[inline(always)]
+    fn magnitude_bits(self) -> u64 {
+        self.to_bits() << 1
     }
 
     /// A group of four columns (one 64-byte line per row) is moved two rows at a time in
@@ -170,14 +178,9 @@ impl Real for f32 {
         WORK_F32.with(f)
     }
 
-    fn all_zero(row: &[f32]) -> bool {
-        let mut groups = row.chunks_exact(8);
-        for group in &mut groups {
-            if group.iter().fold(0u32, |acc, v| acc | (v.to_bits() << 1)) != 0 {
-                return false;
-            }
-        }
-        groups.remainder().iter().all(|&v| v == 0.0)
+    #[inline(always)]
+    fn magnitude_bits(self) -> u64 {
+        u64::from(self.to_bits() << 1)
     }
 }
 

@@ -67,26 +67,32 @@ fn a_transform_nested_in_a_callback_gets_its_own_working_rows() {
 }
 
 /// The column gather and scatter of the fused convolution move exactly the values of
-/// columns `kx0 ..` (the AVX path for full groups of four, the plain loop for the last,
-/// narrower one), and scattering back what was gathered restores the array.
+/// columns `kx0 ..` (in f64 the AVX path for full groups of four and the plain loop for the
+/// last, narrower one; in f32 the plain loop), and scattering back what was gathered
+/// restores the array.
 #[test]
 fn column_gather_and_scatter_move_the_right_values() {
+    gather_and_scatter::<f64>();
+    gather_and_scatter::<f32>();
+}
+
+fn gather_and_scatter<T: Real>() {
     for n in [2, 6, 8, 10, 64] {
         let h = n / 2 + 1;
-        let original: Vec<Complex64> = (0..n * h)
-            .map(|i| Complex64::new(i as f64, -(i as f64) - 0.5))
+        let original: Vec<Complex<T>> = (0..n * h)
+            .map(|i| Complex::new(T::narrow(i as f64), T::narrow(-(i as f64) - 0.5)))
             .collect();
         let mut rows = original.clone();
         for kx0 in (0..h).step_by(GATHER) {
             let w = GATHER.min(h - kx0);
-            let mut cols = vec![Complex64::new(f64::NAN, f64::NAN); w * n];
+            let nan = T::narrow(f64::NAN);
+            let mut cols = vec![Complex::new(nan, nan); w * n];
             // SAFETY: `rows` holds n·h values and kx0 + w ≤ h.
-            unsafe { f64::gather_columns(rows.as_ptr(), n, h, kx0, &mut cols) };
+            unsafe { T::gather_columns(rows.as_ptr(), n, h, kx0, &mut cols) };
             for j in 0..w {
                 for r in 0..n {
-                    assert_eq!(
-                        cols[j * n + r],
-                        original[r * h + kx0 + j],
+                    assert!(
+                        cols[j * n + r] == original[r * h + kx0 + j],
                         "n {n}, kx {}",
                         kx0 + j
                     );
@@ -96,9 +102,9 @@ fn column_gather_and_scatter_move_the_right_values() {
                 *c = -*c;
             }
             // SAFETY: as above.
-            unsafe { f64::scatter_columns(rows.as_mut_ptr(), n, h, kx0, &cols) };
+            unsafe { T::scatter_columns(rows.as_mut_ptr(), n, h, kx0, &cols) };
         }
-        let negated: Vec<Complex64> = original.iter().map(|c| -*c).collect();
+        let negated: Vec<Complex<T>> = original.iter().map(|c| -*c).collect();
         assert_eq!(
             rows, negated,
             "n {n}: every value scattered back once, to its place"
@@ -161,27 +167,30 @@ fn forward_matches_naive_dft_and_inverse_round_trips() {
 #[test]
 fn zero_rows_are_recognised_at_every_position() {
     // ±0 anywhere is zero; one non-zero value (smallest subnormal, NaN, negative) at any
-    // position, in a full group of eight or in the remainder, is not.
-    for len in [1usize, 7, 8, 9, 16, 21] {
-        let mut row = vec![0.0; len];
-        assert!(f64::all_zero(&row));
-        row.iter_mut().step_by(2).for_each(|v| *v = -0.0);
-        assert!(f64::all_zero(&row), "−0 counts as zero (len {len})");
-        for i in 0..len {
-            for bad in [f64::from_bits(1), f64::NAN, -3.5, f64::INFINITY] {
-                let mut r = row.clone();
-                r[i] = bad;
-                assert!(!f64::all_zero(&r), "len {len}, value {bad} at {i}");
+    // position, in a full group of eight or in the remainder, is not. In both precisions.
+    fn check<T: Real + std::fmt::Display>(bads: [T; 4]) {
+        for len in [1usize, 7, 8, 9, 16, 21] {
+            let mut row = vec![T::zero(); len];
+            assert!(T::all_zero(&row));
+            row.iter_mut().step_by(2).for_each(|v| *v = -T::zero());
+            assert!(T::all_zero(&row), "−0 counts as zero (len {len})");
+            for i in 0..len {
+                for bad in bads {
+                    let mut r = row.clone();
+                    r[i] = bad;
+                    assert!(!T::all_zero(&r), "len {len}, value {bad} at {i}");
+                }
             }
         }
     }
+    check([f64::from_bits(1), f64::NAN, -3.5, f64::INFINITY]);
+    check([f32::from_bits(1), f32::NAN, -3.5, f32::INFINITY]);
 }
 
 /// The single-precision plans compute the same transforms: against the naive DFT in double
 /// precision, within f32 rounding (relative 2⁻²⁴ per operation, about log₂ n² operations
 /// deep), and the pair round-trips to the input times n² within the same bound; with
-/// empty rows too. The column gather and scatter of f32 (the plain path) move the right
-/// values, as in the f64 test.
+/// empty rows too.
 #[test]
 fn single_precision_plans_compute_the_same_transforms() {
     for n in [2usize, 6, 8, 16, 30, 64] {
@@ -210,28 +219,6 @@ fn single_precision_plans_compute_the_same_transforms() {
                 "n={n}: round trip {a} vs {b}"
             );
         }
-        // Gather and scatter in f32.
-        let h = n / 2 + 1;
-        let original: Vec<Complex<f32>> = (0..n * h)
-            .map(|i| Complex::new(i as f32, -(i as f32) - 0.5))
-            .collect();
-        let mut rows = original.clone();
-        for kx0 in (0..h).step_by(GATHER) {
-            let w = GATHER.min(h - kx0);
-            let mut cols = vec![Complex::new(f32::NAN, f32::NAN); w * n];
-            // SAFETY: `rows` holds n·h values and kx0 + w ≤ h.
-            unsafe { f32::gather_columns(rows.as_ptr(), n, h, kx0, &mut cols) };
-            for j in 0..w {
-                for r in 0..n {
-                    assert_eq!(cols[j * n + r], original[r * h + kx0 + j]);
-                }
-            }
-            cols.iter_mut().for_each(|c| *c = -*c);
-            // SAFETY: as above.
-            unsafe { f32::scatter_columns(rows.as_mut_ptr(), n, h, kx0, &cols) };
-        }
-        assert!(rows.iter().zip(&original).all(|(a, b)| *a == -*b), "n {n}");
-        assert!(f32::all_zero(&[0.0, -0.0, 0.0]) && !f32::all_zero(&[0.0, f32::from_bits(1)]));
     }
 }
 
