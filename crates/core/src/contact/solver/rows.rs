@@ -200,18 +200,27 @@ avx2_dispatch! {
     );
 }
 
-avx2_dispatch! {
-    /// [`update_row`] with AVX2 where available.
-    pub(super) fn dispatch_update = update_row(
-        a: &UpdateArgs,
-        base: usize,
-        pc: &mut [f64],
-        wc: &mut [f64],
-        tc: &[f64],
-        rc: &[f64],
-        acc: &mut UpdateAcc,
-        changes: &mut Vec<(usize, f64)>,
-    );
+/// [`update_row`], with AVX2 intrinsics where the processor has them ([`update_row_avx2`]:
+/// the compiler leaves this loop scalar, and it was the solver's costliest pass). Same
+/// operations in the same order, so the same bits either way.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn dispatch_update(
+    a: &UpdateArgs,
+    base: usize,
+    pc: &mut [f64],
+    wc: &mut [f64],
+    tc: &[f64],
+    rc: &[f64],
+    acc: &mut UpdateAcc,
+    changes: &mut Vec<(usize, f64)>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor supports AVX2 (checked just above).
+        unsafe { update_row_avx2(a, base, pc, wc, tc, rc, acc, changes) };
+        return;
+    }
+    update_row(a, base, pc, wc, tc, rc, acc, changes)
 }
 
 avx2_dispatch! {
@@ -481,6 +490,185 @@ fn update_row(
         acc.grad.merge_lanes(&tail.grad, k);
         for l in 0..k {
             acc.kept_t[l] += tail.kept_t[l];
+        }
+    }
+}
+
+/// [`update_row`] with AVX2 intrinsics: [`update_lanes`] on four lanes at once (one lane
+/// per accumulator lane, so the sums are the scalar code's), the tail by the scalar code.
+///
+/// # Safety
+/// AVX2 must be present; the slices must have equal lengths.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn update_row_avx2(
+    a: &UpdateArgs,
+    base: usize,
+    pc: &mut [f64],
+    wc: &mut [f64],
+    tc: &[f64],
+    rc: &[f64],
+    acc: &mut UpdateAcc,
+    changes: &mut Vec<(usize, f64)>,
+) {
+    use std::arch::x86_64::*;
+    const _: () = assert!(LANES == 4, "one AVX register of f64 per lane block");
+    let len = pc.len();
+    assert!(wc.len() == len && tc.len() == len && rc.len() == len);
+    let whole = len / LANES * LANES;
+    let tau = _mm256_set1_pd(a.tau);
+    let neg_tau = _mm256_set1_pd(-a.tau);
+    let level = _mm256_set1_pd(a.level);
+    let next_shift = _mm256_set1_pd(a.next_shift);
+    let zero = _mm256_setzero_pd();
+    let one = _mm256_set1_pd(1.0);
+    let readmit = a.readmit;
+    let g = &mut acc.grad;
+    let mut n = _mm256_loadu_pd(g.n.as_ptr());
+    let mut sg = _mm256_loadu_pd(g.sg.as_ptr());
+    let mut sg2 = _mm256_loadu_pd(g.sg2.as_ptr());
+    let mut spg = _mm256_loadu_pd(g.spg.as_ptr());
+    let mut sp = _mm256_loadu_pd(g.sp.as_ptr());
+    let mut min = _mm256_loadu_pd(g.min.as_ptr());
+    let mut kept_t = _mm256_loadu_pd(acc.kept_t.as_ptr());
+    let (pp, wp, tp, rp) = (pc.as_mut_ptr(), wc.as_mut_ptr(), tc.as_ptr(), rc.as_ptr());
+    for i in (0..whole).step_by(LANES) {
+        // SAFETY: i + LANES ≤ whole ≤ len, the length of all four slices.
+        let (p, w, t, r) = unsafe {
+            (
+                _mm256_loadu_pd(pp.add(i)),
+                _mm256_loadu_pd(wp.add(i)),
+                _mm256_loadu_pd(tp.add(i)),
+                _mm256_loadu_pd(rp.add(i)),
+            )
+        };
+        // The operations of `update_lanes`, in its order.
+        let stepped = _mm256_sub_pd(p, _mm256_mul_pd(tau, t));
+        let kept = _mm256_and_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(stepped, zero), stepped);
+        let gc = _mm256_sub_pd(w, level);
+        let new = if readmit {
+            let enter = _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_EQ_OQ>(kept, zero),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(gc, zero),
+            );
+            _mm256_blendv_pd(kept, _mm256_mul_pd(neg_tau, gc), enter)
+        } else {
+            kept
+        };
+        let delta = _mm256_sub_pd(new, stepped);
+        let m = _mm256_and_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(new, zero), one);
+        kept_t = _mm256_add_pd(kept_t, _mm256_mul_pd(m, t));
+        let w_new = _mm256_sub_pd(w, _mm256_mul_pd(tau, r));
+        let gn = _mm256_sub_pd(w_new, next_shift);
+        // GradientLanes::add: `if g < min { g } else { min }` is exactly `min_pd(g, min)`.
+        min = _mm256_min_pd(gn, min);
+        n = _mm256_add_pd(n, m);
+        let mg = _mm256_mul_pd(m, gn);
+        sg = _mm256_add_pd(sg, mg);
+        sg2 = _mm256_add_pd(sg2, _mm256_mul_pd(mg, gn));
+        spg = _mm256_add_pd(spg, _mm256_mul_pd(new, gn));
+        sp = _mm256_add_pd(sp, new);
+        // SAFETY: as for the loads.
+        unsafe {
+            _mm256_storeu_pd(pp.add(i), new);
+            _mm256_storeu_pd(wp.add(i), w_new);
+        }
+        // Rare path: a node left or (re-)entered the contact set (`delta != 0`, NaN
+        // included, as in the scalar code).
+        if _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_NEQ_UQ>(delta, zero)) != 0 {
+            let (mut d, mut pn) = ([0.0; LANES], [0.0; LANES]);
+            _mm256_storeu_pd(d.as_mut_ptr(), delta);
+            _mm256_storeu_pd(pn.as_mut_ptr(), new);
+            record_changes(&d, &pn, base + i, LANES, acc, changes);
+        }
+    }
+    let g = &mut acc.grad;
+    _mm256_storeu_pd(g.n.as_mut_ptr(), n);
+    _mm256_storeu_pd(g.sg.as_mut_ptr(), sg);
+    _mm256_storeu_pd(g.sg2.as_mut_ptr(), sg2);
+    _mm256_storeu_pd(g.spg.as_mut_ptr(), spg);
+    _mm256_storeu_pd(g.sp.as_mut_ptr(), sp);
+    _mm256_storeu_pd(g.min.as_mut_ptr(), min);
+    _mm256_storeu_pd(acc.kept_t.as_mut_ptr(), kept_t);
+    if whole < len {
+        let at = whole..len;
+        update_row(
+            a,
+            base + whole,
+            &mut pc[at.clone()],
+            &mut wc[at.clone()],
+            &tc[at.clone()],
+            &rc[at],
+            acc,
+            changes,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row exercising every branch of the update: nodes in contact that stay, leave
+    /// (stepped below 0) or sit exactly on 0, nodes off contact above and below the level,
+    /// and a tail shorter than `LANES`.
+    fn row(len: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let mut state = seed;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let (mut p, mut w, mut t, mut r) = (vec![], vec![], vec![], vec![]);
+        for i in 0..len {
+            p.push(if i % 3 == 0 { 0.0 } else { next().abs() });
+            w.push(next());
+            t.push(if i % 7 == 0 { 0.0 } else { next() });
+            r.push(next());
+        }
+        (p, w, t, r)
+    }
+
+    /// The AVX2 update (where the processor has it) gives the scalar code's bits: the
+    /// pressures, separations, every accumulator lane and the list of changed nodes.
+    #[test]
+    fn vector_update_matches_scalar_bits() {
+        for (len, readmit) in [(64, false), (64, true), (39, false), (39, true), (3, true)] {
+            let (p0, w0, t, r) = row(len, len as u64 + readmit as u64);
+            let args = UpdateArgs {
+                tau: 0.7,
+                level: 0.1,
+                next_shift: -0.05,
+                readmit,
+            };
+            let run = |vector: bool| {
+                let (mut p, mut w) = (p0.clone(), w0.clone());
+                let mut acc = UpdateAcc::new();
+                let mut changes = Vec::with_capacity(len);
+                if vector {
+                    dispatch_update(&args, 100, &mut p, &mut w, &t, &r, &mut acc, &mut changes);
+                } else {
+                    update_row(&args, 100, &mut p, &mut w, &t, &r, &mut acc, &mut changes);
+                }
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let g = &acc.grad;
+                let lanes = [g.n, g.sg, g.sg2, g.spg, g.sp, g.min, acc.kept_t];
+                (
+                    bits(&p),
+                    bits(&w),
+                    lanes.iter().map(|l| bits(l)).collect::<Vec<_>>(),
+                    (acc.changed, acc.readmitted),
+                    changes
+                        .iter()
+                        .map(|&(i, d)| (i, d.to_bits()))
+                        .collect::<Vec<_>>(),
+                )
+            };
+            let (scalar, vector) = (run(false), run(true));
+            assert!(scalar.3 .0 > 0, "the row must change some nodes");
+            assert_eq!(scalar, vector, "len {len}, readmit {readmit}");
         }
     }
 }
