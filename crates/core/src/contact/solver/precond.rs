@@ -120,48 +120,145 @@ avx2_dispatch! {
     }
 }
 
-avx2_dispatch! {
-    /// One row of `K⁻¹ P g` as it leaves the inverse FFT, with AVX2 where available: stored
-    /// in `z` on the free set F and marked off it (NaN, [`OFF_FREE_SET`]), so that the
-    /// direction pass needs neither `p` nor `w`; and with `g = w − level`, `Σ z`, `|F|`,
-    /// `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over F added to `acc` (lane `k mod LANES` takes node `k`).
-    fn dispatch_precondition_output(
-        level: f64,
-        row: &[f32],
-        z: &mut [f32],
-        p: &[f64],
-        w: &[f64],
-        t: &[f64],
-        acc: &mut [[f64; LANES]; 6],
-    ) {
-        for (((z, &v), &p), &w) in z.iter_mut().zip(row).zip(p).zip(w) {
-            *z = if free(p, w, level) { v } else { OFF_FREE_SET };
-        }
-        let n = row.len();
-        let whole = n - n % LANES;
-        for i in (0..whole).step_by(LANES) {
-            let at = i..i + LANES;
-            precondition_sums(
-                level,
-                &widened(&row[at.clone()]),
-                &lanes(&p[at.clone()]),
-                &lanes(&w[at.clone()]),
-                &lanes(&t[at]),
-                acc,
-            );
-        }
-        if whole < n {
-            // Padding: p = 0 and w = +∞ put the extra lanes off F.
-            let at = whole..n;
-            precondition_sums(
-                level,
-                &widened(&row[at.clone()]),
-                &padded(&p[at.clone()], 0.0),
-                &padded(&w[at.clone()], f64::INFINITY),
-                &padded(&t[at], 0.0),
-                acc,
-            );
-        }
+/// [`precondition_output_row`], with AVX2 intrinsics where the processor has them
+/// ([`precondition_output_avx2`]: one pass over the row instead of two, the sums kept in
+/// registers). Same operations in the same order, so the same bits either way.
+#[allow(clippy::too_many_arguments)]
+fn dispatch_precondition_output(
+    level: f64,
+    row: &[f32],
+    z: &mut [f32],
+    p: &[f64],
+    w: &[f64],
+    t: &[f64],
+    acc: &mut [[f64; LANES]; 6],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor supports AVX2 (checked just above).
+        unsafe { precondition_output_avx2(level, row, z, p, w, t, acc) };
+        return;
+    }
+    precondition_output_row(level, row, z, p, w, t, acc)
+}
+
+/// [`precondition_output_row`] with AVX2 intrinsics, four nodes (one per accumulator lane)
+/// at a time; the tail by the scalar code.
+///
+/// # Safety
+/// AVX2 must be present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn precondition_output_avx2(
+    level: f64,
+    row: &[f32],
+    z: &mut [f32],
+    p: &[f64],
+    w: &[f64],
+    t: &[f64],
+    acc: &mut [[f64; LANES]; 6],
+) {
+    use std::arch::x86_64::*;
+    const _: () = assert!(LANES == 4, "one AVX register of f64 per lane block");
+    let n = row.len();
+    assert!(z.len() == n && p.len() == n && w.len() == n && t.len() == n);
+    let whole = n / LANES * LANES;
+    let level_v = _mm256_set1_pd(level);
+    let zero = _mm256_setzero_pd();
+    let one = _mm256_set1_pd(1.0);
+    let off = _mm256_set1_pd(OFF_FREE_SET as f64);
+    let mut sums = [zero; 6];
+    for (s, lanes) in sums.iter_mut().zip(acc.iter()) {
+        *s = _mm256_loadu_pd(lanes.as_ptr());
+    }
+    let [mut sz, mut count, mut sgz, mut sg, mut sgt, mut st] = sums;
+    for i in (0..whole).step_by(LANES) {
+        // SAFETY: i + LANES ≤ whole ≤ n, the length of every slice.
+        let (v, pv, wv, tv) = unsafe {
+            (
+                _mm256_cvtps_pd(_mm_loadu_ps(row.as_ptr().add(i))),
+                _mm256_loadu_pd(p.as_ptr().add(i)),
+                _mm256_loadu_pd(w.as_ptr().add(i)),
+                _mm256_loadu_pd(t.as_ptr().add(i)),
+            )
+        };
+        // `free`: p > 0 || w < level.
+        let on = _mm256_or_pd(
+            _mm256_cmp_pd::<_CMP_GT_OQ>(pv, zero),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(wv, level_v),
+        );
+        // z on F (v, exactly the f32 value), NaN off it.
+        let stored = _mm256_cvtpd_ps(_mm256_blendv_pd(off, v, on));
+        // SAFETY: as for the loads.
+        unsafe { _mm_storeu_ps(z.as_mut_ptr().add(i), stored) };
+        let g = _mm256_and_pd(on, _mm256_sub_pd(wv, level_v));
+        let zk = _mm256_and_pd(on, v);
+        sz = _mm256_add_pd(sz, zk);
+        count = _mm256_add_pd(count, _mm256_and_pd(on, one));
+        sgz = _mm256_add_pd(sgz, _mm256_mul_pd(g, zk));
+        sg = _mm256_add_pd(sg, g);
+        sgt = _mm256_add_pd(sgt, _mm256_and_pd(on, _mm256_mul_pd(g, tv)));
+        st = _mm256_add_pd(st, _mm256_and_pd(on, tv));
+    }
+    for (lanes, s) in acc.iter_mut().zip([sz, count, sgz, sg, sgt, st]) {
+        _mm256_storeu_pd(lanes.as_mut_ptr(), s);
+    }
+    if whole < n {
+        let at = whole..n;
+        precondition_output_row(
+            level,
+            &row[at.clone()],
+            &mut z[at.clone()],
+            &p[at.clone()],
+            &w[at.clone()],
+            &t[at],
+            acc,
+        );
+    }
+}
+
+/// One row of `K⁻¹ P g` as it leaves the inverse FFT: stored
+/// in `z` on the free set F and marked off it (NaN, [`OFF_FREE_SET`]), so that the
+/// direction pass needs neither `p` nor `w`; and with `g = w − level`, `Σ z`, `|F|`,
+/// `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over F added to `acc` (lane `k mod LANES` takes node `k`).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn precondition_output_row(
+    level: f64,
+    row: &[f32],
+    z: &mut [f32],
+    p: &[f64],
+    w: &[f64],
+    t: &[f64],
+    acc: &mut [[f64; LANES]; 6],
+) {
+    for (((z, &v), &p), &w) in z.iter_mut().zip(row).zip(p).zip(w) {
+        *z = if free(p, w, level) { v } else { OFF_FREE_SET };
+    }
+    let n = row.len();
+    let whole = n - n % LANES;
+    for i in (0..whole).step_by(LANES) {
+        let at = i..i + LANES;
+        precondition_sums(
+            level,
+            &widened(&row[at.clone()]),
+            &lanes(&p[at.clone()]),
+            &lanes(&w[at.clone()]),
+            &lanes(&t[at]),
+            acc,
+        );
+    }
+    if whole < n {
+        // Padding: p = 0 and w = +∞ put the extra lanes off F.
+        let at = whole..n;
+        precondition_sums(
+            level,
+            &widened(&row[at.clone()]),
+            &padded(&p[at.clone()], 0.0),
+            &padded(&w[at.clone()], f64::INFINITY),
+            &padded(&t[at], 0.0),
+            acc,
+        );
     }
 }
 
@@ -244,4 +341,55 @@ pub(super) struct PreconditionSums {
     pub g_sum: f64,
     /// Mean of the previous direction over F.
     pub t_old_mean: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The AVX2 output pass (where the processor has it) gives the scalar code's bits: `z`
+    /// (values on F, NaN off it) and every lane of the six sums, on rows with nodes in
+    /// contact, off contact above and below the level, and a tail shorter than `LANES`.
+    #[test]
+    fn vector_output_matches_scalar_bits() {
+        for len in [64usize, 39, 3] {
+            let mut state = len as u64;
+            let mut next = move || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+            };
+            let row: Vec<f32> = (0..len).map(|_| next() as f32).collect();
+            let p: Vec<f64> = (0..len)
+                .map(|i| if i % 3 == 0 { next().abs() } else { 0.0 })
+                .collect();
+            // Every third node off contact and above the level (off F), the others at random.
+            let w: Vec<f64> = (0..len)
+                .map(|i| next() + if i % 3 == 1 { 2.0 } else { 0.0 })
+                .collect();
+            let t: Vec<f64> = (0..len).map(|_| next()).collect();
+            let level = 0.1;
+            let run = |vector: bool| {
+                let mut z = vec![0.0f32; len];
+                let mut acc = [[0.5; LANES]; 6];
+                if vector {
+                    dispatch_precondition_output(level, &row, &mut z, &p, &w, &t, &mut acc);
+                } else {
+                    precondition_output_row(level, &row, &mut z, &p, &w, &t, &mut acc);
+                }
+                let z_bits: Vec<u32> = z.iter().map(|v| v.to_bits()).collect();
+                let acc_bits: Vec<u64> = acc.iter().flatten().map(|v| v.to_bits()).collect();
+                (z_bits, acc_bits)
+            };
+            let (scalar, vector) = (run(false), run(true));
+            let off = scalar
+                .0
+                .iter()
+                .filter(|&&b| f32::from_bits(b).is_nan())
+                .count();
+            assert!(off > 0 && off < len, "the row must have nodes on and off F");
+            assert_eq!(scalar, vector, "len {len}");
+        }
+    }
 }
