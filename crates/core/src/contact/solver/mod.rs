@@ -27,14 +27,11 @@
 //! fixed positive operator either way, the iteration counts are those of `f64`, and the
 //! transforms take about 0.6 of the time. Everything that defines the solution (`p`, `u`,
 //! `K t`, `K Δ`, the exact recomputation, every sum) stays in `f64`; a correction `K Δ` in
-//! `f32` was tried and stalls the iteration near 10⁻⁸. The search direction `t` is stored in
-//! `f32` too: `p` and `u` are updated with exactly the rounded values `K t` is computed from,
-//! so the state stays consistent, and the passes move fewer bytes. The preconditioner's
-//! input pass reads `p`, `w` and `t`: it marks F in `z` (NaN off it) and sums `|F|`, `Σ g`,
-//! `Σ g t_old` and the old direction's mean over F; `⟨g, K⁻¹ P g⟩` is Parseval's sum inside
-//! the transform; the output pass reads only the marks, stores `K⁻¹ P g` on F and sums it.
-//! So the direction pass reads `t` and `z` alone, only subtracts the means, and the
-//! line-search numerator `⟨g, t⟩` follows from those sums.
+//! `f32` was tried and stalls the iteration near 10⁻⁸. `K⁻¹ P g` is summed over F as its
+//! rows leave the inverse FFT (its mean, `⟨g, z⟩`, `Σ g t_old` and the old direction's mean)
+//! and stored on F only, NaN marking the nodes off it, so the direction pass reads `t` and
+//! `z` alone (not `p` and `w`: 8 % less time per sweep at 1024²), only subtracts the means,
+//! and the line-search numerator `⟨g, t⟩` follows from those sums.
 //!
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
 //! A sweep's warm start scales the previous converged state, `p` and `K p` alike
@@ -166,7 +163,7 @@ pub struct Solver<'a> {
     /// stored instead of `u` so that the passes of an iteration need not read `h`.
     separation: Vec<f64>,
     /// The search direction `t`.
-    direction: Vec<f32>,
+    direction: Vec<f64>,
     /// `min w` after a solve: the gap is `w − gap_level`.
     gap_level: f64,
     /// Values per work block: the operator's fixed row blocks (`rows_per_block · n`), so
@@ -180,7 +177,7 @@ pub struct Solver<'a> {
     /// Per block: accumulators of the update pass fused with the inverse FFT.
     update_acc: Vec<UpdateAcc>,
     /// Per-block lane sums of [`Solver::precondition`].
-    precondition_acc: Vec<[[f64; LANES]; 5]>,
+    precondition_acc: Vec<[[f64; LANES]; 6]>,
     /// Per block: the nodes whose projection departed from the linear step, `(node, Δ)` in
     /// node order, up to the list's capacity (one node in [`CHANGES_PER_NODE`] of the
     /// block; never reallocated).
@@ -196,10 +193,10 @@ pub struct Solver<'a> {
 }
 
 impl<'a> Solver<'a> {
-    /// Check the surface and allocate every buffer: 3.5 n² doubles (the transform's rows,
-    /// `p`, `w`, and `t` in single precision), n²/8 for the lists of changed nodes, and n²/2
-    /// more at the first preconditioned solve (`z`, single precision); besides the heights
-    /// and the operator's kernel (n²/2).
+    /// Check the surface and allocate every buffer: 4 n² doubles (the transform's rows, `p`,
+    /// `w`, `t`), n²/8 for the lists of changed nodes, and n²/2 more at the first
+    /// preconditioned solve (`z`, single precision); besides the heights and the operator's
+    /// kernel (n²/2).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
         let len = n * n;
@@ -240,7 +237,7 @@ impl<'a> Solver<'a> {
             lane_sums: vec![[0.0; LANES]; blocks],
             block_stats: vec![GradientStats::EMPTY; blocks],
             update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
-            precondition_acc: vec![[[0.0; LANES]; 5]; blocks],
+            precondition_acc: vec![[[0.0; LANES]; 6]; blocks],
             changes: (0..blocks)
                 .map(|_| Vec::with_capacity((chunk / CHANGES_PER_NODE).max(MAX_SPARSE)))
                 .collect(),

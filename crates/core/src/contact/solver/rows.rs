@@ -26,27 +26,6 @@ pub(super) fn padded(slice: &[f64], fill: f64) -> [f64; LANES] {
     out
 }
 
-/// A block of `LANES` single-precision values in double precision (exactly).
-#[inline(always)]
-pub(super) fn lanes_f32(slice: &[f32]) -> [f64; LANES] {
-    let mut out = [0.0; LANES];
-    for (o, &v) in out.iter_mut().zip(slice) {
-        *o = v as f64;
-    }
-    out
-}
-
-/// A block of up to `LANES` single-precision values in double precision (exactly), padded
-/// with `fill`.
-#[inline(always)]
-pub(super) fn padded_f32(slice: &[f32], fill: f64) -> [f64; LANES] {
-    let mut out = [fill; LANES];
-    for (o, &v) in out.iter_mut().zip(slice) {
-        *o = v as f64;
-    }
-    out
-}
-
 /// Per-lane accumulators of the gradient statistics `|S|, Σg, Σg², Σpg, Σp, min g`.
 pub(super) struct GradientLanes {
     n: [f64; LANES],
@@ -213,7 +192,7 @@ avx2_dispatch! {
         level: f64,
         beta: f64,
         direction_mean: f64,
-        t: &mut [f32],
+        t: &mut [f64],
         p: &[f64],
         w: &[f64],
         row: &mut [f64],
@@ -230,7 +209,7 @@ pub(super) fn dispatch_update(
     base: usize,
     pc: &mut [f64],
     wc: &mut [f64],
-    tc: &[f32],
+    tc: &[f64],
     rc: &[f64],
     acc: &mut UpdateAcc,
     changes: &mut Vec<(usize, f64)>,
@@ -313,16 +292,15 @@ fn exact_row(scale: f64, p: &mut [f64], w: &mut [f64], kx: &[f64], h: &[f64]) {
     }
 }
 
-/// Direction update of one row (see [`Solver::direction_and_transform`]): writes `t`
-/// (rounded to single precision) and the FFT's input row (the same rounded values), adds
-/// `(g − ḡ_S) t` to the lane sums `part[..LANES]`.
+/// Direction update of one row (see [`Solver::direction_and_transform`]): writes `t` and
+/// the FFT's input row, adds `(g − ḡ_S) t` to the lane sums `part[..LANES]`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn direction_row(
     level: f64,
     beta: f64,
     direction_mean: f64,
-    t: &mut [f32],
+    t: &mut [f64],
     p: &[f64],
     w: &[f64],
     row: &mut [f64],
@@ -334,7 +312,7 @@ fn direction_row(
             for l in 0..LANES {
                 let m = if p[l] > 0.0 { 1.0 } else { 0.0 };
                 let gc = w[l] - level;
-                t[l] = (m * (gc + beta * (t[l] - direction_mean))) as f32 as f64;
+                t[l] = m * (gc + beta * (t[l] - direction_mean));
                 num[l] += gc * t[l];
             }
         };
@@ -345,27 +323,23 @@ fn direction_row(
         .zip(w.chunks_exact(LANES))
         .zip(row.chunks_exact_mut(LANES))
     {
-        let mut tn = lanes_f32(t);
+        let mut tn = lanes(t);
         body(&mut tn, &lanes(p), &lanes(w), &mut num);
-        for (t, &v) in t.iter_mut().zip(&tn) {
-            *t = v as f32;
-        }
+        t.copy_from_slice(&tn);
         o.copy_from_slice(&tn);
     }
     if whole < t.len() {
         // Tail of a row whose length is not a multiple of LANES: padded with p = 0 (off S),
         // so the padding contributes exactly 0.
         let k = t.len() - whole;
-        let mut tn = padded_f32(&t[whole..], 0.0);
+        let mut tn = padded(&t[whole..], 0.0);
         body(
             &mut tn,
             &padded(&p[whole..], 0.0),
             &padded(&w[whole..], 0.0),
             &mut num,
         );
-        for (t, &v) in t[whole..].iter_mut().zip(&tn) {
-            *t = v as f32;
-        }
+        t[whole..].copy_from_slice(&tn[..k]);
         row[whole..].copy_from_slice(&tn[..k]);
     }
     for l in 0..LANES {
@@ -471,7 +445,7 @@ fn update_row(
     base: usize,
     pc: &mut [f64],
     wc: &mut [f64],
-    tc: &[f32],
+    tc: &[f64],
     rc: &[f64],
     acc: &mut UpdateAcc,
     changes: &mut Vec<(usize, f64)>,
@@ -485,7 +459,7 @@ fn update_row(
         .enumerate()
     {
         let (mut pn, mut wn) = (lanes(p), lanes(w));
-        let delta = update_lanes(a, &mut pn, &mut wn, &lanes_f32(t), &lanes(r), acc);
+        let delta = update_lanes(a, &mut pn, &mut wn, &lanes(t), &lanes(r), acc);
         p.copy_from_slice(&pn);
         w.copy_from_slice(&wn);
         // Rare path: a node left or (re-)entered the contact set.
@@ -506,7 +480,7 @@ fn update_row(
             a,
             &mut pn,
             &mut wn,
-            &padded_f32(&tc[whole..], 0.0),
+            &padded(&tc[whole..], 0.0),
             &padded(&rc[whole..], 0.0),
             &mut tail,
         );
@@ -533,7 +507,7 @@ unsafe fn update_row_avx2(
     base: usize,
     pc: &mut [f64],
     wc: &mut [f64],
-    tc: &[f32],
+    tc: &[f64],
     rc: &[f64],
     acc: &mut UpdateAcc,
     changes: &mut Vec<(usize, f64)>,
@@ -565,7 +539,7 @@ unsafe fn update_row_avx2(
             (
                 _mm256_loadu_pd(pp.add(i)),
                 _mm256_loadu_pd(wp.add(i)),
-                _mm256_cvtps_pd(_mm_loadu_ps(tp.add(i))),
+                _mm256_loadu_pd(tp.add(i)),
                 _mm256_loadu_pd(rp.add(i)),
             )
         };
@@ -639,7 +613,7 @@ mod tests {
     /// A row exercising every branch of the update: nodes in contact that stay, leave
     /// (stepped below 0) or sit exactly on 0, nodes off contact above and below the level,
     /// and a tail shorter than `LANES`.
-    fn row(len: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f32>, Vec<f64>) {
+    fn row(len: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
         let mut state = seed;
         let mut next = move || {
             state = state
@@ -651,7 +625,7 @@ mod tests {
         for i in 0..len {
             p.push(if i % 3 == 0 { 0.0 } else { next().abs() });
             w.push(next());
-            t.push(if i % 7 == 0 { 0.0 } else { next() as f32 });
+            t.push(if i % 7 == 0 { 0.0 } else { next() });
             r.push(next());
         }
         (p, w, t, r)
