@@ -120,26 +120,19 @@ avx2_dispatch! {
     }
 }
 
-/// [`precondition_output_row`], with AVX2 intrinsics where the processor has them
-/// ([`precondition_output_avx2`]: one pass over the row instead of two, the sums kept in
-/// registers). Same operations in the same order, so the same bits either way.
-#[allow(clippy::too_many_arguments)]
-fn dispatch_precondition_output(
-    level: f64,
-    row: &[f32],
-    z: &mut [f32],
-    p: &[f64],
-    w: &[f64],
-    t: &[f64],
-    acc: &mut [[f64; LANES]; 6],
-) {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor supports AVX2 (checked just above).
-        unsafe { precondition_output_avx2(level, row, z, p, w, t, acc) };
-        return;
-    }
-    precondition_output_row(level, row, z, p, w, t, acc)
+avx2_dispatch! {
+    /// [`precondition_output_row`], with AVX2 intrinsics where the processor has them
+    /// ([`precondition_output_avx2`]: one pass over the row instead of two, the sums kept in
+    /// registers). Same operations in the same order, so the same bits either way.
+    fn dispatch_precondition_output = precondition_output_row / precondition_output_avx2(
+        level: f64,
+        row: &[f32],
+        z: &mut [f32],
+        p: &[f64],
+        w: &[f64],
+        t: &[f64],
+        acc: &mut [[f64; LANES]; 6],
+    );
 }
 
 /// [`precondition_output_row`] with AVX2 intrinsics, four nodes (one per accumulator lane)

@@ -158,6 +158,21 @@ macro_rules! avx2_dispatch {
             body($($arg),*)
         }
     };
+    // A scalar body and an AVX2 one written with intrinsics (an `unsafe fn` with
+    // `#[target_feature(enable = "avx2")]`), chosen at run time.
+    ($(#[$attr:meta])* $vis:vis fn $name:ident = $scalar:ident / $avx2:ident($($arg:ident: $ty:ty),* $(,)?);) => {
+        $(#[$attr])*
+        #[allow(clippy::too_many_arguments)]
+        $vis fn $name($($arg: $ty),*) {
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY: the processor supports AVX2 (checked just above).
+                unsafe { $avx2($($arg),*) };
+                return;
+            }
+            $scalar($($arg),*)
+        }
+    };
     // A named generic body (`#[inline(always)]`), compiled once more with AVX2.
     ($(#[$attr:meta])* $vis:vis fn $name:ident = $body:ident($($arg:ident: $ty:ty),* $(,)?);) => {
         avx2_dispatch! {
@@ -200,27 +215,20 @@ avx2_dispatch! {
     );
 }
 
-/// [`update_row`], with AVX2 intrinsics where the processor has them ([`update_row_avx2`]:
-/// the compiler leaves this loop scalar, and it was the solver's costliest pass). Same
-/// operations in the same order, so the same bits either way.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn dispatch_update(
-    a: &UpdateArgs,
-    base: usize,
-    pc: &mut [f64],
-    wc: &mut [f64],
-    tc: &[f64],
-    rc: &[f64],
-    acc: &mut UpdateAcc,
-    changes: &mut Vec<(usize, f64)>,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor supports AVX2 (checked just above).
-        unsafe { update_row_avx2(a, base, pc, wc, tc, rc, acc, changes) };
-        return;
-    }
-    update_row(a, base, pc, wc, tc, rc, acc, changes)
+avx2_dispatch! {
+    /// [`update_row`], with AVX2 intrinsics where the processor has them ([`update_row_avx2`]:
+    /// the compiler leaves this loop scalar, and it was the solver's costliest pass). Same
+    /// operations in the same order, so the same bits either way.
+    pub(super) fn dispatch_update = update_row / update_row_avx2(
+        a: &UpdateArgs,
+        base: usize,
+        pc: &mut [f64],
+        wc: &mut [f64],
+        tc: &[f64],
+        rc: &[f64],
+        acc: &mut UpdateAcc,
+        changes: &mut Vec<(usize, f64)>,
+    );
 }
 
 avx2_dispatch! {
