@@ -139,7 +139,7 @@ avx2_dispatch! {
 /// at a time; the tail by the scalar code.
 ///
 /// # Safety
-/// AVX2 must be present.
+/// AVX2 must be present (the slices' lengths are checked).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn precondition_output_avx2(
@@ -338,6 +338,7 @@ pub(super) struct PreconditionSums {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::support::{require_vector_path, sequence};
     use super::*;
 
     /// The AVX2 output pass (where the processor has it) gives the scalar code's bits: `z`
@@ -345,14 +346,9 @@ mod tests {
     /// contact, off contact above and below the level, and a tail shorter than `LANES`.
     #[test]
     fn vector_output_matches_scalar_bits() {
+        require_vector_path();
         for len in [64usize, 39, 3] {
-            let mut state = len as u64;
-            let mut next = move || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-            };
+            let mut next = sequence(len as u64);
             let row: Vec<f32> = (0..len).map(|_| next() as f32).collect();
             let p: Vec<f64> = (0..len)
                 .map(|i| if i % 3 == 0 { next().abs() } else { 0.0 })

@@ -506,7 +506,7 @@ fn update_row(
 /// per accumulator lane, so the sums are the scalar code's), the tail by the scalar code.
 ///
 /// # Safety
-/// AVX2 must be present; the slices must have equal lengths.
+/// AVX2 must be present (the slices' lengths are checked).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
@@ -616,19 +616,14 @@ unsafe fn update_row_avx2(
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::support::{require_vector_path, sequence};
     use super::*;
 
     /// A row exercising every branch of the update: nodes in contact that stay, leave
     /// (stepped below 0) or sit exactly on 0, nodes off contact above and below the level,
     /// and a tail shorter than `LANES`.
     fn row(len: usize, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        let mut state = seed;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = sequence(seed);
         let (mut p, mut w, mut t, mut r) = (vec![], vec![], vec![], vec![]);
         for i in 0..len {
             p.push(if i % 3 == 0 { 0.0 } else { next().abs() });
@@ -643,6 +638,7 @@ mod tests {
     /// pressures, separations, every accumulator lane and the list of changed nodes.
     #[test]
     fn vector_update_matches_scalar_bits() {
+        require_vector_path();
         for (len, readmit) in [(64, false), (64, true), (39, false), (39, true), (3, true)] {
             let (p0, w0, t, r) = row(len, len as u64 + readmit as u64);
             let args = UpdateArgs {
@@ -676,6 +672,10 @@ mod tests {
             };
             let (scalar, vector) = (run(false), run(true));
             assert!(scalar.3 .0 > 0, "the row must change some nodes");
+            assert!(
+                !readmit || scalar.3 .1 > 0,
+                "with re-admission the row must re-admit some nodes"
+            );
             assert_eq!(scalar, vector, "len {len}, readmit {readmit}");
         }
     }
