@@ -562,6 +562,7 @@ fn non_convergence_is_reported_not_hidden() {
                 max_iterations: 3,
                 stall_window: 1000,
                 preconditioned: false,
+                extension: None,
             },
         )
         .unwrap();
@@ -652,4 +653,66 @@ fn area_load_slope_at_small_loads() {
     }
     // κ decreases slightly with load (VALIDATION §3d).
     assert!(mean[0] > mean[3], "{mean:?}");
+}
+
+/// The preconditioner's free-set extension (opt-in) reaches the same solution: at every load
+/// of a warm-started sweep on a rough surface (ragged rows and a partial last cell at
+/// n = 66), the same contact pixels, pressures within the tolerance's reach of the
+/// default's, the load and complementarity recomputed independently; in full contact it is
+/// the exact inverse like the default (the same iterations); invalid settings are an
+/// error naming them.
+#[test]
+fn extended_preconditioner_reaches_the_same_solution() {
+    use wearcoef::contact::solver::Extension;
+    for (n, lambda_l_px) in [(128usize, 64.0), (66, 33.0)] {
+        let h = rough_surface(n, lambda_l_px, 4.0, 3);
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let extended = SolverConfig {
+            extension: Some(Extension::default()),
+            ..cfg(1e-12)
+        };
+        let (mut plain, mut ext) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());
+        for w in [0.01, 0.05, 0.1, 0.2] {
+            let a = plain.solve(w, &cfg(1e-12)).unwrap();
+            let b = ext.solve(w, &extended).unwrap();
+            assert!(a.converged() && b.converged(), "{a:?} {b:?}");
+            assert_eq!(
+                plain.contact_count(),
+                ext.contact_count(),
+                "n {n}, W/W0 {w}"
+            );
+            let d = relative_l2(ext.pressure(), plain.pressure());
+            assert!(d <= 1e-6, "n {n}, W/W0 {w}: pressures differ by {d}");
+            let p = ext.pressure();
+            let mean_p = p.iter().sum::<f64>() / p.len() as f64;
+            assert!((mean_p / w - 1.0).abs() <= 1e-12, "load {mean_p} vs {w}");
+            let err = independent_error(&op, &h, p);
+            assert!(err <= 1e-12 * 1.01, "complementarity recomputed: {err}");
+        }
+        // From a uniform start in full contact F is every node, E = 1: the default's
+        // exact inverse and its iterations.
+        let full_default = Solver::new(&op, &h)
+            .unwrap()
+            .solve(5.0, &cfg(1e-12))
+            .unwrap();
+        let mut fresh = Solver::new(&op, &h).unwrap();
+        let full = fresh.solve(5.0, &extended).unwrap();
+        assert!(full.converged(), "{full:?}");
+        assert_eq!(full.iterations, full_default.iterations, "{full:?}");
+        assert_eq!(fresh.contact_count(), n * n);
+    }
+    let op = ElasticOperator::new(Grid::unit(16).unwrap(), 1.0);
+    let h = rough_surface(16, 8.0, 4.0, 1);
+    let mut solver = Solver::new(&op, &h).unwrap();
+    let bad = SolverConfig {
+        extension: Some(Extension {
+            weight: 2.0,
+            ..Extension::default()
+        }),
+        ..cfg(1e-8)
+    };
+    match solver.solve(0.1, &bad) {
+        Err(ContactError::BadConfig(msg)) => assert!(msg.contains("weight"), "{msg}"),
+        other => panic!("expected BadConfig, got {other:?}"),
+    }
 }

@@ -33,6 +33,12 @@
 //! `z` alone (not `p` and `w`: 8 % less time per sweep at 1024²), only subtracts the means,
 //! and the line-search numerator `⟨g, t⟩` follows from those sums.
 //!
+//! **Extension** (opt-in, [`SolverConfig::extension`], module `extension`): the
+//! preconditioner's input extended off F by the smoothed gradient, `P Eᵀ K⁻¹ E P`, which
+//! weighs slow modulations over F as the whole surface does; 30 % fewer iterations on the
+//! bench sweep at 1024², but one load of the paper spectrum's 2048² sweep crawls
+//! (docs/BENCHMARKS.md), so it is off by default.
+//!
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
 //! A sweep's warm start scales the previous converged state, `p` and `K p` alike
 //! (`K (s p) = s K p`), in one pass without a convolution.
@@ -72,6 +78,7 @@
 //! - no progress for `stall_window` iterations, or a non-finite error: `Stalled`;
 //!   `max_iterations` reached: `MaxIterations`. Neither is ever a result that looks valid.
 
+mod extension;
 mod passes;
 mod precond;
 mod report;
@@ -82,6 +89,7 @@ mod tests;
 use rayon::prelude::*;
 
 use super::elastic::{ElasticOperator, OperatorWorkspace};
+pub use extension::Extension;
 pub use report::{SolveReport, Status};
 use rows::{GradientStats, UpdateAcc, LANES};
 
@@ -125,6 +133,11 @@ pub struct SolverConfig {
     /// n (3.3 times faster for a 16-load 2048² sweep; docs/BENCHMARKS.md). Same fixed point
     /// and error measure. The default; `false` is the plain Polonsky–Keer iteration.
     pub preconditioned: bool,
+    /// Extend the preconditioner's input off the free set by the smoothed gradient
+    /// ([`Extension`]; needs `preconditioned`): fewer iterations where the contact
+    /// fraction is large, at a pass and two coarse smoothings per iteration. Off (`None`)
+    /// by default.
+    pub extension: Option<Extension>,
 }
 
 impl Default for SolverConfig {
@@ -134,6 +147,7 @@ impl Default for SolverConfig {
             max_iterations: 5000,
             stall_window: 1000,
             preconditioned: true,
+            extension: None,
         }
     }
 }
@@ -190,6 +204,8 @@ pub struct Solver<'a> {
     /// The preconditioned gradient `z`, in single precision like the transform that makes
     /// it (allocated at the first preconditioned solve).
     preconditioned: Vec<f32>,
+    /// The coarse-grid state of the preconditioner's extension, when it is on.
+    coarse: Option<extension::Coarse>,
     has_solution: bool,
     /// Whether `separation` is `K p − h` for the current `pressure`, computed exactly (after
     /// a converged solve; not after [`Self::set_start`]).
@@ -247,6 +263,7 @@ impl<'a> Solver<'a> {
                 .collect(),
             sparse: Vec::with_capacity(MAX_SPARSE),
             preconditioned: Vec::new(),
+            coarse: None,
             has_solution: false,
             separation_exact: false,
         })
@@ -318,6 +335,19 @@ impl<'a> Solver<'a> {
         let len = self.pressure.len();
         if cfg.preconditioned && self.preconditioned.len() != len {
             self.preconditioned = vec![0.0; len];
+        }
+        match cfg.extension.filter(|_| cfg.preconditioned) {
+            Some(settings) => {
+                if self.coarse.as_ref().map(|c| c.settings) != Some(settings) {
+                    let n = self.op.grid().n();
+                    self.coarse = Some(extension::Coarse::new(
+                        n,
+                        self.op.rows_per_block(),
+                        settings,
+                    ));
+                }
+            }
+            None => self.coarse = None,
         }
         let target = mean_pressure;
         let mut report = SolveReport {
@@ -504,6 +534,9 @@ fn check_request(mean_pressure: f64, cfg: &SolverConfig) -> Result<(), ContactEr
             "tolerance {} must be finite and > 0, max_iterations {} must be ≥ 1",
             cfg.tolerance, cfg.max_iterations
         )));
+    }
+    if let Some(extension) = &cfg.extension {
+        extension.check().map_err(ContactError::BadConfig)?;
     }
     Ok(())
 }

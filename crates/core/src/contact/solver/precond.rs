@@ -19,6 +19,9 @@ impl Solver<'_> {
     /// subtracts the mean. Summed in a fixed order (four lanes per block, then the blocks
     /// in order), so bit-identical whatever the number of threads.
     pub(super) fn precondition(&mut self, level: f64) -> PreconditionSums {
+        if self.coarse.is_some() {
+            return self.precondition_extended(level);
+        }
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let produce = self
             .pressure
@@ -56,6 +59,78 @@ impl Solver<'_> {
             },
             &mut self.ws,
         );
+        self.precondition_sums(0.0, 0.0)
+    }
+
+    /// [`Self::precondition`] with the free-set extension (module `extension`):
+    /// `K⁻¹ E g` stored on F as it leaves the inverse FFT, its values off F summed per cell
+    /// for the correction `γ S D⁻¹ (1 − 1_F) y`, which the direction pass adds on F.
+    fn precondition_extended(&mut self, level: f64) -> PreconditionSums {
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        let mut coarse = self.coarse.take().expect("extension state");
+        coarse.gather(&self.pressure, &self.separation, level);
+        let produce = self
+            .pressure
+            .par_chunks(chunk)
+            .zip(self.separation.par_chunks(chunk))
+            .enumerate();
+        let rows = self.op.rows_per_block();
+        {
+            let coarse = &coarse;
+            self.op.start_rows_inverse(
+                produce,
+                |(b, (pc, wc)), r, row| {
+                    let at = r * n..(r + 1) * n;
+                    coarse.input_row(*b * rows + r, row, &pc[at.clone()], &wc[at], level);
+                },
+                &mut self.ws,
+            );
+        }
+        let (cell, m, density, blocks) = coarse.output_parts();
+        self.op.finish_rows_inverse(
+            self.preconditioned
+                .par_chunks_mut(chunk)
+                .zip(self.pressure.par_chunks(chunk))
+                .zip(self.separation.par_chunks(chunk))
+                .zip(self.direction.par_chunks(chunk))
+                .zip(self.precondition_acc.par_iter_mut())
+                .zip(blocks.par_iter_mut()),
+            |(((((zc, pc), wc), tc), acc), block), r, row| {
+                if r == 0 {
+                    **acc = [[0.0; LANES]; 6];
+                }
+                let at = r * n..(r + 1) * n;
+                dispatch_precondition_output(
+                    level,
+                    row,
+                    &mut zc[at.clone()],
+                    &pc[at.clone()],
+                    &wc[at.clone()],
+                    &tc[at.clone()],
+                    acc,
+                );
+                super::extension::Coarse::output_row(
+                    cell,
+                    m,
+                    density,
+                    block,
+                    r,
+                    row,
+                    &pc[at.clone()],
+                    &wc[at],
+                    level,
+                );
+            },
+            &mut self.ws,
+        );
+        let (sum_b, sum_gb) = coarse.finish();
+        self.coarse = Some(coarse);
+        self.precondition_sums(sum_b, sum_gb)
+    }
+
+    /// The sums of the output pass over the blocks in order, with the extension's
+    /// correction `b` on F (`Σ_F b`, `Σ_F g b`; 0 without it).
+    fn precondition_sums(&self, sum_b: f64, sum_gb: f64) -> PreconditionSums {
         let mut sums = [0.0; 6];
         for acc in &self.precondition_acc {
             for (s, lanes) in sums.iter_mut().zip(acc) {
@@ -63,6 +138,7 @@ impl Solver<'_> {
             }
         }
         let [sz, count, sgz, sg, sgt, st] = sums;
+        let (sz, sgz) = (sz + sum_b, sgz + sum_gb);
         let (z_mean, t_mean) = if count > 0.0 {
             (sz / count, st / count)
         } else {
@@ -90,6 +166,39 @@ impl Solver<'_> {
         direction_mean: f64,
     ) -> f64 {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
+        if let Some(coarse) = &self.coarse {
+            let rows = self.op.rows_per_block();
+            let c = coarse.cell();
+            let blocks = self
+                .direction
+                .par_chunks_mut(chunk)
+                .zip(self.preconditioned.par_chunks(chunk))
+                .enumerate();
+            return self.op.start_rows(
+                blocks,
+                |(b, (tc, zc)), r, row| {
+                    let at = r * n..(r + 1) * n;
+                    let back = coarse.back_row(*b * rows + r);
+                    for (((tc, oc), zc), &bc) in tc[at.clone()]
+                        .chunks_mut(c)
+                        .zip(row.chunks_mut(c))
+                        .zip(zc[at].chunks(c))
+                        .zip(back)
+                    {
+                        let shift = bc - z_mean;
+                        for ((t, o), &z) in tc.iter_mut().zip(oc.iter_mut()).zip(zc) {
+                            *t = if !z.is_nan() {
+                                (z as f64 + shift) + beta * (*t - direction_mean)
+                            } else {
+                                0.0
+                            };
+                            *o = *t;
+                        }
+                    }
+                },
+                &mut self.ws,
+            );
+        }
         let blocks = self
             .direction
             .par_chunks_mut(chunk)
@@ -317,7 +426,7 @@ const OFF_FREE_SET: f32 = f32::NAN;
 /// Membership of the free set `F = {p > 0} ∪ {p = 0, w − level < 0}`: the contact set and
 /// the nodes that interpenetrate, whose pressure the next step may raise.
 #[inline(always)]
-fn free(p: f64, w: f64, level: f64) -> bool {
+pub(super) fn free(p: f64, w: f64, level: f64) -> bool {
     p > 0.0 || w < level
 }
 
