@@ -37,12 +37,11 @@ pub struct SolveArgs {
     /// one (same solution; more iterations on large grids, one convolution each).
     #[arg(long)]
     pub plain_cg: bool,
-    /// Extend the preconditioner off the free set by the smoothed gradient (cells of 8
-    /// nodes, Gaussian σ = 32 nodes, weight 0.7, density floor 0.05; experimental, off by
-    /// default: the same solution in fewer iterations on the measured surfaces,
-    /// docs/BENCHMARKS.md).
+    /// Precondition with `P K⁻¹ P` alone, without the default's extension off the free set
+    /// by the smoothed gradient (the same solution in about 30 % more iterations on rough
+    /// surfaces; docs/BENCHMARKS.md).
     #[arg(long, conflicts_with = "plain_cg")]
-    pub extend_preconditioner: bool,
+    pub no_extension: bool,
     /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.
     #[arg(long)]
     pub pressure_out: Option<PathBuf>,
@@ -392,9 +391,7 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         tolerance: args.tol,
         max_iterations: args.max_iter,
         preconditioned: !args.plain_cg,
-        extension: args
-            .extend_preconditioner
-            .then(wearcoef::contact::solver::Extension::default),
+        extension: (!args.no_extension).then(wearcoef::contact::solver::Extension::default),
         ..SolverConfig::default()
     };
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();

@@ -1,4 +1,4 @@
-//! The free-set extension of the preconditioner (opt-in, [`SolverConfig::extension`]).
+//! The free-set extension of the preconditioner (the default, [`super::SolverConfig::extension`]).
 //!
 //! `M = P K⁻¹ P` answers a slow modulation `f` of the gradient over the free set F with
 //! `f · P K⁻¹ 1_F`, the stiff local response of each cluster, while the restricted operator
@@ -18,6 +18,9 @@
 
 use rayon::prelude::*;
 
+use super::precond::free;
+use super::rows::avx2_dispatch;
+
 /// Settings of the preconditioner's free-set extension.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Extension {
@@ -32,13 +35,14 @@ pub struct Extension {
 }
 
 impl Default for Extension {
-    /// The settings measured best on the paper's spectrum and the bench surfaces at 1024²
-    /// and 2048² (docs/BENCHMARKS.md).
+    /// The settings measured on the paper's spectrum and the bench surfaces at 1024²–4096²
+    /// (docs/BENCHMARKS.md): γ = 0.7 saves a few more iterations at 1024² but makes one load
+    /// at 2048² crawl (424 iterations in the replica), γ = 0.5 does not.
     fn default() -> Self {
         Self {
             cell: 8,
             sigma: 32.0,
-            weight: 0.7,
+            weight: 0.5,
             density_floor: 0.05,
         }
     }
@@ -168,7 +172,7 @@ impl Coarse {
                     {
                         let (mut s, mut k) = (0.0, 0.0);
                         for (&pv, &wv) in pc.iter().zip(wc) {
-                            if super::precond::free(pv, wv, level) {
+                            if free(pv, wv, level) {
                                 s += wv - level;
                                 k += 1.0;
                             }
@@ -215,21 +219,7 @@ impl Coarse {
     pub(super) fn input_row(&self, i: usize, o: &mut [f32], p: &[f64], w: &[f64], level: f64) {
         let (c, m) = (self.cell, self.m);
         let values = &self.value[(i / c) * m..(i / c + 1) * m];
-        for (((oc, pc), wc), &v) in o
-            .chunks_mut(c)
-            .zip(p.chunks(c))
-            .zip(w.chunks(c))
-            .zip(values)
-        {
-            let v = v as f32;
-            for ((o, &pv), &wv) in oc.iter_mut().zip(pc).zip(wc) {
-                *o = if super::precond::free(pv, wv, level) {
-                    (wv - level) as f32
-                } else {
-                    v
-                };
-            }
-        }
+        dispatch_input(c, values, level, o, p, w);
     }
 
     /// Adds one row of `K⁻¹ E g` off F, divided by `D`, to its block's cell sums.
@@ -252,20 +242,7 @@ impl Coarse {
         let local = i / cell - block.first_cell_row;
         let sums = &mut block.sums[local * m..(local + 1) * m];
         let dens = &density[(i / cell) * m..(i / cell + 1) * m];
-        for (((yc, pc), wc), (s, &d)) in row
-            .chunks(cell)
-            .zip(p.chunks(cell))
-            .zip(w.chunks(cell))
-            .zip(sums.iter_mut().zip(dens))
-        {
-            let mut acc = 0.0;
-            for ((&y, &pv), &wv) in yc.iter().zip(pc).zip(wc) {
-                if !super::precond::free(pv, wv, level) {
-                    acc += y as f64;
-                }
-            }
-            *s += acc / d;
-        }
+        dispatch_off_sums(cell, dens, level, sums, row, p, w);
     }
 
     /// The cell size, cells per side and `D`, for [`Self::output_row`] while the blocks are
@@ -315,6 +292,96 @@ impl Coarse {
 
     pub(super) fn cell(&self) -> usize {
         self.cell
+    }
+}
+
+avx2_dispatch! {
+    /// One row of `E g`: `g = w − level` on F, the cell's value off it, in single precision
+    /// (AVX2 where available; a selection, so the same bits either way).
+    fn dispatch_input(
+        cell: usize,
+        values: &[f64],
+        level: f64,
+        o: &mut [f32],
+        p: &[f64],
+        w: &[f64],
+    ) {
+        for (((oc, pc), wc), &v) in o
+            .chunks_mut(cell)
+            .zip(p.chunks(cell))
+            .zip(w.chunks(cell))
+            .zip(values)
+        {
+            let v = v as f32;
+            for ((o, &pv), &wv) in oc.iter_mut().zip(pc).zip(wc) {
+                *o = if free(pv, wv, level) {
+                    (wv - level) as f32
+                } else {
+                    v
+                };
+            }
+        }
+    }
+}
+
+avx2_dispatch! {
+    /// Adds `Σ y / D` over the nodes of each cell of a row that are off F to `sums` (nodes
+    /// in order within a cell).
+    fn dispatch_off_sums(
+        cell: usize,
+        density: &[f64],
+        level: f64,
+        sums: &mut [f64],
+        row: &[f32],
+        p: &[f64],
+        w: &[f64],
+    ) {
+        for (((yc, pc), wc), (s, &d)) in row
+            .chunks(cell)
+            .zip(p.chunks(cell))
+            .zip(w.chunks(cell))
+            .zip(sums.iter_mut().zip(density))
+        {
+            let mut acc = 0.0;
+            for ((&y, &pv), &wv) in yc.iter().zip(pc).zip(wc) {
+                if !free(pv, wv, level) {
+                    acc += y as f64;
+                }
+            }
+            *s += acc / d;
+        }
+    }
+}
+
+avx2_dispatch! {
+    /// One row of the preconditioned direction with the extension's correction:
+    /// `t ← (z + (b − z̄)) + β (t − t̄)` on F (where `z` is a number; `b` per cell), 0
+    /// elsewhere, copied into `row` (AVX2 where available: the same operations per node).
+    pub(super) fn dispatch_direction(
+        cell: usize,
+        back: &[f64],
+        coefficients: [f64; 3],
+        t: &mut [f64],
+        row: &mut [f64],
+        z: &[f32],
+    ) {
+        let [z_mean, beta, direction_mean] = coefficients;
+        for (((tc, oc), zc), &bc) in t
+            .chunks_mut(cell)
+            .zip(row.chunks_mut(cell))
+            .zip(z.chunks(cell))
+            .zip(back)
+        {
+            let shift = bc - z_mean;
+            for ((t, o), &z) in tc.iter_mut().zip(oc.iter_mut()).zip(zc) {
+                *t = if !z.is_nan() {
+                    (z as f64 + shift) + beta * (*t - direction_mean)
+                } else {
+                    0.0
+                };
+                *o = *t;
+            }
+        }
     }
 }
 

@@ -33,11 +33,11 @@
 //! `z` alone (not `p` and `w`: 8 % less time per sweep at 1024²), only subtracts the means,
 //! and the line-search numerator `⟨g, t⟩` follows from those sums.
 //!
-//! **Extension** (opt-in, [`SolverConfig::extension`], module `extension`): the
+//! **Extension** (the default, [`SolverConfig::extension`], module `extension`): the
 //! preconditioner's input extended off F by the smoothed gradient, `P Eᵀ K⁻¹ E P`, which
-//! weighs slow modulations over F as the whole surface does; 30 % fewer iterations on the
-//! bench sweep at 1024², but one load of the paper spectrum's 2048² sweep crawls
-//! (docs/BENCHMARKS.md), so it is off by default.
+//! weighs slow modulations over F as the whole surface does, at a pass and two coarse
+//! smoothings per iteration and no convolution: 27–31 % fewer iterations on the paper
+//! spectrum's 30-load sweeps at 1024²–4096² (docs/BENCHMARKS.md).
 //!
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
 //! A sweep's warm start scales the previous converged state, `p` and `K p` alike
@@ -134,9 +134,9 @@ pub struct SolverConfig {
     /// and error measure. The default; `false` is the plain Polonsky–Keer iteration.
     pub preconditioned: bool,
     /// Extend the preconditioner's input off the free set by the smoothed gradient
-    /// ([`Extension`]; needs `preconditioned`): fewer iterations where the contact
-    /// fraction is large, at a pass and two coarse smoothings per iteration. Off (`None`)
-    /// by default.
+    /// ([`Extension`]; used only when `preconditioned`): fewer iterations where the
+    /// contact fraction is large, at a pass and two coarse smoothings per iteration. On
+    /// (`Extension::default()`) by default; `None` gives `P K⁻¹ P` alone.
     pub extension: Option<Extension>,
 }
 
@@ -147,7 +147,7 @@ impl Default for SolverConfig {
             max_iterations: 5000,
             stall_window: 1000,
             preconditioned: true,
-            extension: None,
+            extension: Some(Extension::default()),
         }
     }
 }

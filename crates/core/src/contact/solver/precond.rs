@@ -179,22 +179,14 @@ impl Solver<'_> {
                 |(b, (tc, zc)), r, row| {
                     let at = r * n..(r + 1) * n;
                     let back = coarse.back_row(*b * rows + r);
-                    for (((tc, oc), zc), &bc) in tc[at.clone()]
-                        .chunks_mut(c)
-                        .zip(row.chunks_mut(c))
-                        .zip(zc[at].chunks(c))
-                        .zip(back)
-                    {
-                        let shift = bc - z_mean;
-                        for ((t, o), &z) in tc.iter_mut().zip(oc.iter_mut()).zip(zc) {
-                            *t = if !z.is_nan() {
-                                (z as f64 + shift) + beta * (*t - direction_mean)
-                            } else {
-                                0.0
-                            };
-                            *o = *t;
-                        }
-                    }
+                    super::extension::dispatch_direction(
+                        c,
+                        back,
+                        [z_mean, beta, direction_mean],
+                        &mut tc[at.clone()],
+                        row,
+                        &zc[at],
+                    );
                 },
                 &mut self.ws,
             );
