@@ -4,6 +4,7 @@
 // structure the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
+use rayon::iter::Either;
 use rayon::prelude::*;
 
 use super::rows::{avx2_dispatch, lanes, padded, LANES};
@@ -17,76 +18,51 @@ impl Solver<'_> {
     /// leaves the inverse FFT, and summed over F in the same pass: `Σ z`, `|F|`, `Σ g z`,
     /// `Σ g`, `Σ g t_old`, `Σ t_old`. The centring is left to the direction pass, which
     /// subtracts the mean. Summed in a fixed order (four lanes per block, then the blocks
-    /// in order), so bit-identical whatever the number of threads.
+    /// in order), so bit-identical whatever the number of threads. With the free-set
+    /// extension (module `extension`) the input is `E g` instead of `P g`, and the values
+    /// of `K⁻¹ E g` off F are summed per cell for the correction `γ S D⁻¹ (1 − 1_F) y` that
+    /// the direction pass adds on F.
     pub(super) fn precondition(&mut self, level: f64) -> PreconditionSums {
-        if self.coarse.is_some() {
-            return self.precondition_extended(level);
-        }
         let (n, chunk) = (self.op.grid().n(), self.chunk);
-        let produce = self
-            .pressure
-            .par_chunks(chunk)
-            .zip(self.separation.par_chunks(chunk));
-        self.op.start_rows_inverse(
-            produce,
-            |(pc, wc), r, row| {
-                let at = r * n..(r + 1) * n;
-                dispatch_precondition_input(level, row, &pc[at.clone()], &wc[at]);
-            },
-            &mut self.ws,
-        );
-        self.op.finish_rows_inverse(
-            self.preconditioned
-                .par_chunks_mut(chunk)
-                .zip(self.pressure.par_chunks(chunk))
-                .zip(self.separation.par_chunks(chunk))
-                .zip(self.direction.par_chunks(chunk))
-                .zip(self.precondition_acc.par_iter_mut()),
-            |((((zc, pc), wc), tc), acc), r, row| {
-                if r == 0 {
-                    **acc = [[0.0; LANES]; 6];
-                }
-                let at = r * n..(r + 1) * n;
-                dispatch_precondition_output(
-                    level,
-                    row,
-                    &mut zc[at.clone()],
-                    &pc[at.clone()],
-                    &wc[at.clone()],
-                    &tc[at],
-                    acc,
-                );
-            },
-            &mut self.ws,
-        );
-        self.precondition_sums(0.0, 0.0)
-    }
-
-    /// [`Self::precondition`] with the free-set extension (module `extension`):
-    /// `K⁻¹ E g` stored on F as it leaves the inverse FFT, its values off F summed per cell
-    /// for the correction `γ S D⁻¹ (1 − 1_F) y`, which the direction pass adds on F.
-    fn precondition_extended(&mut self, level: f64) -> PreconditionSums {
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
-        let mut coarse = self.coarse.take().expect("extension state");
-        coarse.gather(&self.pressure, &self.separation, level);
-        let produce = self
-            .pressure
-            .par_chunks(chunk)
-            .zip(self.separation.par_chunks(chunk))
-            .enumerate();
         let rows = self.op.rows_per_block();
+        let mut coarse = self.coarse.take();
+        if let Some(c) = coarse.as_mut() {
+            c.gather(&self.pressure, &self.separation, level);
+        }
         {
-            let coarse = &coarse;
+            let coarse = coarse.as_ref();
+            let produce = self
+                .pressure
+                .par_chunks(chunk)
+                .zip(self.separation.par_chunks(chunk))
+                .enumerate();
             self.op.start_rows_inverse(
                 produce,
                 |(b, (pc, wc)), r, row| {
                     let at = r * n..(r + 1) * n;
-                    coarse.input_row(*b * rows + r, row, &pc[at.clone()], &wc[at], level);
+                    let (p, w) = (&pc[at.clone()], &wc[at]);
+                    match coarse {
+                        Some(c) => c.input_row(*b * rows + r, row, p, w, level),
+                        None => dispatch_precondition_input(level, row, p, w),
+                    }
                 },
                 &mut self.ws,
             );
         }
-        let (cell, m, density, blocks) = coarse.output_parts();
+        let blocks = self.precondition_acc.len();
+        let (extension, off_blocks) = match coarse.as_mut() {
+            Some(c) => {
+                let (cell, m, density, off) = c.output_parts();
+                (
+                    Some((cell, m, density)),
+                    Either::Left(off.par_iter_mut().map(Some)),
+                )
+            }
+            None => (
+                None,
+                Either::Right((0..blocks).into_par_iter().map(|_| None)),
+            ),
+        };
         self.op.finish_rows_inverse(
             self.preconditioned
                 .par_chunks_mut(chunk)
@@ -94,37 +70,24 @@ impl Solver<'_> {
                 .zip(self.separation.par_chunks(chunk))
                 .zip(self.direction.par_chunks(chunk))
                 .zip(self.precondition_acc.par_iter_mut())
-                .zip(blocks.par_iter_mut()),
+                .zip(off_blocks),
             |(((((zc, pc), wc), tc), acc), block), r, row| {
                 if r == 0 {
                     **acc = [[0.0; LANES]; 6];
                 }
                 let at = r * n..(r + 1) * n;
-                dispatch_precondition_output(
-                    level,
-                    row,
-                    &mut zc[at.clone()],
-                    &pc[at.clone()],
-                    &wc[at.clone()],
-                    &tc[at.clone()],
-                    acc,
-                );
-                super::extension::Coarse::output_row(
-                    cell,
-                    m,
-                    density,
-                    block,
-                    r,
-                    row,
-                    &pc[at.clone()],
-                    &wc[at],
-                    level,
-                );
+                let (p, w) = (&pc[at.clone()], &wc[at.clone()]);
+                dispatch_precondition_output(level, row, &mut zc[at.clone()], p, w, &tc[at], acc);
+                if let (Some((cell, m, density)), Some(block)) = (extension, block) {
+                    super::extension::Coarse::output_row(
+                        cell, m, density, block, r, row, p, w, level,
+                    );
+                }
             },
             &mut self.ws,
         );
-        let (sum_b, sum_gb) = coarse.finish();
-        self.coarse = Some(coarse);
+        let (sum_b, sum_gb) = coarse.as_mut().map_or((0.0, 0.0), |c| c.finish());
+        self.coarse = coarse;
         self.precondition_sums(sum_b, sum_gb)
     }
 
