@@ -26,6 +26,11 @@ Options:
   contact set S (clipped at 0) instead of scaling the previous pressure;
 - `--f32-preconditioner`: z = P K⁻¹ P g computed by a single-precision FFT (the rest in
   double precision);
+- `--extend SIGMA` (with `--gamma`, `--dmin`): the preconditioner's free-set extension of
+  the solver (`P Eᵀ K⁻¹ E P`, `E = 1_F + γ (1 − 1_F) D⁻¹ S 1_F`, `D = max(S 1_F, dmin)`), with
+  `S` a Gaussian of standard deviation SIGMA nodes on the fine grid instead of the solver's
+  8² cells; 0 (the default) is `P K⁻¹ P`;
+- `--restart F`: the restart threshold (fraction of the contact set changed; 0.03);
 - `--trace`: per iteration of the last load, the error and the nodes that left and entered
   the contact set.
 """
@@ -117,6 +122,10 @@ def main():
     ap.add_argument("--refresh", type=float, default=0.0)
     ap.add_argument("--tol", type=float, default=1e-10)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--extend", type=float, default=0.0)
+    ap.add_argument("--gamma", type=float, default=0.5)
+    ap.add_argument("--dmin", type=float, default=0.05)
+    ap.add_argument("--restart", type=float, default=RESTART_FRACTION)
     args = ap.parse_args()
     n = args.n
     h = np.load(args.surface)
@@ -173,6 +182,12 @@ def main():
                 r32 = r.astype(np.float32)
                 z = P(sf.irfft2(sf.rfft2(r32, workers=args.workers) * k_inv_hat.astype(np.float32),
                                 s=(n, n), workers=args.workers).astype(np.float64))
+            elif args.extend > 0:
+                S_hat = np.exp(-2 * (np.pi * args.extend * op.q / n) ** 2)
+                D = np.maximum(conv(F.astype(float), S_hat), args.dmin)
+                ext = np.where(F, r, args.gamma * conv(np.where(F, r, 0.0), S_hat) / D)
+                y = conv(ext, k_inv_hat)
+                z = P(y + args.gamma * conv(np.where(F, 0.0, y) / D, S_hat))
             else:
                 z = P(conv(r, k_inv_hat))
             gz = np.sum(r * z)
@@ -187,7 +202,7 @@ def main():
             p_new = np.maximum(p - tau * t, 0.0)
             left = int(np.sum(S & (p_new <= 0)))
             entered = int(np.sum(~S & (p_new > 0)))
-            restart = left + entered > RESTART_FRACTION * S.sum()
+            restart = left + entered > args.restart * S.sum()
             if trace:
                 print(f"  iteration {it:3d}: error {error:.2e}, interpenetrating "
                       f"{int(F.sum() - S.sum())}, left {left}, entered {entered}, "
