@@ -164,22 +164,7 @@ impl Coarse {
                 cnt.fill(0.0);
                 for i in ci * c..((ci + 1) * c).min(n) {
                     let (pr, wr) = (&p[i * n..(i + 1) * n], &w[i * n..(i + 1) * n]);
-                    for (((pc, wc), sg), cnt) in pr
-                        .chunks(c)
-                        .zip(wr.chunks(c))
-                        .zip(sg.iter_mut())
-                        .zip(cnt.iter_mut())
-                    {
-                        let (mut s, mut k) = (0.0, 0.0);
-                        for (&pv, &wv) in pc.iter().zip(wc) {
-                            if free(pv, wv, level) {
-                                s += wv - level;
-                                k += 1.0;
-                            }
-                        }
-                        *sg += s;
-                        *cnt += k;
-                    }
+                    dispatch_cell_sums(c, level, sg, cnt, pr, wr);
                 }
             });
         let area = (c * c) as f64;
@@ -292,6 +277,37 @@ impl Coarse {
 
     pub(super) fn cell(&self) -> usize {
         self.cell
+    }
+}
+
+avx2_dispatch! {
+    /// Adds one row's sums of `g = w − level` and of `1_F` over each cell's nodes in F to
+    /// `sum_g` and `count` (nodes in order within a cell; AVX2 where available, the same
+    /// operations).
+    fn dispatch_cell_sums(
+        cell: usize,
+        level: f64,
+        sum_g: &mut [f64],
+        count: &mut [f64],
+        p: &[f64],
+        w: &[f64],
+    ) {
+        for (((pc, wc), sg), cnt) in p
+            .chunks(cell)
+            .zip(w.chunks(cell))
+            .zip(sum_g.iter_mut())
+            .zip(count.iter_mut())
+        {
+            let (mut s, mut k) = (0.0, 0.0);
+            for (&pv, &wv) in pc.iter().zip(wc) {
+                if free(pv, wv, level) {
+                    s += wv - level;
+                    k += 1.0;
+                }
+            }
+            *sg += s;
+            *cnt += k;
+        }
     }
 }
 
