@@ -30,6 +30,13 @@ Options:
   the solver (`P Eᵀ K⁻¹ E P`, `E = 1_F + γ (1 − 1_F) D⁻¹ S 1_F`, `D = max(S 1_F, dmin)`), with
   `S` a Gaussian of standard deviation SIGMA nodes on the fine grid instead of the solver's
   8² cells; 0 (the default) is `P K⁻¹ P`;
+- `--long SIGMA_L` (with `--long-weight`, `--dmin-long`, `--long-settled`): with `--extend`,
+  a second extension term of standard deviation SIGMA_L nodes and its own density,
+  `E = 1_F + (1 − 1_F) (γ D⁻¹ S + γ_L D_L⁻¹ S_L) 1_F`, so that the weight reaches γ + γ_L for
+  the longest modes; `--long-settled` uses it only after an iteration that did not restart
+  (the conjugate gradient restarted when it is switched on or off);
+- `--first-on-contact K`: the first K iterations of a warm-started load act on the contact
+  set alone (no interpenetrating nodes in F);
 - `--restart F`: the restart threshold (fraction of the contact set changed; 0.03);
 - `--trace`: per iteration of the last load, the error and the nodes that left and entered
   the contact set.
@@ -126,6 +133,11 @@ def main():
     ap.add_argument("--gamma", type=float, default=0.5)
     ap.add_argument("--dmin", type=float, default=0.05)
     ap.add_argument("--restart", type=float, default=RESTART_FRACTION)
+    ap.add_argument("--long", type=float, default=0.0)
+    ap.add_argument("--long-weight", type=float, default=0.5)
+    ap.add_argument("--dmin-long", type=float, default=0.05)
+    ap.add_argument("--long-settled", action="store_true")
+    ap.add_argument("--first-on-contact", type=int, default=0)
     args = ap.parse_args()
     n = args.n
     h = np.load(args.surface)
@@ -153,6 +165,7 @@ def main():
         gz_old = 0.0
         restart = True
         coarse_key, coarse = None, None
+        long_before = False
         for it in range(20000):
             w = u - h
             S = p > 0
@@ -162,6 +175,8 @@ def main():
                 return p, it
             g = w - level
             F = S | (w < level)
+            if it < args.first_on_contact and p.sum() > 0:
+                F = S
 
             def P(x):
                 y = np.where(F, x, 0.0)
@@ -169,6 +184,7 @@ def main():
                 return y
 
             r = P(g)
+            switched = False
             if args.deflate:
                 if coarse_key is None or np.sum(coarse_key != F) > args.refresh * F.sum():
                     coarse_key, coarse = F.copy(), coarse_space(op, F)
@@ -185,13 +201,26 @@ def main():
             elif args.extend > 0:
                 S_hat = np.exp(-2 * (np.pi * args.extend * op.q / n) ** 2)
                 D = np.maximum(conv(F.astype(float), S_hat), args.dmin)
-                ext = np.where(F, r, args.gamma * conv(np.where(F, r, 0.0), S_hat) / D)
-                y = conv(ext, k_inv_hat)
-                z = P(y + args.gamma * conv(np.where(F, 0.0, y) / D, S_hat))
+                r_F = np.where(F, r, 0.0)
+                off = args.gamma * conv(r_F, S_hat) / D
+                use_long = args.long > 0 and not (args.long_settled and restart)
+                switched, long_before = use_long != long_before, use_long
+                if use_long:
+                    L_hat = np.exp(-2 * (np.pi * args.long * op.q / n) ** 2)
+                    D_L = np.maximum(conv(F.astype(float), L_hat), args.dmin_long)
+                    off = off + args.long_weight * conv(r_F, L_hat) / D_L
+                y = conv(np.where(F, r, off), k_inv_hat)
+                y_off = np.where(F, 0.0, y)
+                back = args.gamma * conv(y_off / D, S_hat)
+                if use_long:
+                    back = back + args.long_weight * conv(y_off / D_L, L_hat)
+                z = P(y + back)
             else:
                 z = P(conv(r, k_inv_hat))
             gz = np.sum(r * z)
             beta = 0.0 if (restart or gz_old <= 0) else gz / gz_old
+            if args.extend > 0 and args.long > 0 and switched:
+                beta = 0.0
             t_old = np.where(F, t - t[F].mean(), 0.0)
             if np.sum(r * (z + beta * t_old)) < DESCENT_FRACTION * gz:
                 beta = 0.0
