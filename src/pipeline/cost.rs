@@ -121,7 +121,7 @@ impl Default for CostModel {
     /// Coefficients measured on the development machine (2 cores, AVX2) on 2026-11-25: the
     /// seconds per unit of work from a default-profile store (instances two at a time on the
     /// 2 cores, so wall time is about one core's CPU time; the contact stage's then scaled by
-    /// 3.51/3.67, the iteration's cost in FFT pairs of the current solver against the one
+    /// 3.64/3.67, the iteration's cost in FFT pairs of the current solver against the one
     /// measured in that store, `make bench-iteration` at 1024², 1 thread, 2026-11-26); the
     /// iterations per load and their growth with n from the paper's own spectrum (`SEEDS="3128
     /// 1 2 3 4 5 6 7 8" REALIZATIONS="9 4 2 1" make bench-iteration-growth BOXES="1 2 4 8"`,
@@ -131,7 +131,7 @@ impl Default for CostModel {
     fn default() -> Self {
         Self {
             surface_per_n2logn: 5.8e-9,
-            contact_per_iteration_n2logn: 2.73e-9,
+            contact_per_iteration_n2logn: 2.83e-9,
             iterations_per_load_1024: 21.6,
             iterations_exponent: 0.271,
             clusters_per_load_n2: 3.8e-9,
