@@ -1,0 +1,124 @@
+"""Which modes limit the preconditioned iteration on a fixed contact set: a Lanczos probe.
+
+Usage (numpy and scipy, e.g. the interpreter `bash benches/venv.sh numpy scipy` prints):
+
+    wearcoef surface --n 2048 --lambda-l-px 1024 --lambda-s-px 8 --hurst 0.8 --seed 3128 -o h.npy
+    wearcoef solve --surface h.npy --loads 0.0522,0.06 --tol 1e-8 --contact-out c.npy
+    python benches/spectrum_probe.py h.npy c.npy [--preconditioner M|E] [--rhs heights|random]
+
+Takes the last load's contact set F from CONTACT (a (loads, n, n) or (n, n) 0/1 array) and
+solves the linear problem of the solver's last phase on that fixed F (A = P K P, P: restrict
+to F and centre; right-hand side P h, or a random field with `--rhs random`) by conjugate
+gradients preconditioned with M = P K⁻¹ P (`M`) or with the solver's free-set extension
+M_E = P Eᵀ K⁻¹ E P (`E`, γ = 0.5, a Gaussian of σ = 32 nodes on the fine grid, D ≥ 0.05, as
+`solver_replica.py --extend 32`) to a relative residual of 1e-8. From the conjugate gradient's
+coefficients it builds the Lanczos matrix of the preconditioned operator and prints one JSON
+line with the iterations and its Ritz values (the extremes, and how many lie above 2 and
+10), then one per extreme Ritz vector (a pressure field on F) describing it: the fraction of
+its energy on F's edge nodes (nodes of F with a neighbour off F) against their share of F,
+the fraction that is constant per cluster (8-neighbour clusters, not periodic), and how
+that per-cluster part spreads over wavelengths (in grid nodes).
+"""
+import argparse
+import json
+
+import numpy as np
+import scipy.fft as sf
+from scipy import ndimage
+
+from solver_replica import Operator
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("surface")
+    ap.add_argument("contact")
+    ap.add_argument("--preconditioner", choices=["M", "E"], default="E")
+    ap.add_argument("--rhs", choices=["heights", "random"], default="heights")
+    ap.add_argument("--max-iterations", type=int, default=300)
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args()
+    h = np.load(args.surface)
+    contact = np.load(args.contact)
+    F = (contact[-1] if contact.ndim == 3 else contact).astype(bool)
+    n = h.shape[0]
+    op = Operator(n, args.workers)
+
+    def P(x):
+        y = np.where(F, x, 0.0)
+        y[F] -= y[F].mean()
+        return y
+
+    def A(x):
+        return P(op.conv(x, op.k_hat))
+
+    smoothing = np.exp(-2 * (np.pi * 32 * op.q / n) ** 2)
+    density = np.maximum(op.conv(F.astype(float), smoothing), 0.05)
+
+    def M(x):
+        r = P(x)
+        if args.preconditioner == "M":
+            return P(op.conv(r, op.k_inv_hat))
+        extended = np.where(F, r, 0.5 * op.conv(r, smoothing) / density)
+        y = op.conv(extended, op.k_inv_hat)
+        return P(y + 0.5 * op.conv(np.where(F, 0.0, y) / density, smoothing))
+
+    b = P(h) if args.rhs == "heights" else P(np.random.default_rng(1).standard_normal((n, n)))
+    r = b.copy()
+    z = M(r)
+    d = z.copy()
+    rz = np.sum(r * z)
+    rz0 = rz
+    alphas, betas, zs, rzs = [], [], [], []
+    while len(alphas) < args.max_iterations and rz > 1e-16 * rz0:
+        zs.append(z.astype(np.float32))
+        rzs.append(rz)
+        Ad = A(d)
+        alpha = rz / np.sum(d * Ad)
+        r -= alpha * Ad
+        z = M(r)
+        rz_new = np.sum(r * z)
+        alphas.append(alpha)
+        betas.append(rz_new / rz)
+        rz = rz_new
+        d = z + betas[-1] * d
+    k = len(alphas)
+    T = np.zeros((k, k))
+    for j in range(k):
+        T[j, j] = 1 / alphas[j] + (betas[j - 1] / alphas[j - 1] if j > 0 else 0.0)
+        if j + 1 < k:
+            T[j, j + 1] = T[j + 1, j] = np.sqrt(betas[j]) / alphas[j]
+    ritz, vectors = np.linalg.eigh(T)
+    print(json.dumps({
+        "n": n, "preconditioner": args.preconditioner, "contact_fraction": float(F.mean()),
+        "iterations": k, "ritz_min": ritz[:3].tolist(), "ritz_max": ritz[-3:].tolist(),
+        "ritz_above_2": int(np.sum(ritz > 2)), "ritz_above_10": int(np.sum(ritz > 10)),
+    }))
+    labels, clusters = ndimage.label(F, structure=np.ones((3, 3)))
+    edge = F & ~ndimage.binary_erosion(F, structure=np.ones((3, 3)))
+    wavelength = np.where(op.q > 0, n / np.where(op.q > 0, op.q, 1.0), np.inf)
+    weights = np.full(op.q.shape, 2.0)
+    weights[:, 0] = 1.0
+    for name, column in (("largest", -1), ("smallest", 0)):
+        # Right eigenvector of M A: Σ_j s_j z_j / sqrt(r_j·z_j).
+        v = sum(vectors[j, column] * zs[j].astype(np.float64) / np.sqrt(rzs[j]) for j in range(k))
+        v = np.where(F, v, 0.0)
+        energy = np.sum(v**2)
+        per_cluster = np.zeros_like(v)
+        per_cluster[F] = ndimage.mean(v, labels, index=np.arange(1, clusters + 1))[labels[F] - 1]
+        power = weights * np.abs(sf.rfft2(per_cluster)) ** 2
+        bands, low = {}, 0
+        for high in (4, 16, 64, 256, 1024, np.inf):
+            inside = (wavelength >= low) & (wavelength < high)
+            bands[f"{low:g}-{high:g}"] = round(float(power[inside].sum() / power.sum()), 3)
+            low = high
+        print(json.dumps({
+            "ritz_vector": name, "energy_on_edge_nodes": round(float(np.sum(v[edge] ** 2) / energy), 3),
+            "edge_nodes_share_of_F": round(float(edge.sum() / F.sum()), 3),
+            "constant_per_cluster": round(float(np.sum(per_cluster**2) / energy), 3),
+            "per_cluster_part_by_wavelength_nodes": bands,
+        }))
+
+
+if __name__ == "__main__":
+    main()
