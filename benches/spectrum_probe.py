@@ -17,7 +17,10 @@ line with the iterations and its Ritz values (the extremes, and how many lie abo
 10), then one per extreme Ritz vector (a pressure field on F) describing it: the fraction of
 its energy on F's edge nodes (nodes of F with a neighbour off F) against their share of F,
 the fraction that is constant per cluster (8-neighbour clusters, not periodic), and how
-that per-cluster part spreads over wavelengths (in grid nodes).
+that per-cluster part spreads over wavelengths (in grid nodes), and how the vector's energy
+density (its square) does, its participation ratio (Σv²)² / (|F| Σv⁴) (near 1 when spread
+evenly over F, small when localised) and the share of its energy in the most loaded block of
+256² nodes (n a multiple of 256).
 """
 import argparse
 import json
@@ -106,17 +109,23 @@ def main():
         energy = np.sum(v**2)
         per_cluster = np.zeros_like(v)
         per_cluster[F] = ndimage.mean(v, labels, index=np.arange(1, clusters + 1))[labels[F] - 1]
-        power = weights * np.abs(sf.rfft2(per_cluster)) ** 2
-        bands, low = {}, 0
-        for high in (4, 16, 64, 256, 1024, np.inf):
-            inside = (wavelength >= low) & (wavelength < high)
-            bands[f"{low:g}-{high:g}"] = round(float(power[inside].sum() / power.sum()), 3)
-            low = high
+        def by_wavelength(field):
+            power = weights * np.abs(sf.rfft2(field - field.mean())) ** 2
+            bands, low = {}, 0
+            for high in (4, 16, 64, 256, 1024, np.inf):
+                inside = (wavelength >= low) & (wavelength < high)
+                bands[f"{low:g}-{high:g}"] = round(float(power[inside].sum() / power.sum()), 3)
+                low = high
+            return bands
         print(json.dumps({
             "ritz_vector": name, "energy_on_edge_nodes": round(float(np.sum(v[edge] ** 2) / energy), 3),
             "edge_nodes_share_of_F": round(float(edge.sum() / F.sum()), 3),
             "constant_per_cluster": round(float(np.sum(per_cluster**2) / energy), 3),
-            "per_cluster_part_by_wavelength_nodes": bands,
+            "per_cluster_part_by_wavelength_nodes": by_wavelength(per_cluster),
+            "energy_density_by_wavelength_nodes": by_wavelength(v**2),
+            "participation_ratio": round(float(energy**2 / (F.sum() * np.sum(v**4))), 4),
+            "largest_256_block_energy_share": round(float(
+                (v**2).reshape(n // 256, 256, n // 256, 256).sum(axis=(1, 3)).max() / energy), 3),
         }))
 
 
