@@ -11,7 +11,8 @@ solves the linear problem of the solver's last phase on that fixed F (A = P K P,
 to F and centre; right-hand side P h, or a random field with `--rhs random`) by conjugate
 gradients preconditioned with M = P K⁻¹ P (`M`) or with the solver's free-set extension
 M_E = P Eᵀ K⁻¹ E P (`E`, γ = 0.5, a Gaussian of σ = 32 nodes on the fine grid, D ≥ 0.05, as
-`solver_replica.py --extend 32`) to a relative residual of 1e-8. From the conjugate gradient's
+`solver_replica.py --extend 32`) to a relative residual of 1e-8; `--edge-scale s` uses
+S M S instead, S scaling F's edge nodes (nodes of F with a neighbour off F) by s. From the conjugate gradient's
 coefficients it builds the Lanczos matrix of the preconditioned operator and prints one JSON
 line with the iterations and its Ritz values (the extremes, and how many lie above 2 and
 10), then one per extreme Ritz vector (a pressure field on F) describing it: the fraction of
@@ -40,6 +41,7 @@ def main():
     ap.add_argument("--rhs", choices=["heights", "random"], default="heights")
     ap.add_argument("--max-iterations", type=int, default=300)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--edge-scale", type=float, default=1.0)
     args = ap.parse_args()
     h = np.load(args.surface)
     contact = np.load(args.contact)
@@ -58,7 +60,14 @@ def main():
     smoothing = np.exp(-2 * (np.pi * 32 * op.q / n) ** 2)
     density = np.maximum(op.conv(F.astype(float), smoothing), 0.05)
 
+    edge = F & ~ndimage.binary_erosion(F, structure=np.ones((3, 3)))
+    scale = np.where(edge, args.edge_scale, 1.0)
+
     def M(x):
+        # S M S with S = diag(scale): 1 inside F, --edge-scale on its edge nodes.
+        return P(scale * unscaled(P(scale * x)))
+
+    def unscaled(x):
         r = P(x)
         if args.preconditioner == "M":
             return P(op.conv(r, op.k_inv_hat))
@@ -98,7 +107,6 @@ def main():
         "ritz_above_2": int(np.sum(ritz > 2)), "ritz_above_10": int(np.sum(ritz > 10)),
     }))
     labels, clusters = ndimage.label(F, structure=np.ones((3, 3)))
-    edge = F & ~ndimage.binary_erosion(F, structure=np.ones((3, 3)))
     wavelength = np.where(op.q > 0, n / np.where(op.q > 0, op.q, 1.0), np.inf)
     weights = np.full(op.q.shape, 2.0)
     weights[:, 0] = 1.0
