@@ -12,14 +12,19 @@ to F and centre; right-hand side P h, or a random field with `--rhs random`) by 
 gradients preconditioned with M = P K⁻¹ P (`M`) or with the solver's free-set extension
 M_E = P Eᵀ K⁻¹ E P (`E`, γ = 0.5, a Gaussian of σ = 32 nodes on the fine grid, D ≥ 0.05, as
 `solver_replica.py --extend 32`) to a relative residual of 1e-8; `--edge-scale s` uses
-S M S instead, S scaling F's edge nodes (nodes of F with a neighbour off F) by s. From the conjugate gradient's
+S M S instead, S scaling F's edge nodes (nodes of F with a neighbour off F) by s;
+`--ring-blocks B` deflates the preconditioner (balancing form, A Z exact) by the
+ring-minus-core pattern (1 on each cluster's edge nodes, minus the edge-to-interior count
+ratio on its interior) cut into B × B blocks. From the conjugate gradient's
 coefficients it builds the Lanczos matrix of the preconditioned operator and prints one JSON
 line with the iterations and its Ritz values (the extremes, and how many lie above 2 and
 10), then one per extreme Ritz vector (a pressure field on F) describing it: the fraction of
 its energy on F's edge nodes (nodes of F with a neighbour off F) against their share of F,
 the fraction that is constant per cluster (8-neighbour clusters, not periodic), and how
 that per-cluster part spreads over wavelengths (in grid nodes), and how the vector's energy
-density (its square) does, its participation ratio (Σv²)² / (|F| Σv⁴) (near 1 when spread
+density (its square) does, the energy share of the clusters whose edge mean exceeds their
+interior mean and the vector's correlation with the ring-minus-core pattern (how coherent
+an edge-against-core loading is across clusters), its participation ratio (Σv²)² / (|F| Σv⁴) (near 1 when spread
 evenly over F, small when localised) and the share of its energy in the most loaded block of
 256² nodes (n a multiple of 256).
 """
@@ -42,6 +47,7 @@ def main():
     ap.add_argument("--max-iterations", type=int, default=300)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--edge-scale", type=float, default=1.0)
+    ap.add_argument("--ring-blocks", type=int, default=0)
     args = ap.parse_args()
     h = np.load(args.surface)
     contact = np.load(args.contact)
@@ -75,6 +81,20 @@ def main():
         y = op.conv(extended, op.k_inv_hat)
         return P(y + 0.5 * op.conv(np.where(F, 0.0, y) / density, smoothing))
 
+    # The ring-minus-core pattern: 1 on each cluster's edge nodes, −(edge/interior count) on
+    # its interior (0 on clusters without interior), so each cluster's sum is 0.
+    labels, clusters = ndimage.label(F, structure=np.ones((3, 3)))
+    ids = np.arange(1, clusters + 1)
+    interior = F & ~edge
+    n_edge = ndimage.sum(edge, labels, ids)
+    n_interior = ndimage.sum(interior, labels, ids)
+    ring = np.zeros((n, n))
+    ring[edge] = 1.0
+    ring[interior] = -(n_edge / np.maximum(n_interior, 1))[labels[interior] - 1]
+    ring[np.isin(labels, ids[n_interior < 1])] = 0.0
+    if args.ring_blocks > 0:
+        M = deflate(M, A, P, ring_space(ring, n, args.ring_blocks, P))
+
     b = P(h) if args.rhs == "heights" else P(np.random.default_rng(1).standard_normal((n, n)))
     r = b.copy()
     z = M(r)
@@ -106,7 +126,6 @@ def main():
         "iterations": k, "ritz_min": ritz[:3].tolist(), "ritz_max": ritz[-3:].tolist(),
         "ritz_above_2": int(np.sum(ritz > 2)), "ritz_above_10": int(np.sum(ritz > 10)),
     }))
-    labels, clusters = ndimage.label(F, structure=np.ones((3, 3)))
     wavelength = np.where(op.q > 0, n / np.where(op.q > 0, op.q, 1.0), np.inf)
     weights = np.full(op.q.shape, 2.0)
     weights[:, 0] = 1.0
@@ -131,10 +150,60 @@ def main():
             "constant_per_cluster": round(float(np.sum(per_cluster**2) / energy), 3),
             "per_cluster_part_by_wavelength_nodes": by_wavelength(per_cluster),
             "energy_density_by_wavelength_nodes": by_wavelength(v**2),
+            "edge_above_core_energy_share": round(edge_above_core(v, labels, ids, edge,
+                                                                   interior, n_interior), 3),
+            "correlation_with_ring_pattern": round(float(
+                np.sum(v * ring) / np.sqrt(energy * np.sum(ring**2))), 3),
             "participation_ratio": round(float(energy**2 / (F.sum() * np.sum(v**4))), 4),
             "largest_256_block_energy_share": round(float(
                 (v**2).reshape(n // 256, 256, n // 256, 256).sum(axis=(1, 3)).max() / energy), 3),
         }))
+
+
+def edge_above_core(v, labels, ids, edge, interior, n_interior):
+    """Energy share of v, over the clusters with an interior, of those whose mean over their
+    edge nodes exceeds the mean over their interior."""
+    energy = ndimage.sum(v**2, labels, ids)
+    edge_mean = ndimage.sum(np.where(edge, v, 0.0), labels, ids) / np.maximum(
+        ndimage.sum(edge, labels, ids), 1)
+    core_mean = ndimage.sum(np.where(interior, v, 0.0), labels, ids) / np.maximum(n_interior, 1)
+    keep = n_interior >= 1
+    return float(np.sum(energy[keep] * (edge_mean > core_mean)[keep]) / np.sum(energy[keep]))
+
+
+def ring_space(ring, n, blocks, P):
+    """The ring pattern cut into blocks × blocks equal blocks, each centred on F (the empty
+    ones dropped)."""
+    side = n // blocks
+    space = []
+    for i in range(blocks):
+        for j in range(blocks):
+            z = np.zeros((n, n))
+            cut = (slice(i * side, (i + 1) * side), slice(j * side, (j + 1) * side))
+            z[cut] = ring[cut]
+            z = P(z)
+            if np.any(z):
+                space.append(z)
+    return space
+
+
+def deflate(M, A, P, space):
+    """The balancing form (I − Q A) M (I − A Q) + Q, Q = Z (Zᵀ A Z)⁻¹ Zᵀ, of M on the
+    coarse space Z (A Z exact, one convolution per vector)."""
+    AZ = [A(z) for z in space]
+    E = np.array([[np.sum(a * z) for z in space] for a in AZ])
+    E_inv = np.linalg.inv(0.5 * (E + E.T))
+
+    def combine(fields, c):
+        return sum(ci * f for ci, f in zip(c, fields))
+
+    def deflated(x):
+        y = E_inv @ np.array([np.sum(z * x) for z in space])
+        s = M(x - combine(AZ, y))
+        v = E_inv @ np.array([np.sum(a * s) for a in AZ])
+        return P(s - combine(space, v) + combine(space, y))
+
+    return deflated
 
 
 if __name__ == "__main__":
