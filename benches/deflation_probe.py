@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from solver_replica import Operator, coarse_space, deflated
+from solver_replica import Operator, coarse_space, deflated, free_set_operators
 
 
 def contact_set(wearcoef, work, boxes):
@@ -47,17 +47,7 @@ def contact_set(wearcoef, work, boxes):
 def probe(h, F):
     n = h.shape[0]
     op = Operator(n)
-
-    def P(x):
-        y = np.where(F, x, 0.0)
-        y[F] -= y[F].mean()
-        return y
-
-    def A(x):
-        return P(op.conv(x, op.k_hat))
-
-    def M(x):
-        return P(op.conv(P(x), op.k_inv_hat))
+    P, A, M = free_set_operators(op, F)
 
     b = P(h - op.conv(np.where(F, 1.0, 0.0), op.k_hat))
 

@@ -76,6 +76,49 @@ class Operator:
         return out.reshape(self.n, self.n)
 
 
+def centring(F):
+    """P of the free set F: restrict a field to F and centre it there."""
+
+    def P(x):
+        y = np.where(F, x, 0.0)
+        y[F] -= y[F].mean()
+        return y
+
+    return P
+
+
+def free_set_operators(op, F):
+    """(P, A, M) on the free set F: the centring P, A = P K P and M = P K⁻¹ P."""
+    P = centring(F)
+    return P, (lambda x: P(op.conv(x, op.k_hat))), (lambda x: P(op.conv(P(x), op.k_inv_hat)))
+
+
+def extended_preconditioner(op, F, P, terms):
+    """The free-set extension of M: r ↦ P Eᵀ K⁻¹ E r for r on F (centred),
+    E = 1_F + (1 − 1_F) Σ_j γ_j D_j⁻¹ S_j 1_F, one term per (σ_j, γ_j, D_min,j) of `terms`:
+    S_j a Gaussian of standard deviation σ_j nodes on the fine grid, D_j = max(S_j 1_F,
+    D_min,j). The solver has one term, its S on 8² cells instead."""
+    n = op.n
+    parts = []
+    for sigma, weight, floor in terms:
+        s_hat = np.exp(-2 * (np.pi * sigma * op.q / n) ** 2)
+        parts.append((s_hat, weight, np.maximum(op.conv(F.astype(float), s_hat), floor)))
+
+    def M(r):
+        r_F = np.where(F, r, 0.0)
+        off = 0.0
+        for s_hat, weight, density in parts:
+            off = off + weight * op.conv(r_F, s_hat) / density
+        y = op.conv(np.where(F, r, off), op.k_inv_hat)
+        y_off = np.where(F, 0.0, y)
+        back = 0.0
+        for s_hat, weight, density in parts:
+            back = back + weight * op.conv(y_off / density, s_hat)
+        return P(y + back)
+
+    return M
+
+
 def coarse_space(op, F, block=BLOCK):
     """Deflation space of the free set F: indicators of the block × block blocks on F (Z, one
     row per block that F touches), A Z for A = P K P (P: restrict to F, centre; one
@@ -178,11 +221,7 @@ def main():
             if it < args.first_on_contact and p.sum() > 0:
                 F = S
 
-            def P(x):
-                y = np.where(F, x, 0.0)
-                y[F] -= y[F].mean()
-                return y
-
+            P = centring(F)
             r = P(g)
             switched = False
             if args.deflate:
@@ -199,22 +238,12 @@ def main():
                 z = P(sf.irfft2(sf.rfft2(r32, workers=args.workers) * k_inv_hat.astype(np.float32),
                                 s=(n, n), workers=args.workers).astype(np.float64))
             elif args.extend > 0:
-                S_hat = np.exp(-2 * (np.pi * args.extend * op.q / n) ** 2)
-                D = np.maximum(conv(F.astype(float), S_hat), args.dmin)
-                r_F = np.where(F, r, 0.0)
-                off = args.gamma * conv(r_F, S_hat) / D
                 use_long = args.long > 0 and not (args.long_settled and restart)
                 switched, long_before = use_long != long_before, use_long
+                terms = [(args.extend, args.gamma, args.dmin)]
                 if use_long:
-                    L_hat = np.exp(-2 * (np.pi * args.long * op.q / n) ** 2)
-                    D_L = np.maximum(conv(F.astype(float), L_hat), args.dmin_long)
-                    off = off + args.long_weight * conv(r_F, L_hat) / D_L
-                y = conv(np.where(F, r, off), k_inv_hat)
-                y_off = np.where(F, 0.0, y)
-                back = args.gamma * conv(y_off / D, S_hat)
-                if use_long:
-                    back = back + args.long_weight * conv(y_off / D_L, L_hat)
-                z = P(y + back)
+                    terms.append((args.long, args.long_weight, args.dmin_long))
+                z = extended_preconditioner(op, F, P, terms)(r)
             else:
                 z = P(conv(r, k_inv_hat))
             gz = np.sum(r * z)

@@ -35,7 +35,7 @@ import numpy as np
 import scipy.fft as sf
 from scipy import ndimage
 
-from solver_replica import Operator
+from solver_replica import Operator, extended_preconditioner, free_set_operators
 
 
 def main():
@@ -55,16 +55,8 @@ def main():
     n = h.shape[0]
     op = Operator(n, args.workers)
 
-    def P(x):
-        y = np.where(F, x, 0.0)
-        y[F] -= y[F].mean()
-        return y
-
-    def A(x):
-        return P(op.conv(x, op.k_hat))
-
-    smoothing = np.exp(-2 * (np.pi * 32 * op.q / n) ** 2)
-    density = np.maximum(op.conv(F.astype(float), smoothing), 0.05)
+    P, A, plain = free_set_operators(op, F)
+    extended = extended_preconditioner(op, F, P, [(32.0, 0.5, 0.05)])
 
     edge = F & ~ndimage.binary_erosion(F, structure=np.ones((3, 3)))
     scale = np.where(edge, args.edge_scale, 1.0)
@@ -74,12 +66,7 @@ def main():
         return P(scale * unscaled(P(scale * x)))
 
     def unscaled(x):
-        r = P(x)
-        if args.preconditioner == "M":
-            return P(op.conv(r, op.k_inv_hat))
-        extended = np.where(F, r, 0.5 * op.conv(r, smoothing) / density)
-        y = op.conv(extended, op.k_inv_hat)
-        return P(y + 0.5 * op.conv(np.where(F, 0.0, y) / density, smoothing))
+        return plain(x) if args.preconditioner == "M" else extended(P(x))
 
     # The ring-minus-core pattern: 1 on each cluster's edge nodes, −(edge/interior count) on
     # its interior (0 on clusters without interior), so each cluster's sum is 0.
