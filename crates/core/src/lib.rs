@@ -2,7 +2,7 @@
 //!
 //! The numerical core of wearcoef (Frérot, Aghababaei & Molinari, JMPS 2018): everything that
 //! computes physics or statistics, and nothing that reads or writes files, tables, YAML or
-//! plots. Its dependencies are numerical crates only (rustfft, realfft, rayon, rand), so the
+//! plots. Its dependencies are numerical crates only (rustfft, rayon, rand), so the
 //! compiler keeps it free of the application's IO and it rebuilds in seconds.
 //!
 //! ## Module map

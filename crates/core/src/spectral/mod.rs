@@ -23,10 +23,11 @@
 use std::sync::Arc;
 
 use rayon::prelude::*;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::{num_complex::Complex, num_complex::Complex64, Fft, FftPlanner};
 
+mod halfcomplex;
 mod real;
+use halfcomplex::RealRows;
 pub use real::Real;
 use real::Work;
 
@@ -47,6 +48,15 @@ fn prefetch<T>(at: *const Complex<T>) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = at;
+}
+
+/// A hint that the real row `row` will be read soon, one prefetch per cache line.
+#[inline(always)]
+fn prefetch_row<T: Real>(row: &[T]) {
+    let step = 64 / std::mem::size_of::<T>();
+    for i in (0..row.len()).step_by(step) {
+        prefetch(row[i..].as_ptr() as *const Complex<T>);
+    }
 }
 
 /// Upper bound on the number of independent work blocks.
@@ -97,8 +107,8 @@ fn with_work<T: Real, R>(
 /// Planned forward and inverse 2-D real FFTs for an `n × n` grid.
 pub struct Fft2<T: Real = f64> {
     n: usize,
-    r2c: Arc<dyn RealToComplex<T>>,
-    c2r: Arc<dyn ComplexToReal<T>>,
+    /// The real transforms along x.
+    rows: RealRows<T>,
     col_forward: Arc<dyn Fft<T>>,
     col_inverse: Arc<dyn Fft<T>>,
     /// Scratch length of the 1-D transforms (the largest of the four plans').
@@ -142,16 +152,11 @@ impl<T: Real> Fft2<T> {
             n >= 2 && n.is_multiple_of(2),
             "Fft2 needs an even n ≥ 2, got {n}"
         );
-        let mut real_planner = RealFftPlanner::<T>::new();
         let mut planner = FftPlanner::<T>::new();
-        let (r2c, c2r) = (
-            real_planner.plan_fft_forward(n),
-            real_planner.plan_fft_inverse(n),
-        );
+        let rows = RealRows::new(n, &mut planner);
         let (col_forward, col_inverse) = (planner.plan_fft_forward(n), planner.plan_fft_inverse(n));
         let complex_len = [
-            r2c.get_scratch_len(),
-            c2r.get_scratch_len(),
+            rows.scratch_len(),
             col_forward.get_inplace_scratch_len(),
             col_inverse.get_inplace_scratch_len(),
         ]
@@ -161,8 +166,7 @@ impl<T: Real> Fft2<T> {
         .max(1);
         Self {
             n,
-            r2c,
-            c2r,
+            rows,
             col_forward,
             col_inverse,
             complex_len,
@@ -239,12 +243,41 @@ impl<T: Real> Fft2<T> {
         );
         let n = self.n;
         let block_len = self.rows_per_block() * n;
-        self.forward_rows(
-            input.par_chunks(block_len),
-            |rows: &mut &[T], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
-            output,
-            scratch,
-        );
+        if !self.rows.reads_in_place() {
+            self.forward_rows(
+                input.par_chunks(block_len),
+                |rows: &mut &[T], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
+                output,
+                scratch,
+            );
+            return;
+        }
+        self.check(n * n, output.len(), scratch);
+        let h = n / 2 + 1;
+        let len = self.rows.scratch_len();
+        scratch
+            .rows_mut::<T>()
+            .par_chunks_mut(self.rows_per_block() * h)
+            .zip(input.par_chunks(block_len))
+            .for_each(|(rows_out, rows_in)| {
+                with_work(0, len, 0, |_, complex, _| {
+                    for (r, (row_out, row_in)) in rows_out
+                        .chunks_exact_mut(h)
+                        .zip(rows_in.chunks_exact(n))
+                        .enumerate()
+                    {
+                        if let Some(next) = rows_in.get((r + 1) * n..(r + 2) * n) {
+                            prefetch_row(next);
+                        }
+                        if T::all_zero(row_in) {
+                            row_out.fill(Complex::new(T::zero(), T::zero()));
+                        } else {
+                            self.rows.forward_from(row_in, row_out, complex);
+                        }
+                    }
+                });
+            });
+        self.forward_columns(output, scratch);
     }
 
     /// Forward transform of a field produced row by row, so that a pass over other fields
@@ -265,20 +298,35 @@ impl<T: Real> Fft2<T> {
         F: Fn(&mut S, usize, &mut [T]) + Sync,
     {
         let n = self.n;
-        let h = n / 2 + 1;
         self.check(n * n, output.len(), scratch);
         assert_eq!(blocks.len(), self.block_count(), "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
-        // 2. columns GATHER at a time: gathered from the rows straight into their place in
-        //    the kx-major output (one cache line per row, prefetched), then transformed
-        //    along y while in cache. No separate transpose pass: the rows, 16 (n/2 + 1)
-        //    bytes apart, were walked once per column group, not once per transpose tile.
+        // 2. the columns.
+        self.forward_columns(output, scratch);
+    }
+
+    /// The column pass of a forward transform, from the row-transformed `scratch.rows` into
+    /// the kx-major `output`: columns GATHER at a time, gathered from the rows straight into their place in
+    /// the kx-major output (one cache line per row, prefetched), then transformed along y
+    /// while in cache. No separate transpose pass: the rows, 16 (n/2 + 1) bytes apart, are
+    /// walked once per column group, not once per transpose tile.
+    fn forward_columns(&self, output: &mut [Complex<T>], scratch: &mut Fft2Scratch) {
+        let (n, h) = (self.n, self.n / 2 + 1);
         let rows = SharedRows(scratch.rows_mut::<T>().as_mut_ptr());
         self.for_each_column_group(output, &self.col_forward, |kx0, cols, complex| {
             // SAFETY: columns kx0.. < h of the rows are only read here, and nothing writes
             // `scratch.rows` during this loop.
-            unsafe { T::gather_columns(rows.get(), n, h, kx0, cols) };
+            unsafe {
+                T::gather_lines(
+                    rows.get().add(kx0),
+                    h,
+                    n,
+                    cols.len() / n,
+                    cols.as_mut_ptr(),
+                    n,
+                )
+            };
             for col in cols.chunks_exact_mut(n) {
                 self.col_forward.process_with_scratch(col, complex);
             }
@@ -331,7 +379,7 @@ impl<T: Real> Fft2<T> {
         // c2r straight into the output rows (no row buffer to copy from, unlike
         // `inverse_rows`; the same transform of the same values).
         let rpb = self.rows_per_block();
-        let len = self.c2r.get_scratch_len();
+        let len = self.rows.scratch_len();
         scratch
             .rows_mut::<T>()
             .par_chunks_mut(rpb * h)
@@ -342,11 +390,7 @@ impl<T: Real> Fft2<T> {
                         .chunks_exact_mut(h)
                         .zip(rows_out.chunks_exact_mut(n))
                     {
-                        row_in[0].im = T::zero();
-                        row_in[h - 1].im = T::zero();
-                        self.c2r
-                            .process_with_scratch(row_in, row_out, &mut complex[..len])
-                            .expect("c2r lengths are fixed and imaginary parts were cleared");
+                        self.rows.inverse(row_in, row_out, complex);
                     }
                 });
             });
@@ -389,7 +433,9 @@ impl<T: Real> Fft2<T> {
             }
             // SAFETY: columns kx0.. < h belong to this group alone, and nothing else
             // touches `scratch.rows` during this loop.
-            unsafe { T::scatter_columns(rows.get(), n, h, kx0, cols) };
+            unsafe {
+                T::scatter_lines(rows.get().add(kx0), h, n, cols.len() / n, cols.as_ptr(), n)
+            };
         });
     }
 
@@ -438,7 +484,16 @@ impl<T: Real> Fft2<T> {
                         let cols = &mut columns[..width * n];
                         // SAFETY: columns kx0..kx0 + width (< h) belong to this group
                         // alone, and nothing else touches `scratch.rows` during this loop.
-                        unsafe { T::gather_columns(rows.get(), n, h, kx0, cols) };
+                        unsafe {
+                            T::gather_lines(
+                                rows.get().add(kx0),
+                                h,
+                                n,
+                                cols.len() / n,
+                                cols.as_mut_ptr(),
+                                n,
+                            )
+                        };
                         for (j, col) in cols.chunks_exact_mut(n).enumerate() {
                             let len = self.col_forward.get_inplace_scratch_len();
                             self.col_forward
@@ -449,7 +504,16 @@ impl<T: Real> Fft2<T> {
                                 .process_with_scratch(col, &mut complex[..len]);
                         }
                         // SAFETY: as for the gather above.
-                        unsafe { T::scatter_columns(rows.get(), n, h, kx0, cols) };
+                        unsafe {
+                            T::scatter_lines(
+                                rows.get().add(kx0),
+                                h,
+                                n,
+                                cols.len() / n,
+                                cols.as_ptr(),
+                                n,
+                            )
+                        };
                     }
                 });
             });
@@ -478,7 +542,7 @@ impl<T: Real> Fft2<T> {
     {
         let h = self.n / 2 + 1;
         let rpb = self.rows_per_block();
-        let len = self.r2c.get_scratch_len();
+        let len = self.rows.scratch_len();
         scratch
             .rows_mut::<T>()
             .par_chunks_mut(rpb * h)
@@ -492,9 +556,7 @@ impl<T: Real> Fft2<T> {
                             // fields) transforms to zeros: its FFT is skipped.
                             row_out.fill(Complex::new(T::zero(), T::zero()));
                         } else {
-                            self.r2c
-                                .process_with_scratch(real_row, row_out, complex)
-                                .expect("r2c lengths are fixed by the plan");
+                            self.rows.forward(real_row, row_out, complex);
                         }
                     }
                 });
@@ -510,7 +572,7 @@ impl<T: Real> Fft2<T> {
     {
         let h = self.n / 2 + 1;
         let rpb = self.rows_per_block();
-        let len = self.c2r.get_scratch_len();
+        let len = self.rows.scratch_len();
         scratch
             .rows_mut::<T>()
             .par_chunks_mut(rpb * h)
@@ -518,11 +580,7 @@ impl<T: Real> Fft2<T> {
             .for_each(|(rows_in, mut state)| {
                 with_work(self.n, len, 0, |real_row, complex, _| {
                     for (r, row_in) in rows_in.chunks_exact_mut(h).enumerate() {
-                        row_in[0].im = T::zero();
-                        row_in[h - 1].im = T::zero();
-                        self.c2r
-                            .process_with_scratch(row_in, real_row, complex)
-                            .expect("c2r lengths are fixed and imaginary parts were cleared");
+                        self.rows.inverse(row_in, real_row, complex);
                         consume(&mut state, r, real_row);
                     }
                 });

@@ -7,7 +7,7 @@ use std::cell::RefCell;
 
 use rustfft::num_complex::{Complex, Complex64};
 
-use super::{prefetch, GATHER, PREFETCH_ROWS};
+use super::{halfcomplex, prefetch, GATHER, PREFETCH_ROWS};
 
 /// A floating-point type the 2-D transforms run in: `f64` or `f32` (sealed).
 pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
@@ -38,39 +38,56 @@ pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
         groups.remainder().iter().all(|v| v.magnitude_bits() == 0)
     }
 
-    /// Copy columns `kx0 .. kx0 + w` of the row-major `n × h` array at `rows` into `cols`
-    /// (`w = cols.len() / n ≤ GATHER` columns one after the other), prefetching
-    /// [`PREFETCH_ROWS`] rows ahead.
-    ///
-    /// # Safety
-    /// `rows` must be valid for reads of `n·h` values, `kx0 + w ≤ h`, and no other thread
-    /// may write those columns meanwhile.
+    /// The untangling after a row's forward complex FFT ([`super::halfcomplex`]).
     #[doc(hidden)]
-    unsafe fn gather_columns(
-        rows: *const Complex<Self>,
-        n: usize,
-        h: usize,
-        kx0: usize,
-        cols: &mut [Complex<Self>],
-    ) {
-        // SAFETY: the caller's bounds.
-        unsafe { gather_plain(rows, n, h, kx0, cols) }
+    fn untangle_forward(out: &mut [Complex<Self>], twiddles: &[Complex<Self>]) {
+        halfcomplex::untangle_forward_plain(out, twiddles)
     }
 
-    /// The inverse of [`Self::gather_columns`]: `cols` written back into columns `kx0 ..`.
+    /// The tangling before a row's inverse complex FFT ([`super::halfcomplex`]).
+    #[doc(hidden)]
+    fn tangle_inverse(spectrum: &mut [Complex<Self>], twiddles: &[Complex<Self>]) {
+        halfcomplex::tangle_inverse_plain(spectrum, twiddles)
+    }
+
+    /// Transpose a band of lines out: `dst[j·dst_stride + i] = src[i·src_stride + j]` for
+    /// `i < count`, `j < width` (≤ [`GATHER`]), prefetching [`PREFETCH_ROWS`] source lines
+    /// ahead. The column pass gathers columns `kx0 ..` of the rows this way (`src` at
+    /// column `kx0`, stride `n/2 + 1`, `count = n`); the inverse row pass of a pair gathers
+    /// rows `y0 ..` of the kx-major spectrum (`src` at `y0`, stride `n`, `count = n/2 + 1`).
     ///
     /// # Safety
-    /// As for [`Self::gather_columns`], with writes.
+    /// `src` must be valid for reads and `dst` for writes at every index above, the two
+    /// must not overlap, and no other thread may write those values meanwhile.
     #[doc(hidden)]
-    unsafe fn scatter_columns(
-        rows: *mut Complex<Self>,
-        n: usize,
-        h: usize,
-        kx0: usize,
-        cols: &[Complex<Self>],
+    unsafe fn gather_lines(
+        src: *const Complex<Self>,
+        src_stride: usize,
+        count: usize,
+        width: usize,
+        dst: *mut Complex<Self>,
+        dst_stride: usize,
     ) {
         // SAFETY: the caller's bounds.
-        unsafe { scatter_plain(rows, n, h, kx0, cols) }
+        unsafe { gather_plain(src, src_stride, count, width, dst, dst_stride, 0) }
+    }
+
+    /// The inverse of [`Self::gather_lines`]: `dst[i·dst_stride + j] = src[j·src_stride +
+    /// i]` for `i < count`, `j < width`.
+    ///
+    /// # Safety
+    /// As for [`Self::gather_lines`].
+    #[doc(hidden)]
+    unsafe fn scatter_lines(
+        dst: *mut Complex<Self>,
+        dst_stride: usize,
+        count: usize,
+        width: usize,
+        src: *const Complex<Self>,
+        src_stride: usize,
+    ) {
+        // SAFETY: the caller's bounds.
+        unsafe { scatter_plain(dst, dst_stride, count, width, src, src_stride, 0) }
     }
 }
 
@@ -125,41 +142,66 @@ impl Real for f64 {
         self.to_bits() << 1
     }
 
-    /// A group of four columns (one 64-byte line per row) is moved two rows at a time in
-    /// 256-bit registers where the processor has AVX; the values moved are the same either
-    /// way.
-    unsafe fn gather_columns(
-        rows: *const Complex64,
-        n: usize,
-        h: usize,
-        kx0: usize,
-        cols: &mut [Complex64],
-    ) {
+    /// Two pairs at a time in 256-bit registers where the processor has AVX (the same
+    /// operations, so the same values).
+    fn untangle_forward(out: &mut [Complex64], twiddles: &[Complex64]) {
         #[cfg(target_arch = "x86_64")]
-        if cols.len() == GATHER * n && n.is_multiple_of(2) && std::is_x86_feature_detected!("avx") {
-            // SAFETY: AVX is present (checked); the bounds are the caller's.
-            unsafe { gather4_avx(rows, n, h, kx0, cols) };
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present (checked).
+            unsafe { halfcomplex::untangle_forward_avx(out, twiddles) };
             return;
         }
-        // SAFETY: the caller's bounds.
-        unsafe { gather_plain(rows, n, h, kx0, cols) }
+        halfcomplex::untangle_forward_plain(out, twiddles)
     }
 
-    unsafe fn scatter_columns(
-        rows: *mut Complex64,
-        n: usize,
-        h: usize,
-        kx0: usize,
-        cols: &[Complex64],
+    /// As [`Self::untangle_forward`].
+    fn tangle_inverse(spectrum: &mut [Complex64], twiddles: &[Complex64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present (checked).
+            unsafe { halfcomplex::tangle_inverse_avx(spectrum, twiddles) };
+            return;
+        }
+        halfcomplex::tangle_inverse_plain(spectrum, twiddles)
+    }
+
+    /// A band of four (one 64-byte line per source line) is moved two lines at a time in
+    /// 256-bit registers where the processor has AVX; the values moved are the same either
+    /// way.
+    unsafe fn gather_lines(
+        src: *const Complex64,
+        src_stride: usize,
+        count: usize,
+        width: usize,
+        dst: *mut Complex64,
+        dst_stride: usize,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if cols.len() == GATHER * n && n.is_multiple_of(2) && std::is_x86_feature_detected!("avx") {
+        if width == GATHER && std::is_x86_feature_detected!("avx") {
             // SAFETY: AVX is present (checked); the bounds are the caller's.
-            unsafe { scatter4_avx(rows, h, kx0, cols) };
+            unsafe { gather4_avx(src, src_stride, count, dst, dst_stride) };
             return;
         }
         // SAFETY: the caller's bounds.
-        unsafe { scatter_plain(rows, n, h, kx0, cols) }
+        unsafe { gather_plain(src, src_stride, count, width, dst, dst_stride, 0) }
+    }
+
+    unsafe fn scatter_lines(
+        dst: *mut Complex64,
+        dst_stride: usize,
+        count: usize,
+        width: usize,
+        src: *const Complex64,
+        src_stride: usize,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if width == GATHER && std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present (checked); the bounds are the caller's.
+            unsafe { scatter4_avx(dst, dst_stride, count, src, src_stride) };
+            return;
+        }
+        // SAFETY: the caller's bounds.
+        unsafe { scatter_plain(dst, dst_stride, count, width, src, src_stride, 0) }
     }
 }
 
@@ -184,121 +226,144 @@ impl Real for f32 {
     }
 }
 
-/// Prefetch the gather's rows [`PREFETCH_ROWS`] ahead of row `r`: rows are `h` complex
-/// values apart (more than a 4 KiB page from 512² on in f64), which the hardware
-/// prefetchers do not follow.
+/// Prefetch the source line [`PREFETCH_ROWS`] ahead of line `i` (lines are more than a
+/// 4 KiB page apart from 512² on in f64, which the hardware prefetchers do not follow).
 #[inline(always)]
-fn prefetch_ahead<T>(rows: *const Complex<T>, n: usize, h: usize, kx0: usize, w: usize, r: usize) {
-    if r + PREFETCH_ROWS < n {
-        prefetch(rows.wrapping_add((r + PREFETCH_ROWS) * h + kx0));
-        prefetch(rows.wrapping_add((r + PREFETCH_ROWS) * h + kx0 + w - 1));
+fn prefetch_ahead<T>(src: *const Complex<T>, stride: usize, count: usize, width: usize, i: usize) {
+    if i + PREFETCH_ROWS < count {
+        prefetch(src.wrapping_add((i + PREFETCH_ROWS) * stride));
+        prefetch(src.wrapping_add((i + PREFETCH_ROWS) * stride + width - 1));
     }
 }
 
-/// [`Real::gather_columns`], one value at a time.
+/// [`Real::gather_lines`] one value at a time, from line `first` on.
 ///
 /// # Safety
-/// As for [`Real::gather_columns`].
+/// As for [`Real::gather_lines`].
 unsafe fn gather_plain<T: Copy>(
-    rows: *const Complex<T>,
-    n: usize,
-    h: usize,
-    kx0: usize,
-    cols: &mut [Complex<T>],
+    src: *const Complex<T>,
+    src_stride: usize,
+    count: usize,
+    width: usize,
+    dst: *mut Complex<T>,
+    dst_stride: usize,
+    first: usize,
 ) {
-    let w = cols.len() / n;
-    for r in 0..n {
-        prefetch_ahead(rows, n, h, kx0, w, r);
-        for j in 0..w {
-            // SAFETY: `r·h + kx0 + j < n·h` (the caller's bounds).
-            cols[j * n + r] = unsafe { rows.add(r * h + kx0 + j).read() };
+    for i in first..count {
+        prefetch_ahead(src, src_stride, count, width, i);
+        for j in 0..width {
+            // SAFETY: the caller's bounds.
+            unsafe {
+                dst.add(j * dst_stride + i)
+                    .write(src.add(i * src_stride + j).read())
+            };
         }
     }
 }
 
-/// [`Real::scatter_columns`], one value at a time.
+/// [`Real::scatter_lines`] one value at a time, from line `first` on.
 ///
 /// # Safety
-/// As for [`Real::scatter_columns`].
+/// As for [`Real::scatter_lines`].
 unsafe fn scatter_plain<T: Copy>(
-    rows: *mut Complex<T>,
-    n: usize,
-    h: usize,
-    kx0: usize,
-    cols: &[Complex<T>],
+    dst: *mut Complex<T>,
+    dst_stride: usize,
+    count: usize,
+    width: usize,
+    src: *const Complex<T>,
+    src_stride: usize,
+    first: usize,
 ) {
-    let w = cols.len() / n;
-    for r in 0..n {
-        for j in 0..w {
-            // SAFETY: `r·h + kx0 + j < n·h` (the caller's bounds).
-            unsafe { rows.add(r * h + kx0 + j).write(cols[j * n + r]) };
+    for i in first..count {
+        for j in 0..width {
+            // SAFETY: the caller's bounds.
+            unsafe {
+                dst.add(i * dst_stride + j)
+                    .write(src.add(j * src_stride + i).read())
+            };
         }
     }
 }
 
-/// [`Real::gather_columns`] in f64 for four columns and an even `n`, two rows at a time: each row's four
-/// values are two 256-bit loads, regrouped by column with 128-bit lane permutes.
+/// [`Real::gather_lines`] in f64 for a band of four, two source lines at a time: each
+/// line's four values are two 256-bit loads, regrouped with 128-bit lane permutes; an odd
+/// last line by the plain loop.
 ///
 /// # Safety
-/// AVX must be present; the bounds of [`Real::gather_columns`].
+/// AVX must be present; the bounds of [`Real::gather_lines`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 unsafe fn gather4_avx(
-    rows: *const Complex64,
-    n: usize,
-    h: usize,
-    kx0: usize,
-    cols: &mut [Complex64],
+    src: *const Complex64,
+    src_stride: usize,
+    count: usize,
+    dst: *mut Complex64,
+    dst_stride: usize,
 ) {
     use std::arch::x86_64::{_mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd};
-    let c = cols.as_mut_ptr() as *mut f64;
-    for r in (0..n).step_by(2) {
-        prefetch_ahead(rows, n, h, kx0, GATHER, r);
-        prefetch_ahead(rows, n, h, kx0, GATHER, r + 1);
-        // SAFETY: rows r and r + 1 < n, columns kx0..kx0 + 4 ≤ h (the caller's bounds);
-        // column j's values r, r + 1 are at 2(j·n + r) doubles in `cols`.
+    let d = dst as *mut f64;
+    let pairs = count / 2 * 2;
+    for i in (0..pairs).step_by(2) {
+        prefetch_ahead(src, src_stride, count, GATHER, i);
+        prefetch_ahead(src, src_stride, count, GATHER, i + 1);
+        // SAFETY: lines i and i + 1 < count (the caller's bounds); value (i, j) goes to
+        // 2(j·dst_stride + i) doubles from `dst`.
         unsafe {
-            let a = rows.add(r * h + kx0) as *const f64;
-            let b = rows.add((r + 1) * h + kx0) as *const f64;
+            let a = src.add(i * src_stride) as *const f64;
+            let b = src.add((i + 1) * src_stride) as *const f64;
             let (a01, a23) = (_mm256_loadu_pd(a), _mm256_loadu_pd(a.add(4)));
             let (b01, b23) = (_mm256_loadu_pd(b), _mm256_loadu_pd(b.add(4)));
-            _mm256_storeu_pd(c.add(2 * r), _mm256_permute2f128_pd::<0x20>(a01, b01));
-            _mm256_storeu_pd(c.add(2 * (n + r)), _mm256_permute2f128_pd::<0x31>(a01, b01));
+            _mm256_storeu_pd(d.add(2 * i), _mm256_permute2f128_pd::<0x20>(a01, b01));
             _mm256_storeu_pd(
-                c.add(2 * (2 * n + r)),
+                d.add(2 * (dst_stride + i)),
+                _mm256_permute2f128_pd::<0x31>(a01, b01),
+            );
+            _mm256_storeu_pd(
+                d.add(2 * (2 * dst_stride + i)),
                 _mm256_permute2f128_pd::<0x20>(a23, b23),
             );
             _mm256_storeu_pd(
-                c.add(2 * (3 * n + r)),
+                d.add(2 * (3 * dst_stride + i)),
                 _mm256_permute2f128_pd::<0x31>(a23, b23),
             );
         }
     }
+    // SAFETY: the caller's bounds.
+    unsafe { gather_plain(src, src_stride, count, GATHER, dst, dst_stride, pairs) }
 }
 
-/// [`Real::scatter_columns`] in f64 for four columns and an even `n`, two rows at a time.
+/// [`Real::scatter_lines`] in f64 for a band of four, two destination lines at a time; an
+/// odd last line by the plain loop.
 ///
 /// # Safety
-/// AVX must be present; the bounds of [`Real::scatter_columns`].
+/// AVX must be present; the bounds of [`Real::scatter_lines`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-unsafe fn scatter4_avx(rows: *mut Complex64, h: usize, kx0: usize, cols: &[Complex64]) {
+unsafe fn scatter4_avx(
+    dst: *mut Complex64,
+    dst_stride: usize,
+    count: usize,
+    src: *const Complex64,
+    src_stride: usize,
+) {
     use std::arch::x86_64::{_mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd};
-    let n = cols.len() / GATHER;
-    let c = cols.as_ptr() as *const f64;
-    for r in (0..n).step_by(2) {
+    let c = src as *const f64;
+    let pairs = count / 2 * 2;
+    for i in (0..pairs).step_by(2) {
         // SAFETY: as in `gather4_avx`.
         unsafe {
-            let c0 = _mm256_loadu_pd(c.add(2 * r));
-            let c1 = _mm256_loadu_pd(c.add(2 * (n + r)));
-            let c2 = _mm256_loadu_pd(c.add(2 * (2 * n + r)));
-            let c3 = _mm256_loadu_pd(c.add(2 * (3 * n + r)));
-            let a = rows.add(r * h + kx0) as *mut f64;
-            let b = rows.add((r + 1) * h + kx0) as *mut f64;
+            let c0 = _mm256_loadu_pd(c.add(2 * i));
+            let c1 = _mm256_loadu_pd(c.add(2 * (src_stride + i)));
+            let c2 = _mm256_loadu_pd(c.add(2 * (2 * src_stride + i)));
+            let c3 = _mm256_loadu_pd(c.add(2 * (3 * src_stride + i)));
+            let a = dst.add(i * dst_stride) as *mut f64;
+            let b = dst.add((i + 1) * dst_stride) as *mut f64;
             _mm256_storeu_pd(a, _mm256_permute2f128_pd::<0x20>(c0, c1));
             _mm256_storeu_pd(a.add(4), _mm256_permute2f128_pd::<0x20>(c2, c3));
             _mm256_storeu_pd(b, _mm256_permute2f128_pd::<0x31>(c0, c1));
             _mm256_storeu_pd(b.add(4), _mm256_permute2f128_pd::<0x31>(c2, c3));
         }
     }
+    // SAFETY: the caller's bounds.
+    unsafe { scatter_plain(dst, dst_stride, count, GATHER, src, src_stride, pairs) }
 }

@@ -88,7 +88,7 @@ fn gather_and_scatter<T: Real>() {
             let nan = T::narrow(f64::NAN);
             let mut cols = vec![Complex::new(nan, nan); w * n];
             // SAFETY: `rows` holds n·h values and kx0 + w ≤ h.
-            unsafe { T::gather_columns(rows.as_ptr(), n, h, kx0, &mut cols) };
+            unsafe { T::gather_lines(rows.as_ptr().add(kx0), h, n, w, cols.as_mut_ptr(), n) };
             for j in 0..w {
                 for r in 0..n {
                     assert!(
@@ -102,7 +102,7 @@ fn gather_and_scatter<T: Real>() {
                 *c = -*c;
             }
             // SAFETY: as above.
-            unsafe { T::scatter_columns(rows.as_mut_ptr(), n, h, kx0, &cols) };
+            unsafe { T::scatter_lines(rows.as_mut_ptr().add(kx0), h, n, w, cols.as_ptr(), n) };
         }
         let negated: Vec<Complex<T>> = original.iter().map(|c| -*c).collect();
         assert_eq!(
@@ -220,4 +220,120 @@ fn one_scratch_serves_both_precisions() {
     assert_eq!(pair(&fft_single, &single, &mut shared), expected_single);
     assert_eq!(pair(&fft, &field, &mut shared), expected);
     assert_eq!(pair(&fft_single, &single, &mut shared), expected_single);
+}
+
+/// The row transforms are realfft's algorithm operation for operation: forward (reading the
+/// row in place or from a copy, untangled by the plain loop or the AVX one) and inverse give
+/// realfft's bits, in both precisions, for lengths with and without a centre value
+/// (`n ≡ 0` and `2 mod 4`), with the inner FFT a butterfly (read in place) or a mixed
+/// radix (copied).
+#[test]
+fn row_transforms_give_realfft_bits() {
+    fn check<T: Real>(n: usize) {
+        let mut real_planner = realfft::RealFftPlanner::<T>::new();
+        let (r2c, c2r) = (
+            real_planner.plan_fft_forward(n),
+            real_planner.plan_fft_inverse(n),
+        );
+        let rows = RealRows::<T>::new(n, &mut FftPlanner::new());
+        let zero = Complex::new(T::zero(), T::zero());
+        let mut scratch = vec![
+            zero;
+            rows.scratch_len()
+                .max(r2c.get_scratch_len())
+                .max(c2r.get_scratch_len())
+        ];
+        let row: Vec<T> = (0..n)
+            .map(|i| T::narrow((((i * 7919 + n) % 1013) as f64 / 1013.0 - 0.5) * 3.0))
+            .collect();
+        let bits = |v: &[Complex<T>]| -> Vec<(u64, u64)> {
+            v.iter()
+                .map(|c| (c.re.widen().to_bits(), c.im.widen().to_bits()))
+                .collect()
+        };
+        let mut expected = vec![zero; n / 2 + 1];
+        r2c.process_with_scratch(&mut row.clone(), &mut expected, &mut scratch)
+            .unwrap();
+        let mut got = vec![zero; n / 2 + 1];
+        rows.forward(&mut row.clone(), &mut got, &mut scratch);
+        assert_eq!(bits(&got), bits(&expected), "forward, n = {n}");
+        if rows.reads_in_place() {
+            let mut got = vec![zero; n / 2 + 1];
+            rows.forward_from(&row, &mut got, &mut scratch);
+            assert_eq!(bits(&got), bits(&expected), "forward in place, n = {n}");
+        }
+        // The plain untangling, whatever the precision's own path.
+        let mut plain = vec![zero; n / 2 + 1];
+        let mut packed = row.clone();
+        // SAFETY: n values of T are n/2 complex values.
+        let packed = unsafe {
+            std::slice::from_raw_parts_mut(packed.as_mut_ptr() as *mut Complex<T>, n / 2)
+        };
+        FftPlanner::<T>::new()
+            .plan_fft_forward(n / 2)
+            .process_outofplace_with_scratch(packed, &mut plain[..n / 2], &mut scratch);
+        halfcomplex::untangle_forward_plain(&mut plain, &rows.forward_twiddles);
+        assert_eq!(bits(&plain), bits(&expected), "plain untangling, n = {n}");
+
+        // Inverse of a spectrum with non-zero imaginary parts at both ends: realfft wants
+        // them cleared, ours clears them.
+        let mut spectrum = expected.clone();
+        for (k, v) in spectrum.iter_mut().enumerate() {
+            v.im = v.im + T::narrow(0.25 * k as f64);
+        }
+        spectrum[0].im = T::narrow(1.5);
+        let mut cleared = spectrum.clone();
+        cleared[0].im = T::zero();
+        cleared[n / 2].im = T::zero();
+        let mut expected_row = vec![T::zero(); n];
+        c2r.process_with_scratch(&mut cleared.clone(), &mut expected_row, &mut scratch)
+            .unwrap();
+        let mut got_row = vec![T::zero(); n];
+        rows.inverse(&mut spectrum.clone(), &mut got_row, &mut scratch);
+        let row_bits = |v: &[T]| v.iter().map(|x| x.widen().to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            row_bits(&got_row),
+            row_bits(&expected_row),
+            "inverse, n = {n}"
+        );
+        let mut tangled = cleared.clone();
+        halfcomplex::tangle_inverse_plain(&mut tangled, &rows.inverse_twiddles);
+        let mut tangled_native = cleared;
+        T::tangle_inverse(&mut tangled_native, &rows.inverse_twiddles);
+        assert_eq!(
+            bits(&tangled),
+            bits(&tangled_native),
+            "plain tangling, n = {n}"
+        );
+    }
+    for n in [
+        2, 4, 6, 8, 10, 12, 14, 16, 18, 30, 64, 100, 254, 256, 1024, 2048, 4096,
+    ] {
+        check::<f64>(n);
+        check::<f32>(n);
+    }
+}
+
+/// `forward` reads its rows in place where the inner FFT allows it; the result is the one
+/// `forward_rows` gives through a working row (a grid with an all-zero row included).
+#[test]
+fn forward_in_place_equals_forward_through_rows() {
+    let n = 64;
+    let fft = Fft2::new(n);
+    assert!(fft.rows.reads_in_place(), "n = 64 reads in place");
+    let mut field = pseudo_random_field(n);
+    field[5 * n..6 * n].fill(0.0);
+    let mut scratch = fft.make_scratch();
+    let (mut direct, mut through) = (fft.make_spectrum(), fft.make_spectrum());
+    fft.forward(&field, &mut direct, &mut scratch);
+    fft.forward_rows(
+        field.par_chunks(fft.rows_per_block() * n),
+        |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
+        &mut through,
+        &mut scratch,
+    );
+    let bits = |v: &[Complex64]| -> Vec<(u64, u64)> {
+        v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+    };
+    assert_eq!(bits(&direct), bits(&through));
 }
