@@ -252,6 +252,9 @@ impl<T: Real> Fft2<T> {
             );
             return;
         }
+        // The row transforms read `input` in place (no copy into a working row), the next
+        // row prefetched while one is transformed (the inner FFT's first pass reads by
+        // strides): the same transforms of the same values as through `forward_rows`.
         self.check(n * n, output.len(), scratch);
         let h = n / 2 + 1;
         let len = self.rows.scratch_len();
@@ -307,10 +310,10 @@ impl<T: Real> Fft2<T> {
     }
 
     /// The column pass of a forward transform, from the row-transformed `scratch.rows` into
-    /// the kx-major `output`: columns GATHER at a time, gathered from the rows straight into their place in
-    /// the kx-major output (one cache line per row, prefetched), then transformed along y
-    /// while in cache. No separate transpose pass: the rows, 16 (n/2 + 1) bytes apart, are
-    /// walked once per column group, not once per transpose tile.
+    /// the kx-major `output`: columns GATHER at a time, gathered from the rows straight into
+    /// their place in the kx-major output (one cache line per row, prefetched), then
+    /// transformed along y while in cache. No separate transpose pass: the rows, 16 (n/2 + 1)
+    /// bytes apart, are walked once per column group, not once per transpose tile.
     fn forward_columns(&self, output: &mut [Complex<T>], scratch: &mut Fft2Scratch) {
         let (n, h) = (self.n, self.n / 2 + 1);
         let rows = SharedRows(scratch.rows_mut::<T>().as_mut_ptr());
@@ -448,8 +451,8 @@ impl<T: Real> Fft2<T> {
     /// back. [`Self::convolve_finish`] must follow before `scratch` is used again.
     /// Compared with [`Self::forward`], a multiplier pass and [`Self::inverse`], this does
     /// without the spectrum buffer, a column scatter and gather between the two transforms
-    /// and a pass over the spectrum for the multiplier, and gives bit-identical results: every 1-D transform and product is the same computation
-    /// on the same values.
+    /// and a pass over the spectrum for the multiplier, and gives bit-identical results:
+    /// every 1-D transform and product is the same computation on the same values.
     pub fn convolve_start<S, I, F, C>(
         &self,
         blocks: I,
