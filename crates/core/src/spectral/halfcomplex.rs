@@ -199,6 +199,68 @@ pub(super) fn tangle_pair<T: Real>(
     spectrum[mirror] = Complex::new(sum.re + twiddled_real, -twiddled_imag - diff.im);
 }
 
+/// Pairs `k, k + 1` of the f64 untangling or tangling, loaded in 256-bit registers: the
+/// values `k, k + 1`, their mirrors `m − k, m − k − 1` (in that order), and the products of
+/// the twiddles shared by both loops. Returns `(sum, diff, twiddled_real, twiddled_imag)`,
+/// two complex values each, as [`untangle_pair`] and [`tangle_pair`] compute them.
+///
+/// # Safety
+/// AVX must be present; values `k − 1 .. m − k + 1` of `p` and twiddles `k − 1, k` of `t`
+/// must be valid, and `k + 1 < m − k − 1`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn load_pairs(
+    p: *const f64,
+    t: *const f64,
+    m: usize,
+    k: usize,
+) -> [std::arch::x86_64::__m256d; 4] {
+    use std::arch::x86_64::*;
+    // SAFETY: the caller's bounds.
+    unsafe {
+        let a = _mm256_loadu_pd(p.add(2 * k));
+        let b = _mm256_loadu_pd(p.add(2 * (m - k - 1)));
+        let b = _mm256_permute2f128_pd::<0x01>(b, b);
+        let tw = _mm256_loadu_pd(t.add(2 * (k - 1)));
+        let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
+        let (tw_re, tw_im) = (_mm256_movedup_pd(tw), _mm256_permute_pd::<0b1111>(tw));
+        let (sum_im, diff_re) = (_mm256_permute_pd::<0b1111>(sum), _mm256_movedup_pd(diff));
+        let twiddled_real =
+            _mm256_add_pd(_mm256_mul_pd(sum_im, tw_re), _mm256_mul_pd(diff_re, tw_im));
+        let twiddled_imag =
+            _mm256_sub_pd(_mm256_mul_pd(sum_im, tw_im), _mm256_mul_pd(diff_re, tw_re));
+        [sum, diff, twiddled_real, twiddled_imag]
+    }
+}
+
+/// Store pairs `k, k + 1` of the f64 untangling or tangling: the real parts from `*_re`,
+/// the imaginary parts from `*_im`, `low` at `k, k + 1` and `high` at `m − k, m − k − 1`.
+///
+/// # Safety
+/// As for [`load_pairs`], with writes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn store_pairs(
+    p: *mut f64,
+    m: usize,
+    k: usize,
+    [low_re, low_im, high_re, high_im]: [std::arch::x86_64::__m256d; 4],
+) {
+    use std::arch::x86_64::*;
+    let low = _mm256_blend_pd::<0b1010>(low_re, low_im);
+    let high = _mm256_blend_pd::<0b1010>(high_re, high_im);
+    // SAFETY: the caller's bounds.
+    unsafe {
+        _mm256_storeu_pd(p.add(2 * k), low);
+        _mm256_storeu_pd(
+            p.add(2 * (m - k - 1)),
+            _mm256_permute2f128_pd::<0x01>(high, high),
+        );
+    }
+}
+
 /// [`untangle_forward_plain`] in f64, pairs `k, k + 1` at a time in 256-bit registers (the
 /// same operations in the same order).
 ///
@@ -227,31 +289,19 @@ pub(super) unsafe fn untangle_forward_avx(out: &mut [Complex<f64>], twiddles: &[
         // SAFETY: k + 1 ≤ pairs < m/2, so values k, k + 1 and m − k − 1, m − k lie in `out`
         // and do not overlap; twiddles k − 1 and k lie in `twiddles`.
         unsafe {
-            let a = _mm256_loadu_pd(p.add(2 * k));
-            let b = _mm256_loadu_pd(p.add(2 * (m - k - 1)));
-            let b = _mm256_permute2f128_pd::<0x01>(b, b);
-            let tw = _mm256_loadu_pd(t.add(2 * (k - 1)));
-            let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
-            let (tw_re, tw_im) = (_mm256_movedup_pd(tw), _mm256_permute_pd::<0b1111>(tw));
-            let (sum_im, diff_re) = (_mm256_permute_pd::<0b1111>(sum), _mm256_movedup_pd(diff));
-            let twiddled_real =
-                _mm256_add_pd(_mm256_mul_pd(sum_im, tw_re), _mm256_mul_pd(diff_re, tw_im));
-            let twiddled_imag =
-                _mm256_sub_pd(_mm256_mul_pd(sum_im, tw_im), _mm256_mul_pd(diff_re, tw_re));
+            let [sum, diff, twiddled_real, twiddled_imag] = load_pairs(p, t, m, k);
             let half_sum_re = _mm256_mul_pd(half, _mm256_movedup_pd(sum));
             let half_diff_im = _mm256_mul_pd(half, _mm256_permute_pd::<0b1111>(diff));
-            let low = _mm256_blend_pd::<0b1010>(
-                _mm256_add_pd(half_sum_re, twiddled_real),
-                _mm256_add_pd(half_diff_im, twiddled_imag),
-            );
-            let high = _mm256_blend_pd::<0b1010>(
-                _mm256_sub_pd(half_sum_re, twiddled_real),
-                _mm256_sub_pd(twiddled_imag, half_diff_im),
-            );
-            _mm256_storeu_pd(p.add(2 * k), low);
-            _mm256_storeu_pd(
-                p.add(2 * (m - k - 1)),
-                _mm256_permute2f128_pd::<0x01>(high, high),
+            store_pairs(
+                p,
+                m,
+                k,
+                [
+                    _mm256_add_pd(half_sum_re, twiddled_real),
+                    _mm256_add_pd(half_diff_im, twiddled_imag),
+                    _mm256_sub_pd(half_sum_re, twiddled_real),
+                    _mm256_sub_pd(twiddled_imag, half_diff_im),
+                ],
             );
         }
         k += 2;
@@ -291,30 +341,18 @@ pub(super) unsafe fn tangle_inverse_avx(spectrum: &mut [Complex<f64>], twiddles:
     while k < pairs {
         // SAFETY: as in `untangle_forward_avx`.
         unsafe {
-            let a = _mm256_loadu_pd(p.add(2 * k));
-            let b = _mm256_loadu_pd(p.add(2 * (m - k - 1)));
-            let b = _mm256_permute2f128_pd::<0x01>(b, b);
-            let tw = _mm256_loadu_pd(t.add(2 * (k - 1)));
-            let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
-            let (tw_re, tw_im) = (_mm256_movedup_pd(tw), _mm256_permute_pd::<0b1111>(tw));
-            let (sum_im, diff_re) = (_mm256_permute_pd::<0b1111>(sum), _mm256_movedup_pd(diff));
-            let twiddled_real =
-                _mm256_add_pd(_mm256_mul_pd(sum_im, tw_re), _mm256_mul_pd(diff_re, tw_im));
-            let twiddled_imag =
-                _mm256_sub_pd(_mm256_mul_pd(sum_im, tw_im), _mm256_mul_pd(diff_re, tw_re));
+            let [sum, diff, twiddled_real, twiddled_imag] = load_pairs(p, t, m, k);
             let (sum_re, diff_im) = (_mm256_movedup_pd(sum), _mm256_permute_pd::<0b1111>(diff));
-            let low = _mm256_blend_pd::<0b1010>(
-                _mm256_sub_pd(sum_re, twiddled_real),
-                _mm256_sub_pd(diff_im, twiddled_imag),
-            );
-            let high = _mm256_blend_pd::<0b1010>(
-                _mm256_add_pd(sum_re, twiddled_real),
-                _mm256_sub_pd(_mm256_xor_pd(twiddled_imag, sign), diff_im),
-            );
-            _mm256_storeu_pd(p.add(2 * k), low);
-            _mm256_storeu_pd(
-                p.add(2 * (m - k - 1)),
-                _mm256_permute2f128_pd::<0x01>(high, high),
+            store_pairs(
+                p,
+                m,
+                k,
+                [
+                    _mm256_sub_pd(sum_re, twiddled_real),
+                    _mm256_sub_pd(diff_im, twiddled_imag),
+                    _mm256_add_pd(sum_re, twiddled_real),
+                    _mm256_sub_pd(_mm256_xor_pd(twiddled_imag, sign), diff_im),
+                ],
             );
         }
         k += 2;
