@@ -27,6 +27,14 @@ interior mean and the vector's correlation with the ring-minus-core pattern (how
 an edge-against-core loading is across clusters), its participation ratio (Σv²)² / (|F| Σv⁴) (near 1 when spread
 evenly over F, small when localised) and the share of its energy in the most loaded block of
 256² nodes (n a multiple of 256).
+
+`--ritz-deflate K1,K2,…` then asks how far a recycled coarse space could go: the K largest
+Ritz vectors of this solve (right eigenvectors of the preconditioned operator, as far as
+the Lanczos matrix has found them) deflate the preconditioner (balancing form, A Z exact),
+and the same fixed-F problem with another right-hand side (a random field) is solved
+without and with each deflation; one JSON line per K gives the iterations. Since the Ritz
+vectors come from the same operator, this bounds from above what vectors recycled from the
+previous load of a sweep (another contact set) could give.
 """
 import argparse
 import json
@@ -48,6 +56,7 @@ def main():
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--edge-scale", type=float, default=1.0)
     ap.add_argument("--ring-blocks", type=int, default=0)
+    ap.add_argument("--ritz-deflate", default="")
     args = ap.parse_args()
     h = np.load(args.surface)
     contact = np.load(args.contact)
@@ -83,24 +92,7 @@ def main():
         M = deflate(M, A, P, ring_space(ring, n, args.ring_blocks, P))
 
     b = P(h) if args.rhs == "heights" else P(np.random.default_rng(1).standard_normal((n, n)))
-    r = b.copy()
-    z = M(r)
-    d = z.copy()
-    rz = np.sum(r * z)
-    rz0 = rz
-    alphas, betas, zs, rzs = [], [], [], []
-    while len(alphas) < args.max_iterations and rz > 1e-16 * rz0:
-        zs.append(z.astype(np.float32))
-        rzs.append(rz)
-        Ad = A(d)
-        alpha = rz / np.sum(d * Ad)
-        r -= alpha * Ad
-        z = M(r)
-        rz_new = np.sum(r * z)
-        alphas.append(alpha)
-        betas.append(rz_new / rz)
-        rz = rz_new
-        d = z + betas[-1] * d
+    alphas, betas, zs, rzs = conjugate_gradients(A, M, b, args.max_iterations)
     k = len(alphas)
     T = np.zeros((k, k))
     for j in range(k):
@@ -108,6 +100,24 @@ def main():
         if j + 1 < k:
             T[j, j + 1] = T[j + 1, j] = np.sqrt(betas[j]) / alphas[j]
     ritz, vectors = np.linalg.eigh(T)
+
+    def ritz_vector(column):
+        # Right eigenvector of M A: Σ_j s_j z_j / sqrt(r_j·z_j).
+        v = sum(vectors[j, column] * zs[j].astype(np.float64) / np.sqrt(rzs[j]) for j in range(k))
+        return np.where(F, v, 0.0)
+
+    if args.ritz_deflate:
+        other = P(np.random.default_rng(2).standard_normal((n, n)))
+        base = len(conjugate_gradients(A, M, other, args.max_iterations)[0])
+        for count in (int(c) for c in args.ritz_deflate.split(",")):
+            space = [P(ritz_vector(k - 1 - j)) for j in range(count)]
+            deflated = deflate(M, A, P, space)
+            iterations = len(conjugate_gradients(A, deflated, other, args.max_iterations)[0])
+            print(json.dumps({
+                "n": n, "preconditioner": args.preconditioner, "ritz_vectors": count,
+                "ritz_values": ritz[k - count:].tolist(), "iterations_random_rhs": iterations,
+                "undeflated": base,
+            }))
     print(json.dumps({
         "n": n, "preconditioner": args.preconditioner, "contact_fraction": float(F.mean()),
         "iterations": k, "ritz_min": ritz[:3].tolist(), "ritz_max": ritz[-3:].tolist(),
@@ -117,9 +127,7 @@ def main():
     weights = np.full(op.q.shape, 2.0)
     weights[:, 0] = 1.0
     for name, column in (("largest", -1), ("smallest", 0)):
-        # Right eigenvector of M A: Σ_j s_j z_j / sqrt(r_j·z_j).
-        v = sum(vectors[j, column] * zs[j].astype(np.float64) / np.sqrt(rzs[j]) for j in range(k))
-        v = np.where(F, v, 0.0)
+        v = ritz_vector(column)
         energy = np.sum(v**2)
         per_cluster = np.zeros_like(v)
         per_cluster[F] = ndimage.mean(v, labels, index=np.arange(1, clusters + 1))[labels[F] - 1]
@@ -145,6 +153,31 @@ def main():
             "largest_256_block_energy_share": round(float(
                 (v**2).reshape(n // 256, 256, n // 256, 256).sum(axis=(1, 3)).max() / energy), 3),
         }))
+
+
+def conjugate_gradients(A, M, b, max_iterations):
+    """Preconditioned conjugate gradients on A x = b from 0 until r·z falls by 1e-16 (a
+    relative residual of about 1e-8); returns the coefficients α, β and, per iteration, z
+    (f32) and r·z, from which the Lanczos matrix and Ritz vectors follow."""
+    r = b.copy()
+    z = M(r)
+    d = z.copy()
+    rz = np.sum(r * z)
+    rz0 = rz
+    alphas, betas, zs, rzs = [], [], [], []
+    while len(alphas) < max_iterations and rz > 1e-16 * rz0:
+        zs.append(z.astype(np.float32))
+        rzs.append(rz)
+        Ad = A(d)
+        alpha = rz / np.sum(d * Ad)
+        r -= alpha * Ad
+        z = M(r)
+        rz_new = np.sum(r * z)
+        alphas.append(alpha)
+        betas.append(rz_new / rz)
+        rz = rz_new
+        d = z + betas[-1] * d
+    return alphas, betas, zs, rzs
 
 
 def edge_above_core(v, labels, ids, edge, interior, n_interior):
