@@ -4,6 +4,7 @@
 //! same sizes and writes the comparison tables.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use wearcoef::pages;
 use wearcoef::spectral::{Fft2, Real};
 
 fn fft_pair(c: &mut Criterion) {
@@ -18,10 +19,13 @@ fn pairs<T: Real>(c: &mut Criterion, name: &str, thread_counts: &[usize]) {
         let fft = Fft2::<T>::new(n);
         let mut scratch = fft.make_scratch();
         let mut spectrum = fft.make_spectrum();
-        let input: Vec<T> = (0..n * n)
-            .map(|i| T::narrow(((i * 7919) % 1013) as f64 / 1013.0 - 0.5))
-            .collect();
-        let mut output = vec![T::zero(); n * n];
+        // On huge pages, as the plans' own scratch and spectrum, and as numpy gives the
+        // arrays FFTW works on in the same run (benches/fft_numpy.py).
+        let mut input = pages::filled(n * n, T::zero());
+        for (i, v) in input.iter_mut().enumerate() {
+            *v = T::narrow(((i * 7919) % 1013) as f64 / 1013.0 - 0.5);
+        }
+        let mut output = pages::filled(n * n, T::zero());
         for &threads in thread_counts {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)

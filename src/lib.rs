@@ -13,7 +13,7 @@
 //! - [`io`]: `.npy` fields.
 
 pub use wearcoef_core::{
-    analytic, clusters, contact, grid, powerlaw, spectral, statistics, surface,
+    analytic, clusters, contact, grid, pages, powerlaw, spectral, statistics, surface,
 };
 
 pub mod config;

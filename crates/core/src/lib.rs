@@ -8,6 +8,7 @@
 //! ## Module map
 //! - [`grid`]: the periodic grid and its wavevectors.
 //! - [`spectral`]: planned 2-D real FFTs with caller-owned scratch.
+//! - [`pages`]: large working arrays on huge pages.
 //! - [`surface`]: self-affine random surfaces by Fourier filtering.
 //! - [`contact`]: the elastic operator, the Polonsky–Keer solver, load sweeps and analytic
 //!   references.
@@ -28,6 +29,7 @@ pub mod analytic;
 pub mod clusters;
 pub mod contact;
 pub mod grid;
+pub mod pages;
 pub mod powerlaw;
 pub mod spectral;
 pub mod statistics;

@@ -185,7 +185,7 @@ impl<T: Real> Fft2<T> {
 
     /// A zeroed half spectrum in this plan's layout.
     pub fn make_spectrum(&self) -> Vec<Complex<T>> {
-        vec![Complex::new(T::zero(), T::zero()); self.spectrum_len()]
+        crate::pages::filled(self.spectrum_len(), Complex::new(T::zero(), T::zero()))
     }
 
     /// Allocate the scratch these plans need: `(n/2 + 1)·n` complex values (about `n²`
@@ -197,7 +197,7 @@ impl<T: Real> Fft2<T> {
         self.prepare_threads();
         Fft2Scratch {
             n,
-            rows: vec![Complex64::new(0.0, 0.0); n * (n / 2 + 1)],
+            rows: crate::pages::filled(n * (n / 2 + 1), Complex64::new(0.0, 0.0)),
         }
     }
 

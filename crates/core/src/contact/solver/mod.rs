@@ -249,9 +249,9 @@ impl<'a> Solver<'a> {
             height_std,
             flat: lo == hi,
             ws: op.make_workspace(),
-            pressure: vec![0.0; len],
-            separation: vec![0.0; len],
-            direction: vec![0.0; len],
+            pressure: crate::pages::filled(len, 0.0),
+            separation: crate::pages::filled(len, 0.0),
+            direction: crate::pages::filled(len, 0.0),
             gap_level: 0.0,
             chunk,
             lane_sums: vec![[0.0; LANES]; blocks],
@@ -334,7 +334,7 @@ impl<'a> Solver<'a> {
         check_request(mean_pressure, cfg)?;
         let len = self.pressure.len();
         if cfg.preconditioned && self.preconditioned.len() != len {
-            self.preconditioned = vec![0.0; len];
+            self.preconditioned = crate::pages::filled(len, 0.0);
         }
         match cfg.extension.filter(|_| cfg.preconditioned) {
             Some(settings) => {
