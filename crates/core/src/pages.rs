@@ -6,8 +6,9 @@
 //! touches four. Linux gives a process transparent huge pages where it asks for them
 //! (`madvise(MADV_HUGEPAGE)`, the default `madvise` mode of
 //! `/sys/kernel/mm/transparent_hugepage/enabled`), as numpy does for every array of 4 MiB
-//! or more, and so for the arrays FFTW works on in `make bench-fft`. The pair at 1024²
-//! takes about 0.93 of its time on 4 KiB pages (docs/BENCHMARKS.md).
+//! or more, and so for the arrays FFTW works on in `make bench-fft`. In interleaved runs
+//! the 2048² pair took 0.955 of its time on 4 KiB pages, the 1024² pair 0.93 or the same
+//! depending on the VM's state (docs/BENCHMARKS.md).
 //!
 //! Only where the memory is placed changes: values, results and the bytes allocated are
 //! the same (the kernel may round the resident size of a huge-page region up to 2 MiB).
