@@ -2,8 +2,9 @@
 //!
 //! The numerical core of wearcoef (Frérot, Aghababaei & Molinari, JMPS 2018): everything that
 //! computes physics or statistics, and nothing that reads or writes files, tables, YAML or
-//! plots. Its dependencies are numerical crates only (rustfft, rayon, rand), so the
-//! compiler keeps it free of the application's IO and it rebuilds in seconds.
+//! plots. Its dependencies are numerical crates only (rustfft, rayon, rand; libc for one
+//! `madvise`, [`pages`]), so the compiler keeps it free of the application's IO and it
+//! rebuilds in seconds.
 //!
 //! ## Module map
 //! - [`grid`]: the periodic grid and its wavevectors.
