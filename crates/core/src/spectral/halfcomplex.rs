@@ -199,77 +199,209 @@ pub(super) fn tangle_pair<T: Real>(
     spectrum[mirror] = Complex::new(sum.re + twiddled_real, -twiddled_imag - diff.im);
 }
 
-/// Pairs `k, k + 1` of the f64 untangling or tangling, loaded in 256-bit registers: the
-/// values `k, k + 1`, their mirrors `m − k, m − k − 1` (in that order), and the products of
-/// the twiddles shared by both loops. Returns `(sum, diff, twiddled_real, twiddled_imag)`,
-/// two complex values each, as [`untangle_pair`] and [`tangle_pair`] compute them.
+/// A 256-bit register of `WIDTH` complex values (two in f64, four in f32), with the few
+/// operations the untangling and tangling need, each the same IEEE operation per lane as
+/// the scalar code's. Only used inside functions compiled for AVX (f64) or AVX2 (f32).
+#[cfg(target_arch = "x86_64")]
+trait Lanes: Copy {
+    type Real: Real;
+    /// Complex values per register.
+    const WIDTH: usize;
+    unsafe fn load(p: *const Self::Real) -> Self;
+    unsafe fn store(p: *mut Self::Real, v: Self);
+    /// The complex values in reverse order.
+    unsafe fn reversed(v: Self) -> Self;
+    unsafe fn splat(x: Self::Real) -> Self;
+    unsafe fn add(a: Self, b: Self) -> Self;
+    unsafe fn sub(a: Self, b: Self) -> Self;
+    unsafe fn mul(a: Self, b: Self) -> Self;
+    /// Every real and imaginary part's sign flipped.
+    unsafe fn neg(a: Self) -> Self;
+    /// Each value's real part in both of its lanes.
+    unsafe fn dup_re(v: Self) -> Self;
+    /// Each value's imaginary part in both of its lanes.
+    unsafe fn dup_im(v: Self) -> Self;
+    /// Real parts from `re`, imaginary parts from `im`.
+    unsafe fn join(re: Self, im: Self) -> Self;
+}
+
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    use std::arch::x86_64::*;
+
+    /// Two f64 complex values (AVX).
+    #[derive(Clone, Copy)]
+    pub(super) struct F64x2(__m256d);
+    /// Four f32 complex values (AVX2, for the reversal across lanes).
+    #[derive(Clone, Copy)]
+    pub(super) struct F32x4(__m256);
+
+    impl super::Lanes for F64x2 {
+        type Real = f64;
+        const WIDTH: usize = 2;
+        #[inline(always)]
+        unsafe fn load(p: *const f64) -> Self {
+            // SAFETY: the caller's bounds.
+            Self(unsafe { _mm256_loadu_pd(p) })
+        }
+        #[inline(always)]
+        unsafe fn store(p: *mut f64, v: Self) {
+            // SAFETY: the caller's bounds.
+            unsafe { _mm256_storeu_pd(p, v.0) }
+        }
+        #[inline(always)]
+        unsafe fn reversed(v: Self) -> Self {
+            Self(_mm256_permute2f128_pd::<0x01>(v.0, v.0))
+        }
+        #[inline(always)]
+        unsafe fn splat(x: f64) -> Self {
+            Self(_mm256_set1_pd(x))
+        }
+        #[inline(always)]
+        unsafe fn add(a: Self, b: Self) -> Self {
+            Self(_mm256_add_pd(a.0, b.0))
+        }
+        #[inline(always)]
+        unsafe fn sub(a: Self, b: Self) -> Self {
+            Self(_mm256_sub_pd(a.0, b.0))
+        }
+        #[inline(always)]
+        unsafe fn mul(a: Self, b: Self) -> Self {
+            Self(_mm256_mul_pd(a.0, b.0))
+        }
+        #[inline(always)]
+        unsafe fn neg(a: Self) -> Self {
+            Self(_mm256_xor_pd(a.0, _mm256_set1_pd(-0.0)))
+        }
+        #[inline(always)]
+        unsafe fn dup_re(v: Self) -> Self {
+            Self(_mm256_movedup_pd(v.0))
+        }
+        #[inline(always)]
+        unsafe fn dup_im(v: Self) -> Self {
+            Self(_mm256_permute_pd::<0b1111>(v.0))
+        }
+        #[inline(always)]
+        unsafe fn join(re: Self, im: Self) -> Self {
+            Self(_mm256_blend_pd::<0b1010>(re.0, im.0))
+        }
+    }
+
+    impl super::Lanes for F32x4 {
+        type Real = f32;
+        const WIDTH: usize = 4;
+        #[inline(always)]
+        unsafe fn load(p: *const f32) -> Self {
+            // SAFETY: the caller's bounds.
+            Self(unsafe { _mm256_loadu_ps(p) })
+        }
+        #[inline(always)]
+        unsafe fn store(p: *mut f32, v: Self) {
+            // SAFETY: the caller's bounds.
+            unsafe { _mm256_storeu_ps(p, v.0) }
+        }
+        #[inline(always)]
+        unsafe fn reversed(v: Self) -> Self {
+            // Each complex f32 value is one 64-bit lane: reverse the four.
+            Self(_mm256_castpd_ps(_mm256_permute4x64_pd::<0b00_01_10_11>(
+                _mm256_castps_pd(v.0),
+            )))
+        }
+        #[inline(always)]
+        unsafe fn splat(x: f32) -> Self {
+            Self(_mm256_set1_ps(x))
+        }
+        #[inline(always)]
+        unsafe fn add(a: Self, b: Self) -> Self {
+            Self(_mm256_add_ps(a.0, b.0))
+        }
+        #[inline(always)]
+        unsafe fn sub(a: Self, b: Self) -> Self {
+            Self(_mm256_sub_ps(a.0, b.0))
+        }
+        #[inline(always)]
+        unsafe fn mul(a: Self, b: Self) -> Self {
+            Self(_mm256_mul_ps(a.0, b.0))
+        }
+        #[inline(always)]
+        unsafe fn neg(a: Self) -> Self {
+            Self(_mm256_xor_ps(a.0, _mm256_set1_ps(-0.0)))
+        }
+        #[inline(always)]
+        unsafe fn dup_re(v: Self) -> Self {
+            Self(_mm256_moveldup_ps(v.0))
+        }
+        #[inline(always)]
+        unsafe fn dup_im(v: Self) -> Self {
+            Self(_mm256_movehdup_ps(v.0))
+        }
+        #[inline(always)]
+        unsafe fn join(re: Self, im: Self) -> Self {
+            Self(_mm256_blend_ps::<0b1010_1010>(re.0, im.0))
+        }
+    }
+}
+
+/// Pairs `k .. k + W` of the untangling or tangling (`W = V::WIDTH`), loaded in registers:
+/// the values `k ..`, their mirrors `m − k, m − k − 1, …` (in that order), and the products
+/// of the twiddles shared by both loops. Returns `(sum, diff, twiddled_real,
+/// twiddled_imag)` as [`untangle_pair`] and [`tangle_pair`] compute them, lane by lane.
 ///
 /// # Safety
-/// AVX must be present; values `k − 1 .. m − k + 1` of `p` and twiddles `k − 1, k` of `t`
-/// must be valid, and `k + 1 < m − k − 1`.
+/// The register's instruction set must be present; values `k .. k + W` and `m − k − W + 1 ..
+/// m − k + 1` of `p` (which must not overlap) and twiddles `k − 1 .. k − 1 + W` of `t` must
+/// be valid.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn load_pairs(
-    p: *const f64,
-    t: *const f64,
-    m: usize,
-    k: usize,
-) -> [std::arch::x86_64::__m256d; 4] {
-    use std::arch::x86_64::*;
+#[inline(always)]
+unsafe fn load_pairs<V: Lanes>(p: *const V::Real, t: *const V::Real, m: usize, k: usize) -> [V; 4] {
     // SAFETY: the caller's bounds.
     unsafe {
-        let a = _mm256_loadu_pd(p.add(2 * k));
-        let b = _mm256_loadu_pd(p.add(2 * (m - k - 1)));
-        let b = _mm256_permute2f128_pd::<0x01>(b, b);
-        let tw = _mm256_loadu_pd(t.add(2 * (k - 1)));
-        let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
-        let (tw_re, tw_im) = (_mm256_movedup_pd(tw), _mm256_permute_pd::<0b1111>(tw));
-        let (sum_im, diff_re) = (_mm256_permute_pd::<0b1111>(sum), _mm256_movedup_pd(diff));
-        let twiddled_real =
-            _mm256_add_pd(_mm256_mul_pd(sum_im, tw_re), _mm256_mul_pd(diff_re, tw_im));
-        let twiddled_imag =
-            _mm256_sub_pd(_mm256_mul_pd(sum_im, tw_im), _mm256_mul_pd(diff_re, tw_re));
+        let a = V::load(p.add(2 * k));
+        let b = V::reversed(V::load(p.add(2 * (m - k + 1 - V::WIDTH))));
+        let tw = V::load(t.add(2 * (k - 1)));
+        let (sum, diff) = (V::add(a, b), V::sub(a, b));
+        let (tw_re, tw_im) = (V::dup_re(tw), V::dup_im(tw));
+        let (sum_im, diff_re) = (V::dup_im(sum), V::dup_re(diff));
+        let twiddled_real = V::add(V::mul(sum_im, tw_re), V::mul(diff_re, tw_im));
+        let twiddled_imag = V::sub(V::mul(sum_im, tw_im), V::mul(diff_re, tw_re));
         [sum, diff, twiddled_real, twiddled_imag]
     }
 }
 
-/// Store pairs `k, k + 1` of the f64 untangling or tangling: the real parts from `*_re`,
-/// the imaginary parts from `*_im`, `low` at `k, k + 1` and `high` at `m − k, m − k − 1`.
+/// Store pairs `k .. k + W`: values `k ..` from the real parts `low_re` and imaginary parts
+/// `low_im`, their mirrors `m − k, m − k − 1, …` from `high_re`, `high_im`.
 ///
 /// # Safety
 /// As for [`load_pairs`], with writes.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn store_pairs(
-    p: *mut f64,
+#[inline(always)]
+unsafe fn store_pairs<V: Lanes>(
+    p: *mut V::Real,
     m: usize,
     k: usize,
-    [low_re, low_im, high_re, high_im]: [std::arch::x86_64::__m256d; 4],
+    [low_re, low_im, high_re, high_im]: [V; 4],
 ) {
-    use std::arch::x86_64::*;
-    let low = _mm256_blend_pd::<0b1010>(low_re, low_im);
-    let high = _mm256_blend_pd::<0b1010>(high_re, high_im);
     // SAFETY: the caller's bounds.
     unsafe {
-        _mm256_storeu_pd(p.add(2 * k), low);
-        _mm256_storeu_pd(
-            p.add(2 * (m - k - 1)),
-            _mm256_permute2f128_pd::<0x01>(high, high),
+        V::store(p.add(2 * k), V::join(low_re, low_im));
+        V::store(
+            p.add(2 * (m - k + 1 - V::WIDTH)),
+            V::reversed(V::join(high_re, high_im)),
         );
     }
 }
 
-/// [`untangle_forward_plain`] in f64, pairs `k, k + 1` at a time in 256-bit registers (the
-/// same operations in the same order).
+/// [`untangle_forward_plain`] `V::WIDTH` pairs at a time in registers (the same operations
+/// in the same order), the last pairs by the plain loop.
 ///
 /// # Safety
-/// AVX must be present.
+/// The register's instruction set must be present.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-pub(super) unsafe fn untangle_forward_avx(out: &mut [Complex<f64>], twiddles: &[Complex<f64>]) {
-    use std::arch::x86_64::*;
+#[inline(always)]
+unsafe fn untangle_forward_lanes<V: Lanes>(
+    out: &mut [Complex<V::Real>],
+    twiddles: &[Complex<V::Real>],
+) {
     let m = out.len() - 1;
     let pairs = twiddles.len();
     assert!(
@@ -277,36 +409,37 @@ pub(super) unsafe fn untangle_forward_avx(out: &mut [Complex<f64>], twiddles: &[
         "one twiddle per pair below the middle"
     );
     let first = out[0];
-    out[0] = Complex::new(first.re + first.im, 0.0);
-    out[m] = Complex::new(first.re - first.im, 0.0);
+    out[0] = Complex::new(first.re + first.im, V::Real::narrow(0.0));
+    out[m] = Complex::new(first.re - first.im, V::Real::narrow(0.0));
     let (p, t) = (
-        out.as_mut_ptr() as *mut f64,
-        twiddles.as_ptr() as *const f64,
+        out.as_mut_ptr() as *mut V::Real,
+        twiddles.as_ptr() as *const V::Real,
     );
-    let half = _mm256_set1_pd(0.5);
     let mut k = 1;
-    while k < pairs {
-        // SAFETY: k + 1 ≤ pairs < m/2, so values k, k + 1 and m − k − 1, m − k lie in `out`
-        // and do not overlap; twiddles k − 1 and k lie in `twiddles`.
-        unsafe {
-            let [sum, diff, twiddled_real, twiddled_imag] = load_pairs(p, t, m, k);
-            let half_sum_re = _mm256_mul_pd(half, _mm256_movedup_pd(sum));
-            let half_diff_im = _mm256_mul_pd(half, _mm256_permute_pd::<0b1111>(diff));
-            store_pairs(
+    // SAFETY: the register's instruction set is the caller's; k + W − 1 ≤ pairs < m/2, so
+    // values k .. k + W and their mirrors lie in `out` and do not overlap, and twiddles
+    // k − 1 .. k − 1 + W lie in `twiddles`.
+    unsafe {
+        let half = V::splat(V::Real::narrow(0.5));
+        while k + V::WIDTH - 1 <= pairs {
+            let [sum, diff, twiddled_real, twiddled_imag] = load_pairs::<V>(p, t, m, k);
+            let half_sum_re = V::mul(half, V::dup_re(sum));
+            let half_diff_im = V::mul(half, V::dup_im(diff));
+            store_pairs::<V>(
                 p,
                 m,
                 k,
                 [
-                    _mm256_add_pd(half_sum_re, twiddled_real),
-                    _mm256_add_pd(half_diff_im, twiddled_imag),
-                    _mm256_sub_pd(half_sum_re, twiddled_real),
-                    _mm256_sub_pd(twiddled_imag, half_diff_im),
+                    V::add(half_sum_re, twiddled_real),
+                    V::add(half_diff_im, twiddled_imag),
+                    V::sub(half_sum_re, twiddled_real),
+                    V::sub(twiddled_imag, half_diff_im),
                 ],
             );
+            k += V::WIDTH;
         }
-        k += 2;
     }
-    if k == pairs {
+    for k in k..=pairs {
         untangle_pair(out, k, m - k, twiddles[k - 1]);
     }
     if m.is_multiple_of(2) {
@@ -314,15 +447,18 @@ pub(super) unsafe fn untangle_forward_avx(out: &mut [Complex<f64>], twiddles: &[
     }
 }
 
-/// [`tangle_inverse_plain`] in f64, pairs `k, k + 1` at a time in 256-bit registers (the
-/// same operations in the same order; `−x − y` as a sign flip then a subtraction).
+/// [`tangle_inverse_plain`] `V::WIDTH` pairs at a time in registers (the same operations in
+/// the same order; `−x − y` as a sign flip then a subtraction), the last pairs by the plain
+/// loop.
 ///
 /// # Safety
-/// AVX must be present.
+/// The register's instruction set must be present.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-pub(super) unsafe fn tangle_inverse_avx(spectrum: &mut [Complex<f64>], twiddles: &[Complex<f64>]) {
-    use std::arch::x86_64::*;
+#[inline(always)]
+unsafe fn tangle_inverse_lanes<V: Lanes>(
+    spectrum: &mut [Complex<V::Real>],
+    twiddles: &[Complex<V::Real>],
+) {
     let m = spectrum.len() - 1;
     let pairs = twiddles.len();
     assert!(
@@ -333,35 +469,84 @@ pub(super) unsafe fn tangle_inverse_avx(spectrum: &mut [Complex<f64>], twiddles:
     let (sum, diff) = (first + last, first - last);
     spectrum[0] = Complex::new(sum.re - sum.im, diff.re - diff.im);
     let (p, t) = (
-        spectrum.as_mut_ptr() as *mut f64,
-        twiddles.as_ptr() as *const f64,
+        spectrum.as_mut_ptr() as *mut V::Real,
+        twiddles.as_ptr() as *const V::Real,
     );
-    let sign = _mm256_set1_pd(-0.0);
     let mut k = 1;
-    while k < pairs {
-        // SAFETY: as in `untangle_forward_avx`.
-        unsafe {
-            let [sum, diff, twiddled_real, twiddled_imag] = load_pairs(p, t, m, k);
-            let (sum_re, diff_im) = (_mm256_movedup_pd(sum), _mm256_permute_pd::<0b1111>(diff));
-            store_pairs(
+    // SAFETY: as in `untangle_forward_lanes`.
+    unsafe {
+        while k + V::WIDTH - 1 <= pairs {
+            let [sum, diff, twiddled_real, twiddled_imag] = load_pairs::<V>(p, t, m, k);
+            let (sum_re, diff_im) = (V::dup_re(sum), V::dup_im(diff));
+            store_pairs::<V>(
                 p,
                 m,
                 k,
                 [
-                    _mm256_sub_pd(sum_re, twiddled_real),
-                    _mm256_sub_pd(diff_im, twiddled_imag),
-                    _mm256_add_pd(sum_re, twiddled_real),
-                    _mm256_sub_pd(_mm256_xor_pd(twiddled_imag, sign), diff_im),
+                    V::sub(sum_re, twiddled_real),
+                    V::sub(diff_im, twiddled_imag),
+                    V::add(sum_re, twiddled_real),
+                    V::sub(V::neg(twiddled_imag), diff_im),
                 ],
             );
+            k += V::WIDTH;
         }
-        k += 2;
     }
-    if k == pairs {
+    for k in k..=pairs {
         tangle_pair(spectrum, k, m - k, twiddles[k - 1]);
     }
     if m.is_multiple_of(2) {
         let centre = spectrum[m / 2];
         spectrum[m / 2] = (centre + centre).conj();
     }
+}
+
+/// [`untangle_forward_plain`] in f64, two pairs at a time in AVX registers.
+///
+/// # Safety
+/// AVX must be present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+pub(super) unsafe fn untangle_forward_avx(out: &mut [Complex<f64>], twiddles: &[Complex<f64>]) {
+    // SAFETY: AVX is present (the caller's).
+    unsafe { untangle_forward_lanes::<lanes::F64x2>(out, twiddles) }
+}
+
+/// [`tangle_inverse_plain`] in f64, two pairs at a time in AVX registers.
+///
+/// # Safety
+/// AVX must be present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+pub(super) unsafe fn tangle_inverse_avx(spectrum: &mut [Complex<f64>], twiddles: &[Complex<f64>]) {
+    // SAFETY: AVX is present (the caller's).
+    unsafe { tangle_inverse_lanes::<lanes::F64x2>(spectrum, twiddles) }
+}
+
+/// [`untangle_forward_plain`] in f32, four pairs at a time in AVX2 registers.
+///
+/// # Safety
+/// AVX2 must be present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn untangle_forward_avx2_f32(
+    out: &mut [Complex<f32>],
+    twiddles: &[Complex<f32>],
+) {
+    // SAFETY: AVX2 is present (the caller's).
+    unsafe { untangle_forward_lanes::<lanes::F32x4>(out, twiddles) }
+}
+
+/// [`tangle_inverse_plain`] in f32, four pairs at a time in AVX2 registers.
+///
+/// # Safety
+/// AVX2 must be present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn tangle_inverse_avx2_f32(
+    spectrum: &mut [Complex<f32>],
+    twiddles: &[Complex<f32>],
+) {
+    // SAFETY: AVX2 is present (the caller's).
+    unsafe { tangle_inverse_lanes::<lanes::F32x4>(spectrum, twiddles) }
 }

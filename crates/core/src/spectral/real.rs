@@ -220,6 +220,29 @@ impl Real for f32 {
         WORK_F32.with(f)
     }
 
+    /// Four pairs at a time in 256-bit registers where the processor has AVX2 (the same
+    /// operations, so the same values).
+    fn untangle_forward(out: &mut [Complex<f32>], twiddles: &[Complex<f32>]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 is present (checked).
+            unsafe { halfcomplex::untangle_forward_avx2_f32(out, twiddles) };
+            return;
+        }
+        halfcomplex::untangle_forward_plain(out, twiddles)
+    }
+
+    /// As [`Self::untangle_forward`].
+    fn tangle_inverse(spectrum: &mut [Complex<f32>], twiddles: &[Complex<f32>]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 is present (checked).
+            unsafe { halfcomplex::tangle_inverse_avx2_f32(spectrum, twiddles) };
+            return;
+        }
+        halfcomplex::tangle_inverse_plain(spectrum, twiddles)
+    }
+
     #[inline(always)]
     fn magnitude_bits(self) -> u64 {
         u64::from(self.to_bits() << 1)
