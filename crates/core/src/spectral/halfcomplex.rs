@@ -6,8 +6,9 @@
 //! realfft's; a test checks it), with two differences that make the rows pass cheaper:
 //! - where the inner FFT reads its input directly (rustfft's butterflies, i.e. `n ≤ 1024`
 //!   in f64), the forward transform reads the caller's row without copying it first;
-//! - in f64 the untangling and tangling passes run two values at a time in 256-bit
-//!   registers where the processor has AVX (the same operations; [`super::Real`]).
+//! - the untangling and tangling passes run several pairs at a time in 256-bit registers
+//!   (two in f64 where the processor has AVX, four in f32 with AVX2; the same operations,
+//!   [`super::Real`]).
 
 use std::sync::Arc;
 
@@ -74,7 +75,9 @@ impl<T: Real> RealRows<T> {
     }
 
     /// Forward transform of the real row `row` (length `n`) into `out` (`n/2 + 1` values),
-    /// `row` left unchanged. Only where [`Self::reads_in_place`].
+    /// `row` left unchanged. Only where [`Self::reads_in_place`]. A row of zeros (for the
+    /// solver's fields, a row with no contact node) is not transformed: its spectrum is
+    /// zeros, as in [`Self::forward`].
     pub(super) fn forward_from(
         &self,
         row: &[T],
@@ -84,6 +87,10 @@ impl<T: Real> RealRows<T> {
         debug_assert!(self.reads_in_place);
         let (n, h) = (self.n, self.n / 2);
         assert!(row.len() == n && out.len() == h + 1, "row lengths");
+        if T::all_zero(row) {
+            out.fill(Complex::new(T::zero(), T::zero()));
+            return;
+        }
         // SAFETY: `row` holds n = 2h values of T; Complex<T> is two T's (repr(C)), with
         // T's alignment.
         let packed = unsafe { std::slice::from_raw_parts(row.as_ptr() as *const Complex<T>, h) };
@@ -93,7 +100,8 @@ impl<T: Real> RealRows<T> {
     }
 
     /// Forward transform of the real row `row` (length `n`) into `out` (`n/2 + 1` values);
-    /// `row` is used as working memory and holds garbage afterwards.
+    /// `row` is used as working memory and holds garbage afterwards. A row of zeros is not
+    /// transformed: its spectrum is set to zeros (the transform would give ±0).
     pub(super) fn forward(
         &self,
         row: &mut [T],
@@ -102,6 +110,10 @@ impl<T: Real> RealRows<T> {
     ) {
         let (n, h) = (self.n, self.n / 2);
         assert!(row.len() == n && out.len() == h + 1, "row lengths");
+        if T::all_zero(row) {
+            out.fill(Complex::new(T::zero(), T::zero()));
+            return;
+        }
         // SAFETY: as in `forward_from`, mutably.
         let packed =
             unsafe { std::slice::from_raw_parts_mut(row.as_mut_ptr() as *mut Complex<T>, h) };
@@ -136,12 +148,19 @@ impl<T: Real> RealRows<T> {
 /// packed row; afterwards `out` holds the row's half spectrum. Pair `k` (`1 ≤ k ≤
 /// twiddles.len()`) combines `out[k]` and `out[m − k]` with `twiddles[k − 1]`.
 pub(super) fn untangle_forward_plain<T: Real>(out: &mut [Complex<T>], twiddles: &[Complex<T>]) {
+    untangle_forward_rest(out, twiddles, 1);
+}
+
+/// [`untangle_forward_plain`] from pair `first` on (the pairs before it already untangled,
+/// by a vector loop), with the first, last and centre values. Those depend on no pair, and
+/// no pair on them, so the order does not change a bit.
+fn untangle_forward_rest<T: Real>(out: &mut [Complex<T>], twiddles: &[Complex<T>], first: usize) {
     let m = out.len() - 1;
-    let first = out[0];
-    out[0] = Complex::new(first.re + first.im, T::zero());
-    out[m] = Complex::new(first.re - first.im, T::zero());
-    for (k, &tw) in (1..).zip(twiddles) {
-        untangle_pair(out, k, m - k, tw);
+    let zero = out[0];
+    out[0] = Complex::new(zero.re + zero.im, T::zero());
+    out[m] = Complex::new(zero.re - zero.im, T::zero());
+    for k in first..=twiddles.len() {
+        untangle_pair(out, k, m - k, twiddles[k - 1]);
     }
     if m.is_multiple_of(2) {
         out[m / 2].im = -out[m / 2].im;
@@ -170,12 +189,22 @@ pub(super) fn untangle_pair<T: Real>(
 /// first and last values zero) becomes, in `spectrum[..m]`, the input of the complex
 /// inverse FFT whose output is the packed real row.
 pub(super) fn tangle_inverse_plain<T: Real>(spectrum: &mut [Complex<T>], twiddles: &[Complex<T>]) {
+    tangle_inverse_rest(spectrum, twiddles, 1);
+}
+
+/// [`tangle_inverse_plain`] from pair `first` on, with the first and centre values (as
+/// [`untangle_forward_rest`]).
+fn tangle_inverse_rest<T: Real>(
+    spectrum: &mut [Complex<T>],
+    twiddles: &[Complex<T>],
+    first: usize,
+) {
     let m = spectrum.len() - 1;
-    let (first, last) = (spectrum[0], spectrum[m]);
-    let (sum, diff) = (first + last, first - last);
+    let (zero, last) = (spectrum[0], spectrum[m]);
+    let (sum, diff) = (zero + last, zero - last);
     spectrum[0] = Complex::new(sum.re - sum.im, diff.re - diff.im);
-    for (k, &tw) in (1..).zip(twiddles) {
-        tangle_pair(spectrum, k, m - k, tw);
+    for k in first..=twiddles.len() {
+        tangle_pair(spectrum, k, m - k, twiddles[k - 1]);
     }
     if m.is_multiple_of(2) {
         let centre = spectrum[m / 2];
@@ -408,9 +437,6 @@ unsafe fn untangle_forward_lanes<V: Lanes>(
         2 * pairs < m || pairs == 0,
         "one twiddle per pair below the middle"
     );
-    let first = out[0];
-    out[0] = Complex::new(first.re + first.im, V::Real::narrow(0.0));
-    out[m] = Complex::new(first.re - first.im, V::Real::narrow(0.0));
     let (p, t) = (
         out.as_mut_ptr() as *mut V::Real,
         twiddles.as_ptr() as *const V::Real,
@@ -439,12 +465,7 @@ unsafe fn untangle_forward_lanes<V: Lanes>(
             k += V::WIDTH;
         }
     }
-    for k in k..=pairs {
-        untangle_pair(out, k, m - k, twiddles[k - 1]);
-    }
-    if m.is_multiple_of(2) {
-        out[m / 2].im = -out[m / 2].im;
-    }
+    untangle_forward_rest(out, twiddles, k);
 }
 
 /// [`tangle_inverse_plain`] `V::WIDTH` pairs at a time in registers (the same operations in
@@ -465,9 +486,6 @@ unsafe fn tangle_inverse_lanes<V: Lanes>(
         2 * pairs < m || pairs == 0,
         "one twiddle per pair below the middle"
     );
-    let (first, last) = (spectrum[0], spectrum[m]);
-    let (sum, diff) = (first + last, first - last);
-    spectrum[0] = Complex::new(sum.re - sum.im, diff.re - diff.im);
     let (p, t) = (
         spectrum.as_mut_ptr() as *mut V::Real,
         twiddles.as_ptr() as *const V::Real,
@@ -492,13 +510,7 @@ unsafe fn tangle_inverse_lanes<V: Lanes>(
             k += V::WIDTH;
         }
     }
-    for k in k..=pairs {
-        tangle_pair(spectrum, k, m - k, twiddles[k - 1]);
-    }
-    if m.is_multiple_of(2) {
-        let centre = spectrum[m / 2];
-        spectrum[m / 2] = (centre + centre).conj();
-    }
+    tangle_inverse_rest(spectrum, twiddles, k);
 }
 
 /// [`untangle_forward_plain`] in f64, two pairs at a time in AVX registers.

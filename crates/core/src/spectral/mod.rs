@@ -272,11 +272,7 @@ impl<T: Real> Fft2<T> {
                         if let Some(next) = rows_in.get((r + 1) * n..(r + 2) * n) {
                             prefetch_row(next);
                         }
-                        if T::all_zero(row_in) {
-                            row_out.fill(Complex::new(T::zero(), T::zero()));
-                        } else {
-                            self.rows.forward_from(row_in, row_out, complex);
-                        }
+                        self.rows.forward_from(row_in, row_out, complex);
                     }
                 });
             });
@@ -554,13 +550,7 @@ impl<T: Real> Fft2<T> {
                 with_work(self.n, len, 0, |real_row, complex, _| {
                     for (r, row_out) in rows_out.chunks_exact_mut(h).enumerate() {
                         produce(&mut state, r, real_row);
-                        if T::all_zero(real_row) {
-                            // A row of zeros (a row with no contact node, for the solver's
-                            // fields) transforms to zeros: its FFT is skipped.
-                            row_out.fill(Complex::new(T::zero(), T::zero()));
-                        } else {
-                            self.rows.forward(real_row, row_out, complex);
-                        }
+                        self.rows.forward(real_row, row_out, complex);
                     }
                 });
             });

@@ -76,6 +76,62 @@ fn column_gather_and_scatter_move_the_right_values() {
     gather_and_scatter::<f32>();
 }
 
+/// The line transpose for any count of lines, odd ones included (the AVX path moves two
+/// lines at a time and leaves an odd last one to the plain loop), and strides that are not
+/// the count: a band of four values out of lines `stride` apart and back.
+#[test]
+fn line_transpose_handles_odd_counts_and_any_stride() {
+    fn check<T: Real>() {
+        for (count, src_stride, dst_stride) in [(1, 4, 1), (7, 9, 8), (8, 4, 11), (513, 6, 513)] {
+            let src: Vec<Complex<T>> = (0..count * src_stride)
+                .map(|i| Complex::new(T::narrow(i as f64), T::narrow(0.5 - i as f64)))
+                .collect();
+            let nan = T::narrow(f64::NAN);
+            let mut dst = vec![Complex::new(nan, nan); GATHER * dst_stride];
+            // SAFETY: count lines of src_stride ≥ GATHER values; GATHER lines of dst_stride
+            // ≥ count values.
+            unsafe {
+                T::gather_lines(
+                    src.as_ptr(),
+                    src_stride,
+                    count,
+                    GATHER,
+                    dst.as_mut_ptr(),
+                    dst_stride,
+                )
+            };
+            for i in 0..count {
+                for j in 0..GATHER {
+                    assert!(
+                        dst[j * dst_stride + i] == src[i * src_stride + j],
+                        "count {count}"
+                    );
+                }
+            }
+            let mut back = vec![Complex::new(nan, nan); count * src_stride];
+            // SAFETY: as above, the other way.
+            unsafe {
+                T::scatter_lines(
+                    back.as_mut_ptr(),
+                    src_stride,
+                    count,
+                    GATHER,
+                    dst.as_ptr(),
+                    dst_stride,
+                )
+            };
+            for i in 0..count {
+                assert_eq!(
+                    back[i * src_stride..i * src_stride + GATHER],
+                    src[i * src_stride..i * src_stride + GATHER]
+                );
+            }
+        }
+    }
+    check::<f64>();
+    check::<f32>();
+}
+
 fn gather_and_scatter<T: Real>() {
     for n in [2, 6, 8, 10, 64] {
         let h = n / 2 + 1;
