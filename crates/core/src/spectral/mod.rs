@@ -31,9 +31,6 @@ use halfcomplex::RealRows;
 pub use real::Real;
 use real::Work;
 
-/// Columns gathered together by [`Fft2::convolve_start`] (four complex values = one
-/// 64-byte cache line per row).
-const GATHER: usize = 4;
 /// How many rows ahead the column gather of [`Fft2::convolve_start`] prefetches.
 const PREFETCH_ROWS: usize = 16;
 
@@ -207,12 +204,12 @@ impl<T: Real> Fft2<T> {
     /// shares another plan's scratch calls it itself.
     pub fn prepare_threads(&self) {
         let n = self.n;
-        rayon::broadcast(|_| with_work::<T, _>(n, self.complex_len, GATHER * n, |_, _, _| ()));
+        rayon::broadcast(|_| with_work::<T, _>(n, self.complex_len, T::GATHER * n, |_, _, _| ()));
     }
 
-    /// Groups of [`GATHER`] columns of the half spectrum.
+    /// Groups of [`Real::GATHER`] columns of the half spectrum.
     fn column_groups(n: usize) -> usize {
-        (n / 2 + 1).div_ceil(GATHER)
+        (n / 2 + 1).div_ceil(T::GATHER)
     }
 
     /// Column groups per work block in [`Self::convolve_start`].
@@ -306,7 +303,7 @@ impl<T: Real> Fft2<T> {
     }
 
     /// The column pass of a forward transform, from the row-transformed `scratch.rows` into
-    /// the kx-major `output`: columns GATHER at a time, gathered from the rows straight into
+    /// the kx-major `output`: columns [`Real::GATHER`] at a time, gathered from the rows straight into
     /// their place in the kx-major output (one cache line per row, prefetched), then
     /// transformed along y while in cache. No separate transpose pass: the rows, 16 (n/2 + 1)
     /// bytes apart, are walked once per column group, not once per transpose tile.
@@ -332,7 +329,7 @@ impl<T: Real> Fft2<T> {
         });
     }
 
-    /// Run `each(kx0, columns, fft scratch)` on every group of GATHER columns of the kx-major
+    /// Run `each(kx0, columns, fft scratch)` on every group of [`Real::GATHER`] columns of the kx-major
     /// `data` (n values per column), the groups split over the fixed work blocks, with the
     /// in-place scratch of `fft` per thread.
     fn for_each_column_group(
@@ -344,12 +341,12 @@ impl<T: Real> Fft2<T> {
         let n = self.n;
         let gpb = Self::groups_per_block(n, self.block_count());
         let len = fft.get_inplace_scratch_len();
-        data.par_chunks_mut(gpb * GATHER * n)
+        data.par_chunks_mut(gpb * T::GATHER * n)
             .enumerate()
             .for_each(|(b, block)| {
                 with_work(0, len, 0, |_, complex, _| {
-                    for (g, cols) in block.chunks_mut(GATHER * n).enumerate() {
-                        each((b * gpb + g) * GATHER, cols, complex);
+                    for (g, cols) in block.chunks_mut(T::GATHER * n).enumerate() {
+                        each((b * gpb + g) * T::GATHER, cols, complex);
                     }
                 });
             });
@@ -419,7 +416,7 @@ impl<T: Real> Fft2<T> {
         self.c2r_rows(blocks, consume, scratch);
     }
 
-    /// Inverse complex FFT along y of every column kx of `spectrum`, GATHER columns at a
+    /// Inverse complex FFT along y of every column kx of `spectrum`, [`Real::GATHER`] columns at a
     /// time, each group scattered into `scratch.rows` while in cache (no separate transpose
     /// pass). `spectrum` holds garbage afterwards.
     fn inverse_columns(&self, spectrum: &mut [Complex<T>], scratch: &mut Fft2Scratch) {
@@ -440,7 +437,7 @@ impl<T: Real> Fft2<T> {
 
     /// First half of a convolution fused with the transforms: the real field is produced
     /// row by row (as in [`Self::forward_rows`]) and transformed along x; then, in place in
-    /// the scratch, each group of [`GATHER`] columns `kx` is gathered (one cache line per
+    /// the scratch, each group of [`Real::GATHER`] columns `kx` is gathered (one cache line per
     /// row), transformed along y, handed to `column(kx, values)` (the values by wrapped
     /// `ky`, to be multiplied in place by a Fourier multiplier; what it returns is stored in
     /// `column_values[kx]`), transformed back along y while still in cache and written
@@ -469,16 +466,16 @@ impl<T: Real> Fft2<T> {
         assert_eq!(blocks.len(), self.block_count(), "one state per work block");
         // 1. r2c along x for every row y.
         self.r2c_rows(blocks, produce, scratch);
-        // 2. columns, in place, GATHER at a time; block b takes groups b·gpb.. .
+        // 2. columns, in place, T::GATHER at a time; block b takes groups b·gpb.. .
         let gpb = Self::groups_per_block(n, self.block_count());
         let rows = SharedRows(scratch.rows_mut::<T>().as_mut_ptr());
         column_values
-            .par_chunks_mut(gpb * GATHER)
+            .par_chunks_mut(gpb * T::GATHER)
             .enumerate()
             .for_each(|(b, values)| {
-                with_work(0, self.complex_len, GATHER * n, |_, complex, columns| {
-                    for (g, values) in values.chunks_mut(GATHER).enumerate() {
-                        let kx0 = (b * gpb + g) * GATHER;
+                with_work(0, self.complex_len, T::GATHER * n, |_, complex, columns| {
+                    for (g, values) in values.chunks_mut(T::GATHER).enumerate() {
+                        let kx0 = (b * gpb + g) * T::GATHER;
                         let width = values.len();
                         let cols = &mut columns[..width * n];
                         // SAFETY: columns kx0..kx0 + width (< h) belong to this group

@@ -7,10 +7,15 @@ use std::cell::RefCell;
 
 use rustfft::num_complex::{Complex, Complex64};
 
-use super::{halfcomplex, prefetch, GATHER, PREFETCH_ROWS};
+use super::{halfcomplex, prefetch, PREFETCH_ROWS};
 
 /// A floating-point type the 2-D transforms run in: `f64` or `f32` (sealed).
 pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
+    /// Columns the column passes gather together: one 64-byte cache line of complex values
+    /// per row (4 in f64, 8 in f32).
+    #[doc(hidden)]
+    const GATHER: usize = 64 / (2 * std::mem::size_of::<Self>());
+
     /// The value in double precision (exact).
     fn widen(self) -> f64;
 
@@ -51,7 +56,7 @@ pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
     }
 
     /// Transpose a band of lines out: `dst[j·dst_stride + i] = src[i·src_stride + j]` for
-    /// `i < count`, `j < width` (≤ [`GATHER`]), prefetching [`PREFETCH_ROWS`] source lines
+    /// `i < count`, `j < width` (≤ [`Self::GATHER`]), prefetching [`PREFETCH_ROWS`] source lines
     /// ahead. The column pass gathers columns `kx0 ..` of the rows this way (`src` at
     /// column `kx0`, stride `n/2 + 1`, `count = n`); the inverse row pass of a pair gathers
     /// rows `y0 ..` of the kx-major spectrum (`src` at `y0`, stride `n`, `count = n/2 + 1`).
@@ -177,7 +182,7 @@ impl Real for f64 {
         dst_stride: usize,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if width == GATHER && std::is_x86_feature_detected!("avx") {
+        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
             // SAFETY: AVX is present (checked); the bounds are the caller's.
             unsafe { gather4_avx(src, src_stride, count, dst, dst_stride) };
             return;
@@ -195,7 +200,7 @@ impl Real for f64 {
         src_stride: usize,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if width == GATHER && std::is_x86_feature_detected!("avx") {
+        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
             // SAFETY: AVX is present (checked); the bounds are the caller's.
             unsafe { scatter4_avx(dst, dst_stride, count, src, src_stride) };
             return;
@@ -246,6 +251,45 @@ impl Real for f32 {
     #[inline(always)]
     fn magnitude_bits(self) -> u64 {
         u64::from(self.to_bits() << 1)
+    }
+
+    /// A band of eight (one 64-byte line per source line) is moved four lines at a time in
+    /// 256-bit registers where the processor has AVX; the values moved are the same either
+    /// way.
+    unsafe fn gather_lines(
+        src: *const Complex<f32>,
+        src_stride: usize,
+        count: usize,
+        width: usize,
+        dst: *mut Complex<f32>,
+        dst_stride: usize,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present (checked); the bounds are the caller's.
+            unsafe { transpose8_avx_f32(src, src_stride, count, dst, dst_stride, true) };
+            return;
+        }
+        // SAFETY: the caller's bounds.
+        unsafe { gather_plain(src, src_stride, count, width, dst, dst_stride, 0) }
+    }
+
+    unsafe fn scatter_lines(
+        dst: *mut Complex<f32>,
+        dst_stride: usize,
+        count: usize,
+        width: usize,
+        src: *const Complex<f32>,
+        src_stride: usize,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX is present (checked); the bounds are the caller's.
+            unsafe { transpose8_avx_f32(src, src_stride, count, dst, dst_stride, false) };
+            return;
+        }
+        // SAFETY: the caller's bounds.
+        unsafe { scatter_plain(dst, dst_stride, count, width, src, src_stride, 0) }
     }
 }
 
@@ -327,8 +371,8 @@ unsafe fn gather4_avx(
     let d = dst as *mut f64;
     let pairs = count / 2 * 2;
     for i in (0..pairs).step_by(2) {
-        prefetch_ahead(src, src_stride, count, GATHER, i);
-        prefetch_ahead(src, src_stride, count, GATHER, i + 1);
+        prefetch_ahead(src, src_stride, count, 4, i);
+        prefetch_ahead(src, src_stride, count, 4, i + 1);
         // SAFETY: lines i and i + 1 < count (the caller's bounds); value (i, j) goes to
         // 2(j·dst_stride + i) doubles from `dst`.
         unsafe {
@@ -352,7 +396,7 @@ unsafe fn gather4_avx(
         }
     }
     // SAFETY: the caller's bounds.
-    unsafe { gather_plain(src, src_stride, count, GATHER, dst, dst_stride, pairs) }
+    unsafe { gather_plain(src, src_stride, count, 4, dst, dst_stride, pairs) }
 }
 
 /// [`Real::scatter_lines`] in f64 for a band of four, two destination lines at a time; an
@@ -388,5 +432,99 @@ unsafe fn scatter4_avx(
         }
     }
     // SAFETY: the caller's bounds.
-    unsafe { scatter_plain(dst, dst_stride, count, GATHER, src, src_stride, pairs) }
+    unsafe { scatter_plain(dst, dst_stride, count, 4, src, src_stride, pairs) }
+}
+
+/// [`Real::gather_lines`] (`gather`) or [`Real::scatter_lines`] in f32 for a band of eight,
+/// four lines at a time: a complex f32 value is one 64-bit lane, so each 4 × 4 block of
+/// values is transposed in 256-bit registers by two rounds of lane shuffles (unpack within
+/// 128-bit halves, then exchange the halves); an incomplete last block by the plain loop.
+/// For a scatter, `src`/`src_stride` are the gathered band and `dst`/`dst_stride` the
+/// lines, as in [`Real::scatter_lines`]; the lines are always indexed by `i < count`.
+///
+/// # Safety
+/// AVX must be present; the bounds of [`Real::gather_lines`] (gather) or
+/// [`Real::scatter_lines`] (scatter).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn transpose8_avx_f32(
+    src: *const Complex<f32>,
+    src_stride: usize,
+    count: usize,
+    dst: *mut Complex<f32>,
+    dst_stride: usize,
+    gather: bool,
+) {
+    use std::arch::x86_64::{
+        __m256d, _mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd, _mm256_unpackhi_pd,
+        _mm256_unpacklo_pd,
+    };
+    /// Transpose the 4 × 4 block of 64-bit values whose rows are `r`.
+    #[inline(always)]
+    unsafe fn block(r: [__m256d; 4]) -> [__m256d; 4] {
+        let t0 = _mm256_unpacklo_pd(r[0], r[1]);
+        let t1 = _mm256_unpackhi_pd(r[0], r[1]);
+        let t2 = _mm256_unpacklo_pd(r[2], r[3]);
+        let t3 = _mm256_unpackhi_pd(r[2], r[3]);
+        [
+            _mm256_permute2f128_pd::<0x20>(t0, t2),
+            _mm256_permute2f128_pd::<0x20>(t1, t3),
+            _mm256_permute2f128_pd::<0x31>(t0, t2),
+            _mm256_permute2f128_pd::<0x31>(t1, t3),
+        ]
+    }
+    const W: usize = 8;
+    let quads = count / 4 * 4;
+    // The lines (i) and the band (j): in a gather the lines are the source, in a scatter
+    // the destination. `line(i, h)` is the first of the four values h·4.. of line i,
+    // `band(j, i)` value i of band line j, both as f64 lanes.
+    let (lines, line_stride, band, band_stride) = if gather {
+        (src as *mut f64, src_stride, dst as *mut f64, dst_stride)
+    } else {
+        (dst as *mut f64, dst_stride, src as *mut f64, src_stride)
+    };
+    for i in (0..quads).step_by(4) {
+        if gather {
+            for k in 0..4 {
+                prefetch_ahead(src, src_stride, count, W, i + k);
+            }
+        }
+        for half in 0..2 {
+            // SAFETY: lines i..i + 4 < count and values half·4..half·4 + 4 < W of each, and
+            // band lines half·4.. + 4 < W at values i..i + 4 < count (the caller's bounds).
+            unsafe {
+                let line = |k: usize| lines.add((i + k) * line_stride + half * 4);
+                let band_at = |j: usize| band.add((half * 4 + j) * band_stride + i);
+                if gather {
+                    let t = block([
+                        _mm256_loadu_pd(line(0)),
+                        _mm256_loadu_pd(line(1)),
+                        _mm256_loadu_pd(line(2)),
+                        _mm256_loadu_pd(line(3)),
+                    ]);
+                    for (j, v) in t.into_iter().enumerate() {
+                        _mm256_storeu_pd(band_at(j), v);
+                    }
+                } else {
+                    let t = block([
+                        _mm256_loadu_pd(band_at(0)),
+                        _mm256_loadu_pd(band_at(1)),
+                        _mm256_loadu_pd(band_at(2)),
+                        _mm256_loadu_pd(band_at(3)),
+                    ]);
+                    for (k, v) in t.into_iter().enumerate() {
+                        _mm256_storeu_pd(line(k), v);
+                    }
+                }
+            }
+        }
+    }
+    // SAFETY: the caller's bounds.
+    unsafe {
+        if gather {
+            gather_plain(src, src_stride, count, W, dst, dst_stride, quads)
+        } else {
+            scatter_plain(dst, dst_stride, count, W, src, src_stride, quads)
+        }
+    }
 }

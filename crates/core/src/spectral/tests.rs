@@ -67,27 +67,29 @@ fn a_transform_nested_in_a_callback_gets_its_own_working_rows() {
 }
 
 /// The column gather and scatter of the fused convolution move exactly the values of
-/// columns `kx0 ..` (in f64 the AVX path for full groups of four and the plain loop for the
-/// last, narrower one; in f32 the plain loop), and scattering back what was gathered
-/// restores the array.
+/// columns `kx0 ..` (the AVX path for full groups, of four in f64 and eight in f32, and the
+/// plain loop for the last, narrower one), and scattering back what was gathered restores
+/// the array.
 #[test]
 fn column_gather_and_scatter_move_the_right_values() {
     gather_and_scatter::<f64>();
     gather_and_scatter::<f32>();
 }
 
-/// The line transpose for any count of lines, odd ones included (the AVX path moves two
-/// lines at a time and leaves an odd last one to the plain loop), and strides that are not
-/// the count: a band of four values out of lines `stride` apart and back.
+/// The line transpose for any count of lines (the AVX path moves two lines at a time in f64
+/// and four in f32, and leaves the rest to the plain loop), and strides that are not the
+/// count: a full band ([`Real::GATHER`] values) out of lines `stride` apart and back.
 #[test]
 fn line_transpose_handles_odd_counts_and_any_stride() {
     fn check<T: Real>() {
-        for (count, src_stride, dst_stride) in [(1, 4, 1), (7, 9, 8), (8, 4, 11), (513, 6, 513)] {
+        for (count, src_stride, dst_stride) in
+            [(1, 8, 1), (6, 9, 7), (7, 9, 8), (8, 8, 11), (513, 10, 513)]
+        {
             let src: Vec<Complex<T>> = (0..count * src_stride)
                 .map(|i| Complex::new(T::narrow(i as f64), T::narrow(0.5 - i as f64)))
                 .collect();
             let nan = T::narrow(f64::NAN);
-            let mut dst = vec![Complex::new(nan, nan); GATHER * dst_stride];
+            let mut dst = vec![Complex::new(nan, nan); T::GATHER * dst_stride];
             // SAFETY: count lines of src_stride ≥ GATHER values; GATHER lines of dst_stride
             // ≥ count values.
             unsafe {
@@ -95,13 +97,13 @@ fn line_transpose_handles_odd_counts_and_any_stride() {
                     src.as_ptr(),
                     src_stride,
                     count,
-                    GATHER,
+                    T::GATHER,
                     dst.as_mut_ptr(),
                     dst_stride,
                 )
             };
             for i in 0..count {
-                for j in 0..GATHER {
+                for j in 0..T::GATHER {
                     assert!(
                         dst[j * dst_stride + i] == src[i * src_stride + j],
                         "count {count}"
@@ -115,15 +117,15 @@ fn line_transpose_handles_odd_counts_and_any_stride() {
                     back.as_mut_ptr(),
                     src_stride,
                     count,
-                    GATHER,
+                    T::GATHER,
                     dst.as_ptr(),
                     dst_stride,
                 )
             };
             for i in 0..count {
                 assert_eq!(
-                    back[i * src_stride..i * src_stride + GATHER],
-                    src[i * src_stride..i * src_stride + GATHER]
+                    back[i * src_stride..i * src_stride + T::GATHER],
+                    src[i * src_stride..i * src_stride + T::GATHER]
                 );
             }
         }
@@ -139,8 +141,8 @@ fn gather_and_scatter<T: Real>() {
             .map(|i| Complex::new(T::narrow(i as f64), T::narrow(-(i as f64) - 0.5)))
             .collect();
         let mut rows = original.clone();
-        for kx0 in (0..h).step_by(GATHER) {
-            let w = GATHER.min(h - kx0);
+        for kx0 in (0..h).step_by(T::GATHER) {
+            let w = T::GATHER.min(h - kx0);
             let nan = T::narrow(f64::NAN);
             let mut cols = vec![Complex::new(nan, nan); w * n];
             // SAFETY: `rows` holds n·h values and kx0 + w ≤ h.
