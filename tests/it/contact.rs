@@ -655,6 +655,41 @@ fn area_load_slope_at_small_loads() {
     assert!(mean[0] > mean[3], "{mean:?}");
 }
 
+/// The extension's near term (on once the contact set has settled) is what makes the
+/// default take fewer iterations than the long term alone on a warm-started sweep over a
+/// rough surface (measured: 149 against 176 at n = 128 through W/W0 = 0.01 … 0.1), with
+/// the same contact pixels at every load and pressures within the tolerance's reach.
+#[test]
+fn near_term_saves_iterations_on_a_settled_contact_set() {
+    use wearcoef::contact::solver::Extension;
+    let n = 128;
+    let h = rough_surface(n, 64.0, 4.0, 3);
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let long_only = SolverConfig {
+        extension: Some(Extension {
+            near_weight: 0.0,
+            ..Extension::default()
+        }),
+        ..cfg(1e-12)
+    };
+    let (mut with, mut without) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());
+    let (mut iterations_with, mut iterations_without) = (0, 0);
+    for w in [0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.1] {
+        let a = with.solve(w, &cfg(1e-12)).unwrap();
+        let b = without.solve(w, &long_only).unwrap();
+        assert!(a.converged() && b.converged(), "{a:?} {b:?}");
+        assert_eq!(with.contact_count(), without.contact_count(), "W/W0 {w}");
+        let d = relative_l2(with.pressure(), without.pressure());
+        assert!(d <= 1e-6, "W/W0 {w}: pressures differ by {d}");
+        iterations_with += a.iterations;
+        iterations_without += b.iterations;
+    }
+    assert!(
+        (iterations_with as f64) < 0.95 * iterations_without as f64,
+        "{iterations_with} iterations with the near term, {iterations_without} without"
+    );
+}
+
 /// The preconditioner's free-set extension (the default) reaches the same solution as
 /// `P K⁻¹ P` alone: at every load
 /// of a warm-started sweep on a rough surface (ragged rows and a partial last cell at
@@ -718,6 +753,17 @@ fn extended_preconditioner_reaches_the_same_solution() {
     };
     match solver.solve(0.1, &bad) {
         Err(ContactError::BadConfig(msg)) => assert!(msg.contains("weight"), "{msg}"),
+        other => panic!("expected BadConfig, got {other:?}"),
+    }
+    let bad = SolverConfig {
+        extension: Some(Extension {
+            near_weight: -0.1,
+            ..Extension::default()
+        }),
+        ..cfg(1e-8)
+    };
+    match solver.solve(0.1, &bad) {
+        Err(ContactError::BadConfig(msg)) => assert!(msg.contains("near weight"), "{msg}"),
         other => panic!("expected BadConfig, got {other:?}"),
     }
 }

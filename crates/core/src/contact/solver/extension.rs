@@ -7,14 +7,22 @@
 //! the iteration count grows with the contact fraction and the box. The extension gives the
 //! surface off F the smoothed gradient, so that `K⁻¹` sees a slow modulation as a slow field:
 //!
-//! `M_E = P Eᵀ K⁻¹ E P`, `E = 1_F + γ (1 − 1_F) D⁻¹ S 1_F`, `Eᵀ = 1_F + γ 1_F S D⁻¹ (1 − 1_F)`,
+//! `M_E = P Eᵀ K⁻¹ E P`, `E = 1_F + (1 − 1_F) Σ_t γ_t D_t⁻¹ S_t 1_F`,
+//! `Eᵀ = 1_F + Σ_t γ_t 1_F S_t D_t⁻¹ (1 − 1_F)`,
 //!
-//! with `S = U G Uᵀ / c²` (`Uᵀ`: sums over cells of c × c nodes, `U`: the cell's value on its
-//! nodes, `G`: a periodic Gaussian on the cells), `D = max(S 1_F, D_min)` the smoothed density
-//! of F. `M_E` is symmetric and positive like `M` (the same `D` on both sides), equal to `M`
-//! in full contact (`E = 1`), and costs one pass over `p` and `w` for the cell sums plus two
-//! smoothings on the coarse grid (n/c per side) per iteration. The floor `D_min` fades the
-//! extension out where F is sparse, where `M` is already accurate.
+//! with, for each term t, `S_t = U G_t Uᵀ / c²` (`Uᵀ`: sums over cells of c × c nodes, `U`:
+//! the cell's value on its nodes, `G_t`: a periodic Gaussian on the cells), `D_t = max(S_t
+//! 1_F, D_min)` the smoothed density of F. Two terms share the cells: the long one (σ = 32
+//! nodes, γ = 0.5) and the near one (σ = 6 nodes, γ = 0.3), which together continue the
+//! gradient across the clusters' edges, where `M` alone jumps from the gradient to zero.
+//! Any extension gives `Eᵀ K⁻¹ E ≥ (P K P)⁻¹` on F, with equality for the one of least
+//! elastic energy, so the closer `E` comes to it the fewer iterations; but while the contact
+//! set still moves, the near term makes it oscillate, so it is used only once the set has
+//! settled ([`Extension::settled_fraction`]). `M_E` is symmetric and positive like `M` (the
+//! same `D_t` on both sides), equal to `M` in full contact (`E = 1`), and costs one pass over
+//! `p` and `w` for the cell sums plus two smoothings per term on the coarse grid (n/c per
+//! side) per iteration. The floor `D_min` fades the extension out where F is sparse, where
+//! `M` is already accurate.
 
 use rayon::prelude::*;
 
@@ -30,20 +38,37 @@ pub struct Extension {
     pub sigma: f64,
     /// Weight γ of the extension (0 gives back `P K⁻¹ P`).
     pub weight: f64,
-    /// Floor `D_min` of the smoothed density of the free set.
+    /// Floor `D_min` of the smoothed density of the free set (both terms).
     pub density_floor: f64,
+    /// Standard deviation of the near term's Gaussian, in grid nodes (Δl): the extension
+    /// within a few cells of F, which with the long term continues the gradient across
+    /// the edges of the contact clusters.
+    pub near_sigma: f64,
+    /// Weight γ_near of the near term (0: the long term alone).
+    pub near_weight: f64,
+    /// The near term is used once the contact set has settled: after an iteration in which
+    /// at most this fraction of the contact set left or entered it (while the set still
+    /// moves it makes the iteration oscillate; docs/BENCHMARKS.md).
+    pub settled_fraction: f64,
 }
 
 impl Default for Extension {
     /// The settings measured on the paper's spectrum and the bench surfaces at 1024²–4096²
     /// (docs/BENCHMARKS.md): γ = 0.7 saves a few more iterations at 1024² but makes one load
-    /// at 2048² crawl (424 iterations in the replica), γ = 0.5 does not.
+    /// at 2048² crawl (424 iterations in the replica), γ = 0.5 does not. The near term (σ =
+    /// 6 nodes, γ_near = 0.3, after an iteration that changed at most 0.2 % of the contact
+    /// set) takes 15 % of the paper spectrum's iterations away at 1024² and 19 % at 2048²;
+    /// σ = 4–8 and γ_near = 0.3–0.4 are within 3 % of it, γ_near = 0.6 loses a third of
+    /// the gain.
     fn default() -> Self {
         Self {
             cell: 8,
             sigma: 32.0,
             weight: 0.5,
             density_floor: 0.05,
+            near_sigma: 6.0,
+            near_weight: 0.3,
+            settled_fraction: 0.002,
         }
     }
 }
@@ -54,17 +79,19 @@ impl Extension {
         if self.cell == 0 {
             return Err("extension cell must be ≥ 1 node".into());
         }
-        if !(self.sigma.is_finite() && self.sigma > 0.0) {
-            return Err(format!(
-                "extension sigma {} must be finite and > 0",
-                self.sigma
-            ));
+        for (name, sigma) in [("sigma", self.sigma), ("near sigma", self.near_sigma)] {
+            if !(sigma.is_finite() && sigma > 0.0) {
+                return Err(format!("extension {name} {sigma} must be finite and > 0"));
+            }
         }
-        if !(self.weight.is_finite() && (0.0..=1.0).contains(&self.weight)) {
-            return Err(format!(
-                "extension weight {} must lie in [0, 1]",
-                self.weight
-            ));
+        for (name, value) in [
+            ("weight", self.weight),
+            ("near weight", self.near_weight),
+            ("settled fraction", self.settled_fraction),
+        ] {
+            if !(value.is_finite() && (0.0..=1.0).contains(&value)) {
+                return Err(format!("extension {name} {value} must lie in [0, 1]"));
+            }
         }
         if !(self.density_floor.is_finite() && self.density_floor > 0.0) {
             return Err(format!(
@@ -83,35 +110,19 @@ pub(super) struct OffBlock {
     sums: Vec<f64>,
 }
 
-/// The coarse-grid state of the extension for one grid and settings.
-pub(super) struct Coarse {
-    pub(super) settings: Extension,
-    n: usize,
-    cell: usize,
-    /// Cells per side.
-    m: usize,
-    /// The periodic Gaussian on the cells, offsets −h..=h.
+/// One Gaussian term of the extension on the cells: its kernel, weight and the smoothed
+/// density of F.
+struct Term {
+    /// The periodic Gaussian on the cells, offsets −h..=h, summing to 1.
     kernel: Vec<f64>,
-    /// Per cell: `Σ_F g`.
-    sum_g: Vec<f64>,
-    /// Per cell: `|F|`.
-    count: Vec<f64>,
-    /// Per cell: the extension's value off F, `γ (G Uᵀ 1_F g / c²) / D`.
-    value: Vec<f64>,
-    /// Per cell: `D`.
+    weight: f64,
+    /// Per cell: `D = max(G 1_F / c², D_min)`.
     density: Vec<f64>,
-    /// Per cell: `γ (G Uᵀ (1 − 1_F) y / D) / c²`, added to `K⁻¹ E g` on F.
-    back: Vec<f64>,
-    scratch: Vec<f64>,
-    scratch2: Vec<f64>,
-    pub(super) blocks: Vec<OffBlock>,
 }
 
-impl Coarse {
-    pub(super) fn new(n: usize, rows_per_block: usize, settings: Extension) -> Self {
-        let cell = settings.cell.min(n).max(1);
-        let m = n.div_ceil(cell);
-        let sigma_cells = settings.sigma / cell as f64;
+impl Term {
+    fn new(sigma_nodes: f64, weight: f64, cell: usize, m: usize) -> Self {
+        let sigma_cells = sigma_nodes / cell as f64;
         let h = ((4.0 * sigma_cells).ceil() as usize).min(m / 2);
         let mut kernel: Vec<f64> = (0..=2 * h)
             .map(|k| {
@@ -121,6 +132,43 @@ impl Coarse {
             .collect();
         let total: f64 = kernel.iter().sum();
         kernel.iter_mut().for_each(|k| *k /= total);
+        Self {
+            kernel,
+            weight,
+            density: vec![0.0; m * m],
+        }
+    }
+}
+
+/// The coarse-grid state of the extension for one grid and settings.
+pub(super) struct Coarse {
+    pub(super) settings: Extension,
+    n: usize,
+    cell: usize,
+    /// Cells per side.
+    m: usize,
+    /// The long term (σ = `settings.sigma`) and the near term (`settings.near_sigma`).
+    long: Term,
+    near: Term,
+    /// Whether the near term is in use (see [`Extension::settled_fraction`]).
+    near_on: bool,
+    /// Per cell: `Σ_F g`.
+    sum_g: Vec<f64>,
+    /// Per cell: `|F|`.
+    count: Vec<f64>,
+    /// Per cell: the extension's value off F, `Σ_terms γ (G Uᵀ 1_F g / c²) / D`.
+    value: Vec<f64>,
+    /// Per cell: `Σ_terms γ G (Uᵀ (1 − 1_F) y / c²) / D`, added to `K⁻¹ E g` on F.
+    back: Vec<f64>,
+    /// Working values on the cells.
+    work: [Vec<f64>; 3],
+    pub(super) blocks: Vec<OffBlock>,
+}
+
+impl Coarse {
+    pub(super) fn new(n: usize, rows_per_block: usize, settings: Extension) -> Self {
+        let cell = settings.cell.min(n).max(1);
+        let m = n.div_ceil(cell);
         let blocks = (0..n.div_ceil(rows_per_block))
             .map(|b| {
                 let first = b * rows_per_block;
@@ -138,21 +186,37 @@ impl Coarse {
             n,
             cell,
             m,
-            kernel,
+            long: Term::new(settings.sigma, settings.weight, cell, m),
+            near: Term::new(settings.near_sigma, settings.near_weight, cell, m),
+            near_on: false,
             sum_g: vec![0.0; m * m],
             count: vec![0.0; m * m],
             value: vec![0.0; m * m],
-            density: vec![0.0; m * m],
             back: vec![0.0; m * m],
-            scratch: vec![0.0; m * m],
-            scratch2: vec![0.0; m * m],
+            work: std::array::from_fn(|_| vec![0.0; m * m]),
             blocks,
         }
     }
 
-    /// The cell sums of `g = w − level` and of `1_F` over F, then `D` and the extension's
-    /// values. One pass over `p` and `w`, in parallel over rows of cells (each summed in node
-    /// order, so the same bits whatever the number of threads).
+    /// Use the near term from the next [`Self::gather`] on, or not, after an iteration that
+    /// changed `changed` nodes of a contact set of `contact` nodes (none before a load's
+    /// first). Returns whether that switched it (the preconditioner changed: the conjugate
+    /// direction must restart). In full contact it stays off: there is nothing off F to
+    /// extend to, and a restart would only cost iterations.
+    pub(super) fn settle(&mut self, changed: Option<(usize, f64)>) -> bool {
+        let nodes = (self.n * self.n) as f64;
+        let on = self.settings.near_weight > 0.0
+            && changed.is_some_and(|(changed, contact)| {
+                changed as f64 <= self.settings.settled_fraction * contact && contact < nodes
+            });
+        let switched = on != self.near_on;
+        self.near_on = on;
+        switched
+    }
+
+    /// The cell sums of `g = w − level` and of `1_F` over F, then each term's `D` and the
+    /// extension's values. One pass over `p` and `w`, in parallel over rows of cells (each
+    /// summed in node order, so the same bits whatever the number of threads).
     pub(super) fn gather(&mut self, p: &[f64], w: &[f64], level: f64) {
         let (n, c, m) = (self.n, self.cell, self.m);
         self.sum_g
@@ -169,34 +233,27 @@ impl Coarse {
             });
         let area = (c * c) as f64;
         let floor = self.settings.density_floor;
-        let gamma = self.settings.weight;
-        self.scratch2
-            .iter_mut()
-            .zip(&self.count)
-            .for_each(|(s, &k)| *s = k / area);
-        smooth(
-            &self.kernel,
-            m,
-            &self.scratch2,
-            &mut self.scratch,
-            &mut self.density,
-        );
-        self.density.iter_mut().for_each(|d| *d = d.max(floor));
-        self.scratch2
-            .iter_mut()
-            .zip(&self.sum_g)
-            .for_each(|(s, &g)| *s = g / area);
-        smooth(
-            &self.kernel,
-            m,
-            &self.scratch2,
-            &mut self.scratch,
-            &mut self.value,
-        );
-        self.value
-            .iter_mut()
-            .zip(&self.density)
-            .for_each(|(v, &d)| *v = gamma * *v / d);
+        let [fraction, tmp, smoothed] = &mut self.work;
+        self.value.fill(0.0);
+        let near = self.near_on.then_some(&mut self.near);
+        for term in std::iter::once(&mut self.long).chain(near) {
+            fraction
+                .iter_mut()
+                .zip(&self.count)
+                .for_each(|(s, &k)| *s = k / area);
+            smooth(&term.kernel, m, fraction, tmp, &mut term.density);
+            term.density.iter_mut().for_each(|d| *d = d.max(floor));
+            fraction
+                .iter_mut()
+                .zip(&self.sum_g)
+                .for_each(|(s, &g)| *s = g / area);
+            smooth(&term.kernel, m, fraction, tmp, smoothed);
+            let gamma = term.weight;
+            self.value
+                .iter_mut()
+                .zip(smoothed.iter().zip(&term.density))
+                .for_each(|(v, (&s, &d))| *v += gamma * s / d);
+        }
     }
 
     /// One row of the preconditioner's input `E g`: `g` on F, the cell's extension value off
@@ -207,12 +264,10 @@ impl Coarse {
         dispatch_input(c, values, level, o, p, w);
     }
 
-    /// Adds one row of `K⁻¹ E g` off F, divided by `D`, to its block's cell sums.
-    #[allow(clippy::too_many_arguments)]
+    /// Adds one row of `K⁻¹ E g` off F to its block's cell sums.
     pub(super) fn output_row(
         cell: usize,
         m: usize,
-        density: &[f64],
         block: &mut OffBlock,
         r: usize,
         row: &[f32],
@@ -226,41 +281,45 @@ impl Coarse {
         }
         let local = i / cell - block.first_cell_row;
         let sums = &mut block.sums[local * m..(local + 1) * m];
-        let dens = &density[(i / cell) * m..(i / cell + 1) * m];
-        dispatch_off_sums(cell, dens, level, sums, row, p, w);
+        dispatch_off_sums(cell, level, sums, row, p, w);
     }
 
-    /// The cell size, cells per side and `D`, for [`Self::output_row`] while the blocks are
+    /// The cell size and cells per side, for [`Self::output_row`] while the blocks are
     /// borrowed.
-    pub(super) fn output_parts(&mut self) -> (usize, usize, &[f64], &mut [OffBlock]) {
-        (self.cell, self.m, &self.density, &mut self.blocks)
+    pub(super) fn output_parts(&mut self) -> (usize, usize, &mut [OffBlock]) {
+        (self.cell, self.m, &mut self.blocks)
     }
 
     /// After the output pass: the correction on F per cell, and its sums
     /// `(Σ_F b, Σ_F g b)` (cells in order).
     pub(super) fn finish(&mut self) -> (f64, f64) {
         let m = self.m;
-        self.scratch2.fill(0.0);
+        let area = (self.cell * self.cell) as f64;
+        let [off, tmp, smoothed] = &mut self.work;
+        off.fill(0.0);
         for block in &self.blocks {
             let at = block.first_cell_row * m;
-            for (s, &v) in self.scratch2[at..at + block.sums.len()]
-                .iter_mut()
-                .zip(&block.sums)
-            {
+            for (s, &v) in off[at..at + block.sums.len()].iter_mut().zip(&block.sums) {
                 *s += v;
             }
         }
-        let area = (self.cell * self.cell) as f64;
-        self.scratch2.iter_mut().for_each(|s| *s /= area);
-        smooth(
-            &self.kernel,
-            m,
-            &self.scratch2,
-            &mut self.scratch,
-            &mut self.back,
-        );
-        let gamma = self.settings.weight;
-        self.back.iter_mut().for_each(|b| *b *= gamma);
+        off.iter_mut().for_each(|s| *s /= area);
+        // `value` is free until the next `gather`: it holds `y / D` of each term in turn.
+        let divided = &mut self.value;
+        self.back.fill(0.0);
+        let near = self.near_on.then_some(&self.near);
+        for term in std::iter::once(&self.long).chain(near) {
+            divided
+                .iter_mut()
+                .zip(off.iter().zip(&term.density))
+                .for_each(|(q, (&y, &d))| *q = y / d);
+            smooth(&term.kernel, m, divided, tmp, smoothed);
+            let gamma = term.weight;
+            self.back
+                .iter_mut()
+                .zip(smoothed.iter())
+                .for_each(|(b, &s)| *b += gamma * s);
+        }
         let (mut sum_b, mut sum_gb) = (0.0, 0.0);
         for ((&b, &k), &g) in self.back.iter().zip(&self.count).zip(&self.sum_g) {
             sum_b += k * b;
@@ -341,22 +400,21 @@ avx2_dispatch! {
 }
 
 avx2_dispatch! {
-    /// Adds `Σ y / D` over the nodes of each cell of a row that are off F to `sums` (nodes
-    /// in order within a cell).
+    /// Adds `Σ y` over the nodes of each cell of a row that are off F to `sums` (nodes in
+    /// order within a cell).
     fn dispatch_off_sums(
         cell: usize,
-        density: &[f64],
         level: f64,
         sums: &mut [f64],
         row: &[f32],
         p: &[f64],
         w: &[f64],
     ) {
-        for (((yc, pc), wc), (s, &d)) in row
+        for (((yc, pc), wc), s) in row
             .chunks(cell)
             .zip(p.chunks(cell))
             .zip(w.chunks(cell))
-            .zip(sums.iter_mut().zip(density))
+            .zip(sums.iter_mut())
         {
             let mut acc = 0.0;
             for ((&y, &pv), &wv) in yc.iter().zip(pc).zip(wc) {
@@ -364,7 +422,7 @@ avx2_dispatch! {
                     acc += y as f64;
                 }
             }
-            *s += acc / d;
+            *s += acc;
         }
     }
 }
@@ -439,12 +497,47 @@ fn add_shifted(o: &mut [f64], x: &[f64], shift: usize, weight: f64) {
 mod tests {
     use super::*;
 
-    /// The smoothing is symmetric (⟨a, G b⟩ = ⟨G a, b⟩, to rounding) and keeps constants
-    /// and sums (the kernel sums to 1), so `S = U G Uᵀ / c²` is symmetric and `M_E` with it.
+    /// The smoothing of either term is symmetric (⟨a, G b⟩ = ⟨G a, b⟩, to rounding) and
+    /// keeps constants and sums (the kernel sums to 1), so `S = U G Uᵀ / c²` is symmetric
+    /// and `M_E` with it.
     #[test]
     fn smoothing_is_symmetric_and_conservative() {
+        let coarse = Coarse::new(96, 4, Extension::default());
+        assert!(coarse.near.kernel.len() < coarse.long.kernel.len());
+        for term in [&coarse.long, &coarse.near] {
+            check_smoothing(&term.kernel);
+        }
+    }
+
+    /// The near term is switched on after an iteration that changed at most the settled
+    /// fraction of the contact set, off after one that changed more or before a load's
+    /// first iteration, never with weight 0 or in full contact; each switch is reported
+    /// (the direction restarts).
+    #[test]
+    fn near_term_follows_the_settled_contact_set() {
+        let settings = Extension::default();
+        let mut coarse = Coarse::new(128, 8, settings);
+        let contact = 10_000.0;
+        let settled = (settings.settled_fraction * contact) as usize;
+        assert!(!coarse.settle(None) && !coarse.near_on);
+        assert!(!coarse.settle(Some((settled + 1, contact))) && !coarse.near_on);
+        assert!(coarse.settle(Some((settled, contact))) && coarse.near_on);
+        assert!(!coarse.settle(Some((0, contact))) && coarse.near_on);
+        assert!(coarse.settle(None) && !coarse.near_on);
+        assert!(!coarse.settle(Some((0, (128 * 128) as f64))) && !coarse.near_on);
+        let mut without = Coarse::new(
+            128,
+            8,
+            Extension {
+                near_weight: 0.0,
+                ..settings
+            },
+        );
+        assert!(!without.settle(Some((0, contact))) && !without.near_on);
+    }
+
+    fn check_smoothing(kernel: &[f64]) {
         let m = 12;
-        let kernel = Coarse::new(96, 4, Extension::default()).kernel;
         assert!(kernel.len() <= m + 1);
         let mut state = 1u64;
         let mut next = || {
@@ -456,8 +549,8 @@ mod tests {
         let a: Vec<f64> = (0..m * m).map(|_| next()).collect();
         let b: Vec<f64> = (0..m * m).map(|_| next()).collect();
         let (mut tmp, mut ga, mut gb) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
-        smooth(&kernel, m, &a, &mut tmp, &mut ga);
-        smooth(&kernel, m, &b, &mut tmp, &mut gb);
+        smooth(kernel, m, &a, &mut tmp, &mut ga);
+        smooth(kernel, m, &b, &mut tmp, &mut gb);
         let lhs: f64 = a.iter().zip(&gb).map(|(x, y)| x * y).sum();
         let rhs: f64 = ga.iter().zip(&b).map(|(x, y)| x * y).sum();
         assert!(
@@ -467,7 +560,7 @@ mod tests {
         let (sa, sga): (f64, f64) = (a.iter().sum(), ga.iter().sum());
         assert!((sa - sga).abs() <= 1e-13, "{sa} {sga}");
         let ones = vec![1.0; m * m];
-        smooth(&kernel, m, &ones, &mut tmp, &mut ga);
+        smooth(kernel, m, &ones, &mut tmp, &mut ga);
         assert!(ga.iter().all(|&v| (v - 1.0).abs() < 1e-14));
     }
 }

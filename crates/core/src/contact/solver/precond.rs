@@ -20,7 +20,7 @@ impl Solver<'_> {
     /// subtracts the mean. Summed in a fixed order (four lanes per block, then the blocks
     /// in order), so bit-identical whatever the number of threads. With the free-set
     /// extension (module `extension`) the input is `E g` instead of `P g`, and the values
-    /// of `K⁻¹ E g` off F are summed per cell for the correction `γ S D⁻¹ (1 − 1_F) y` that
+    /// of `K⁻¹ E g` off F are summed per cell for the correction `Σ γ S D⁻¹ (1 − 1_F) y` that
     /// the direction pass adds on F.
     pub(super) fn precondition(&mut self, level: f64) -> PreconditionSums {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
@@ -52,11 +52,8 @@ impl Solver<'_> {
         let blocks = self.precondition_acc.len();
         let (extension, off_blocks) = match coarse.as_mut() {
             Some(c) => {
-                let (cell, m, density, off) = c.output_parts();
-                (
-                    Some((cell, m, density)),
-                    Either::Left(off.par_iter_mut().map(Some)),
-                )
+                let (cell, m, off) = c.output_parts();
+                (Some((cell, m)), Either::Left(off.par_iter_mut().map(Some)))
             }
             None => (
                 None,
@@ -78,10 +75,8 @@ impl Solver<'_> {
                 let at = r * n..(r + 1) * n;
                 let (p, w) = (&pc[at.clone()], &wc[at.clone()]);
                 dispatch_precondition_output(level, row, &mut zc[at.clone()], p, w, &tc[at], acc);
-                if let (Some((cell, m, density)), Some(block)) = (extension, block) {
-                    super::extension::Coarse::output_row(
-                        cell, m, density, block, r, row, p, w, level,
-                    );
+                if let (Some((cell, m)), Some(block)) = (extension, block) {
+                    super::extension::Coarse::output_row(cell, m, block, r, row, p, w, level);
                 }
             },
             &mut self.ws,
