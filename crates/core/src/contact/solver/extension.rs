@@ -265,6 +265,7 @@ impl Coarse {
     }
 
     /// Adds one row of `K⁻¹ E g` off F to its block's cell sums.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn output_row(
         cell: usize,
         m: usize,
