@@ -35,6 +35,12 @@ Options:
   `E = 1_F + (1 − 1_F) (γ D⁻¹ S + γ_L D_L⁻¹ S_L) 1_F`, so that the weight reaches γ + γ_L for
   the longest modes; `--long-settled` uses it only after an iteration that did not restart
   (the conjugate gradient restarted when it is switched on or off);
+- `--settled-fraction X`: with `--long`, use the second term only after an iteration in
+  which at most a fraction X of the contact set left or entered it (the solver's near
+  term: `--extend 32 --cell 8 --long 6 --long-weight 0.3 --long-cell 8 --settled-fraction
+  0.002` is contact stage version 9's preconditioner);
+- `--cell C`, `--long-cell C`: the smoothing of the first or second term on cells of C × C
+  nodes, as the solver does it (1, the default: a Gaussian on the fine grid);
 - `--first-on-contact K`: the first K iterations of a warm-started load act on the contact
   set alone (no interpenetrating nodes in F);
 - `--restart F`: the restart threshold (fraction of the contact set changed; 0.03);
@@ -95,25 +101,43 @@ def free_set_operators(op, F):
 
 def extended_preconditioner(op, F, P, terms):
     """The free-set extension of M: r ↦ P Eᵀ K⁻¹ E r for r on F (centred),
-    E = 1_F + (1 − 1_F) Σ_j γ_j D_j⁻¹ S_j 1_F, one term per (σ_j, γ_j, D_min,j) of `terms`:
-    S_j a Gaussian of standard deviation σ_j nodes on the fine grid, D_j = max(S_j 1_F,
-    D_min,j). The solver has one term, its S on 8² cells instead."""
+    E = 1_F + (1 − 1_F) Σ_j γ_j D_j⁻¹ S_j 1_F, one term per (σ_j, γ_j, D_min,j[, c_j]) of
+    `terms`: S_j a Gaussian of standard deviation σ_j nodes, on the fine grid, or with a
+    cell size c_j > 1 as the solver does it, S_j = U G_j Uᵀ / c_j² (Uᵀ: sums over cells of
+    c_j × c_j nodes, U: the cell's value on its nodes, G_j the Gaussian on the cells);
+    D_j = max(S_j 1_F, D_min,j)."""
     n = op.n
     parts = []
-    for sigma, weight, floor in terms:
-        s_hat = np.exp(-2 * (np.pi * sigma * op.q / n) ** 2)
-        parts.append((s_hat, weight, np.maximum(op.conv(F.astype(float), s_hat), floor)))
+    for term in terms:
+        sigma, weight, floor = term[:3]
+        cell = int(term[3]) if len(term) > 3 else 1
+        if cell <= 1:
+            s_hat = np.exp(-2 * (np.pi * sigma * op.q / n) ** 2)
+
+            def S(x, s_hat=s_hat):
+                return op.conv(x, s_hat)
+        else:
+            m = n // cell
+            qx = np.fft.fftfreq(m, 1.0 / m)[:, None]
+            qy = np.fft.rfftfreq(m, 1.0 / m)[None, :]
+            g_hat = np.exp(-2 * (np.pi * (sigma / cell) * np.sqrt(qx**2 + qy**2) / m) ** 2)
+
+            def S(x, g_hat=g_hat, m=m, cell=cell):
+                sums = x.reshape(m, cell, m, cell).sum(axis=(1, 3))
+                smoothed = sf.irfft2(sf.rfft2(sums) * g_hat, s=(m, m))
+                return np.repeat(np.repeat(smoothed, cell, axis=0), cell, axis=1) / cell**2
+        parts.append((S, weight, np.maximum(S(F.astype(float)), floor)))
 
     def M(r):
         r_F = np.where(F, r, 0.0)
         off = 0.0
-        for s_hat, weight, density in parts:
-            off = off + weight * op.conv(r_F, s_hat) / density
+        for S, weight, density in parts:
+            off = off + weight * S(r_F) / density
         y = op.conv(np.where(F, r, off), op.k_inv_hat)
         y_off = np.where(F, 0.0, y)
         back = 0.0
-        for s_hat, weight, density in parts:
-            back = back + weight * op.conv(y_off / density, s_hat)
+        for S, weight, density in parts:
+            back = back + weight * S(y_off / density)
         return P(y + back)
 
     return M
@@ -181,6 +205,9 @@ def main():
     ap.add_argument("--dmin-long", type=float, default=0.05)
     ap.add_argument("--long-settled", action="store_true")
     ap.add_argument("--first-on-contact", type=int, default=0)
+    ap.add_argument("--settled-fraction", type=float, default=-1.0)
+    ap.add_argument("--cell", type=int, default=1)
+    ap.add_argument("--long-cell", type=int, default=1)
     args = ap.parse_args()
     n = args.n
     h = np.load(args.surface)
@@ -209,6 +236,7 @@ def main():
         restart = True
         coarse_key, coarse = None, None
         long_before = False
+        changed = None
         for it in range(20000):
             w = u - h
             S = p > 0
@@ -239,10 +267,13 @@ def main():
                                 s=(n, n), workers=args.workers).astype(np.float64))
             elif args.extend > 0:
                 use_long = args.long > 0 and not (args.long_settled and restart)
+                if args.settled_fraction >= 0:
+                    use_long = (args.long > 0 and changed is not None
+                                and changed <= args.settled_fraction * S.sum())
                 switched, long_before = use_long != long_before, use_long
-                terms = [(args.extend, args.gamma, args.dmin)]
+                terms = [(args.extend, args.gamma, args.dmin, args.cell)]
                 if use_long:
-                    terms.append((args.long, args.long_weight, args.dmin_long))
+                    terms.append((args.long, args.long_weight, args.dmin_long, args.long_cell))
                 z = extended_preconditioner(op, F, P, terms)(r)
             else:
                 z = P(conv(r, k_inv_hat))
@@ -261,6 +292,7 @@ def main():
             left = int(np.sum(S & (p_new <= 0)))
             entered = int(np.sum(~S & (p_new > 0)))
             restart = left + entered > args.restart * S.sum()
+            changed = left + entered
             if trace:
                 print(f"  iteration {it:3d}: error {error:.2e}, interpenetrating "
                       f"{int(F.sum() - S.sum())}, left {left}, entered {entered}, "

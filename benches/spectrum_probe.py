@@ -28,6 +28,10 @@ an edge-against-core loading is across clusters), its participation ratio (Σv²
 evenly over F, small when localised) and the share of its energy in the most loaded block of
 256² nodes (n a multiple of 256).
 
+`--cells C` smooths the extension on cells of C × C nodes as the solver does (default 1:
+on the fine grid), and `--near SIGMA,WEIGHT` adds the solver's near term (a second
+Gaussian of SIGMA nodes and weight WEIGHT; the solver's is 6,0.3 with `--cells 8`).
+
 `--ritz-deflate K1,K2,…` then asks how far a recycled coarse space could go: the K largest
 Ritz vectors of this solve (right eigenvectors of the preconditioned operator, as far as
 the Lanczos matrix has found them) deflate the preconditioner (balancing form, A Z exact),
@@ -57,6 +61,8 @@ def main():
     ap.add_argument("--edge-scale", type=float, default=1.0)
     ap.add_argument("--ring-blocks", type=int, default=0)
     ap.add_argument("--ritz-deflate", default="")
+    ap.add_argument("--cells", type=int, default=1)
+    ap.add_argument("--near", default="")
     args = ap.parse_args()
     h = np.load(args.surface)
     contact = np.load(args.contact)
@@ -65,7 +71,11 @@ def main():
     op = Operator(n, args.workers)
 
     P, A, plain = free_set_operators(op, F)
-    extended = extended_preconditioner(op, F, P, [(32.0, 0.5, 0.05)])
+    terms = [(32.0, 0.5, 0.05, args.cells)]
+    if args.near:
+        sigma, weight = (float(v) for v in args.near.split(","))
+        terms.append((sigma, weight, 0.05, args.cells))
+    extended = extended_preconditioner(op, F, P, terms)
 
     edge = F & ~ndimage.binary_erosion(F, structure=np.ones((3, 3)))
     scale = np.where(edge, args.edge_scale, 1.0)
