@@ -38,8 +38,8 @@ pub struct SolveArgs {
     #[arg(long)]
     pub plain_cg: bool,
     /// Precondition with `P K⁻¹ P` alone, without the default's extension off the free set
-    /// by the smoothed gradient (the same solution in about 30 % more iterations on rough
-    /// surfaces; docs/BENCHMARKS.md).
+    /// by the smoothed gradient and its near term (the same solution in 1.6–1.8 times the
+    /// iterations on rough surfaces; docs/BENCHMARKS.md).
     #[arg(long, conflicts_with = "plain_cg")]
     pub no_extension: bool,
     /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.

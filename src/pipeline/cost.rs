@@ -121,19 +121,21 @@ impl Default for CostModel {
     /// Coefficients measured on the development machine (2 cores, AVX2) on 2026-11-25: the
     /// seconds per unit of work from a default-profile store (instances two at a time on the
     /// 2 cores, so wall time is about one core's CPU time; the contact stage's then scaled by
-    /// 3.64/3.67, the iteration's cost in FFT pairs of the current solver against the one
-    /// measured in that store, `make bench-iteration` at 1024², 1 thread, 2026-11-26); the
+    /// 3.64/3.67, the iteration's cost in FFT pairs of the solver of 2026-11-26 04:58 against
+    /// the one measured in that store, `make bench-iteration` at 1024², 1 thread, and by 0.92,
+    /// the current iteration's time against that solver's, interleaved `wearcoef solve` of
+    /// the paper spectrum's 1024² sweep on 1 thread, 0.91–0.95 over three rounds); the
     /// iterations per load and their growth with n from the paper's own spectrum (`SEEDS="3128
     /// 1 2 3 4 5 6 7 8" REALIZATIONS="9 4 2 1" make bench-iteration-growth BOXES="1 2 4 8"`,
-    /// 2026-11-26: means of 21.4, 26.9, 30.3 and 38.5 iterations per load at 1024², 2048²,
-    /// 4096² and 8192² over 9, 4, 2 and 1 realizations, fitted as 21.6 (n/1024)^0.271), which
-    /// dominates the paper campaign.
+    /// 2026-11-26, contact stage version 9: means of 18.3, 21.9, 24.2 and 30.2 iterations per
+    /// load at 1024², 2048², 4096² and 8192² over 9, 4, 2 and 1 realizations, fitted as 18.3
+    /// (n/1024)^0.231), which dominates the paper campaign.
     fn default() -> Self {
         Self {
             surface_per_n2logn: 5.8e-9,
-            contact_per_iteration_n2logn: 2.83e-9,
-            iterations_per_load_1024: 21.6,
-            iterations_exponent: 0.271,
+            contact_per_iteration_n2logn: 2.60e-9,
+            iterations_per_load_1024: 18.3,
+            iterations_exponent: 0.231,
             clusters_per_load_n2: 3.8e-9,
             families: BTreeMap::new(),
             per_instance: [
