@@ -39,6 +39,10 @@ Options:
   which at most a fraction X of the contact set left or entered it (the solver's near
   term: `--extend 32 --cell 8 --long 6 --long-weight 0.3 --long-cell 8 --settled-fraction
   0.002` is contact stage version 9's preconditioner);
+- `--unsettled-weight W`: with `--settled-fraction`, the second term with weight W (instead of
+  none) while the contact set has not settled;
+- `--first-damping D`: the first step of every load shortened to D times the
+  line search's;
 - `--cell C`, `--long-cell C`: the smoothing of the first or second term on cells of C × C
   nodes, as the solver does it (1, the default: a Gaussian on the fine grid);
 - `--first-on-contact K`: the first K iterations of a warm-started load act on the contact
@@ -208,6 +212,8 @@ def main():
     ap.add_argument("--settled-fraction", type=float, default=-1.0)
     ap.add_argument("--cell", type=int, default=1)
     ap.add_argument("--long-cell", type=int, default=1)
+    ap.add_argument("--unsettled-weight", type=float, default=0.0)
+    ap.add_argument("--first-damping", type=float, default=1.0)
     args = ap.parse_args()
     n = args.n
     h = np.load(args.surface)
@@ -274,6 +280,9 @@ def main():
                 terms = [(args.extend, args.gamma, args.dmin, args.cell)]
                 if use_long:
                     terms.append((args.long, args.long_weight, args.dmin_long, args.long_cell))
+                elif args.unsettled_weight > 0:
+                    terms.append((args.long, args.unsettled_weight, args.dmin_long,
+                                  args.long_cell))
                 z = extended_preconditioner(op, F, P, terms)(r)
             else:
                 z = P(conv(r, k_inv_hat))
@@ -288,6 +297,8 @@ def main():
             gz_old = gz
             kt = conv(t, k_hat)
             tau = np.sum(g * t) / np.sum(t * kt)
+            if it == 0 and p.sum() > 0:
+                tau *= args.first_damping
             p_new = np.maximum(p - tau * t, 0.0)
             left = int(np.sum(S & (p_new <= 0)))
             entered = int(np.sum(~S & (p_new > 0)))
