@@ -56,10 +56,11 @@ pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
     }
 
     /// Transpose a band of lines out: `dst[j·dst_stride + i] = src[i·src_stride + j]` for
-    /// `i < count`, `j < width` (≤ [`Self::GATHER`]), prefetching [`PREFETCH_ROWS`] source lines
-    /// ahead. The column pass gathers columns `kx0 ..` of the rows this way (`src` at
+    /// `i < count`, `j < width` (≤ [`Self::GATHER`]), prefetching [`PREFETCH_ROWS`] source
+    /// lines ahead. The column pass gathers columns `kx0 ..` of the rows this way (`src` at
     /// column `kx0`, stride `n/2 + 1`, `count = n`); the inverse row pass of a pair gathers
     /// rows `y0 ..` of the kx-major spectrum (`src` at `y0`, stride `n`, `count = n/2 + 1`).
+    /// A full band goes through [`Self::band_vector`] where it can.
     ///
     /// # Safety
     /// `src` must be valid for reads and `dst` for writes at every index above, the two
@@ -73,6 +74,14 @@ pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
         dst: *mut Complex<Self>,
         dst_stride: usize,
     ) {
+        // SAFETY: the caller's bounds; a gather only reads the lines.
+        if width == Self::GATHER
+            && unsafe {
+                Self::band_vector(src.cast_mut(), src_stride, count, dst, dst_stride, true)
+            }
+        {
+            return;
+        }
         // SAFETY: the caller's bounds.
         unsafe { gather_plain(src, src_stride, count, width, dst, dst_stride, 0) }
     }
@@ -91,8 +100,37 @@ pub trait Real: rustfft::FftNum + Default + sealed::Sealed {
         src: *const Complex<Self>,
         src_stride: usize,
     ) {
+        // SAFETY: the caller's bounds; a scatter only reads the band.
+        if width == Self::GATHER
+            && unsafe {
+                Self::band_vector(dst, dst_stride, count, src.cast_mut(), src_stride, false)
+            }
+        {
+            return;
+        }
         // SAFETY: the caller's bounds.
         unsafe { scatter_plain(dst, dst_stride, count, width, src, src_stride, 0) }
+    }
+
+    /// Move a full band ([`Self::GATHER`] values per line) between `count` lines
+    /// `line_stride` apart and the band's [`Self::GATHER`] lines `band_stride` apart, in
+    /// vector registers: out of the lines if `gather`, into them otherwise. Returns false,
+    /// having moved nothing, where the processor lacks the instructions (the default).
+    ///
+    /// # Safety
+    /// The bounds of [`Self::gather_lines`] (gather) or [`Self::scatter_lines`] (scatter);
+    /// only the destination side is written.
+    #[doc(hidden)]
+    unsafe fn band_vector(
+        lines: *mut Complex<Self>,
+        line_stride: usize,
+        count: usize,
+        band: *mut Complex<Self>,
+        band_stride: usize,
+        gather: bool,
+    ) -> bool {
+        let _ = (lines, line_stride, count, band, band_stride, gather);
+        false
     }
 }
 
@@ -170,43 +208,30 @@ impl Real for f64 {
         halfcomplex::tangle_inverse_plain(spectrum, twiddles)
     }
 
-    /// A band of four (one 64-byte line per source line) is moved two lines at a time in
-    /// 256-bit registers where the processor has AVX; the values moved are the same either
-    /// way.
-    unsafe fn gather_lines(
-        src: *const Complex64,
-        src_stride: usize,
+    /// A band of four (a 64-byte cache line of each line) is moved two lines at a time in 256-bit
+    /// registers where the processor has AVX; the values moved are the same either way.
+    unsafe fn band_vector(
+        lines: *mut Complex64,
+        line_stride: usize,
         count: usize,
-        width: usize,
-        dst: *mut Complex64,
-        dst_stride: usize,
-    ) {
+        band: *mut Complex64,
+        band_stride: usize,
+        gather: bool,
+    ) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
+        if std::is_x86_feature_detected!("avx") {
             // SAFETY: AVX is present (checked); the bounds are the caller's.
-            unsafe { gather4_avx(src, src_stride, count, dst, dst_stride) };
-            return;
+            unsafe {
+                if gather {
+                    gather4_avx(lines, line_stride, count, band, band_stride)
+                } else {
+                    scatter4_avx(lines, line_stride, count, band, band_stride)
+                }
+            };
+            return true;
         }
-        // SAFETY: the caller's bounds.
-        unsafe { gather_plain(src, src_stride, count, width, dst, dst_stride, 0) }
-    }
-
-    unsafe fn scatter_lines(
-        dst: *mut Complex64,
-        dst_stride: usize,
-        count: usize,
-        width: usize,
-        src: *const Complex64,
-        src_stride: usize,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
-            // SAFETY: AVX is present (checked); the bounds are the caller's.
-            unsafe { scatter4_avx(dst, dst_stride, count, src, src_stride) };
-            return;
-        }
-        // SAFETY: the caller's bounds.
-        unsafe { scatter_plain(dst, dst_stride, count, width, src, src_stride, 0) }
+        let _ = (lines, line_stride, count, band, band_stride, gather);
+        false
     }
 }
 
@@ -253,43 +278,24 @@ impl Real for f32 {
         u64::from(self.to_bits() << 1)
     }
 
-    /// A band of eight (one 64-byte line per source line) is moved four lines at a time in
-    /// 256-bit registers where the processor has AVX; the values moved are the same either
-    /// way.
-    unsafe fn gather_lines(
-        src: *const Complex<f32>,
-        src_stride: usize,
+    /// A band of eight (a 64-byte cache line of each line) is moved four lines at a time in 256-bit
+    /// registers where the processor has AVX; the values moved are the same either way.
+    unsafe fn band_vector(
+        lines: *mut Complex<f32>,
+        line_stride: usize,
         count: usize,
-        width: usize,
-        dst: *mut Complex<f32>,
-        dst_stride: usize,
-    ) {
+        band: *mut Complex<f32>,
+        band_stride: usize,
+        gather: bool,
+    ) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
+        if std::is_x86_feature_detected!("avx") {
             // SAFETY: AVX is present (checked); the bounds are the caller's.
-            unsafe { transpose8_avx_f32(src, src_stride, count, dst, dst_stride, true) };
-            return;
+            unsafe { transpose8_avx_f32(lines, line_stride, count, band, band_stride, gather) };
+            return true;
         }
-        // SAFETY: the caller's bounds.
-        unsafe { gather_plain(src, src_stride, count, width, dst, dst_stride, 0) }
-    }
-
-    unsafe fn scatter_lines(
-        dst: *mut Complex<f32>,
-        dst_stride: usize,
-        count: usize,
-        width: usize,
-        src: *const Complex<f32>,
-        src_stride: usize,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if width == Self::GATHER && std::is_x86_feature_detected!("avx") {
-            // SAFETY: AVX is present (checked); the bounds are the caller's.
-            unsafe { transpose8_avx_f32(src, src_stride, count, dst, dst_stride, false) };
-            return;
-        }
-        // SAFETY: the caller's bounds.
-        unsafe { scatter_plain(dst, dst_stride, count, width, src, src_stride, 0) }
+        let _ = (lines, line_stride, count, band, band_stride, gather);
+        false
     }
 }
 
@@ -435,24 +441,22 @@ unsafe fn scatter4_avx(
     unsafe { scatter_plain(dst, dst_stride, count, 4, src, src_stride, pairs) }
 }
 
-/// [`Real::gather_lines`] (`gather`) or [`Real::scatter_lines`] in f32 for a band of eight,
-/// four lines at a time: a complex f32 value is one 64-bit lane, so each 4 × 4 block of
-/// values is transposed in 256-bit registers by two rounds of lane shuffles (unpack within
-/// 128-bit halves, then exchange the halves); an incomplete last block by the plain loop.
-/// For a scatter, `src`/`src_stride` are the gathered band and `dst`/`dst_stride` the
-/// lines, as in [`Real::scatter_lines`]; the lines are always indexed by `i < count`.
+/// [`Real::band_vector`] in f32: a band of eight, four lines at a time. A complex f32 value
+/// is one 64-bit lane, so each 4 × 4 block of values is transposed in 256-bit registers by
+/// two rounds of lane shuffles (unpack within 128-bit halves, then exchange the halves); the
+/// transpose is its own inverse, so a gather and a scatter differ only in which side is
+/// loaded. An incomplete last block goes to the plain loop.
 ///
 /// # Safety
-/// AVX must be present; the bounds of [`Real::gather_lines`] (gather) or
-/// [`Real::scatter_lines`] (scatter).
+/// AVX must be present; the bounds of [`Real::band_vector`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 unsafe fn transpose8_avx_f32(
-    src: *const Complex<f32>,
-    src_stride: usize,
+    lines: *mut Complex<f32>,
+    line_stride: usize,
     count: usize,
-    dst: *mut Complex<f32>,
-    dst_stride: usize,
+    band: *mut Complex<f32>,
+    band_stride: usize,
     gather: bool,
 ) {
     use std::arch::x86_64::{
@@ -475,46 +479,32 @@ unsafe fn transpose8_avx_f32(
     }
     const W: usize = 8;
     let quads = count / 4 * 4;
-    // The lines (i) and the band (j): in a gather the lines are the source, in a scatter
-    // the destination. `line(i, h)` is the first of the four values h·4.. of line i,
-    // `band(j, i)` value i of band line j, both as f64 lanes.
-    let (lines, line_stride, band, band_stride) = if gather {
-        (src as *mut f64, src_stride, dst as *mut f64, dst_stride)
-    } else {
-        (dst as *mut f64, dst_stride, src as *mut f64, src_stride)
-    };
     for i in (0..quads).step_by(4) {
         if gather {
             for k in 0..4 {
-                prefetch_ahead(src, src_stride, count, W, i + k);
+                prefetch_ahead(lines, line_stride, count, W, i + k);
             }
         }
         for half in 0..2 {
-            // SAFETY: lines i..i + 4 < count and values half·4..half·4 + 4 < W of each, and
-            // band lines half·4.. + 4 < W at values i..i + 4 < count (the caller's bounds).
+            // Values half·4.. of lines i..i + 4, and values i..i + 4 of band lines half·4..,
+            // as f64 lanes.
+            let on_lines: [*mut f64; 4] = std::array::from_fn(|k| {
+                lines.wrapping_add((i + k) * line_stride + half * 4) as *mut f64
+            });
+            let on_band: [*mut f64; 4] = std::array::from_fn(|j| {
+                band.wrapping_add((half * 4 + j) * band_stride + i) as *mut f64
+            });
+            let (from, to) = if gather {
+                (on_lines, on_band)
+            } else {
+                (on_band, on_lines)
+            };
+            // SAFETY: lines i..i + 4 < count at values < W, band lines < W at values
+            // i..i + 4 < count (the caller's bounds); only the destination side is written.
             unsafe {
-                let line = |k: usize| lines.add((i + k) * line_stride + half * 4);
-                let band_at = |j: usize| band.add((half * 4 + j) * band_stride + i);
-                if gather {
-                    let t = block([
-                        _mm256_loadu_pd(line(0)),
-                        _mm256_loadu_pd(line(1)),
-                        _mm256_loadu_pd(line(2)),
-                        _mm256_loadu_pd(line(3)),
-                    ]);
-                    for (j, v) in t.into_iter().enumerate() {
-                        _mm256_storeu_pd(band_at(j), v);
-                    }
-                } else {
-                    let t = block([
-                        _mm256_loadu_pd(band_at(0)),
-                        _mm256_loadu_pd(band_at(1)),
-                        _mm256_loadu_pd(band_at(2)),
-                        _mm256_loadu_pd(band_at(3)),
-                    ]);
-                    for (k, v) in t.into_iter().enumerate() {
-                        _mm256_storeu_pd(line(k), v);
-                    }
+                let t = block(from.map(|p| _mm256_loadu_pd(p)));
+                for (p, v) in to.into_iter().zip(t) {
+                    _mm256_storeu_pd(p, v);
                 }
             }
         }
@@ -522,9 +512,9 @@ unsafe fn transpose8_avx_f32(
     // SAFETY: the caller's bounds.
     unsafe {
         if gather {
-            gather_plain(src, src_stride, count, W, dst, dst_stride, quads)
+            gather_plain(lines, line_stride, count, W, band, band_stride, quads)
         } else {
-            scatter_plain(dst, dst_stride, count, W, src, src_stride, quads)
+            scatter_plain(lines, line_stride, count, W, band, band_stride, quads)
         }
     }
 }
