@@ -43,6 +43,10 @@ Options:
   none) while the contact set has not settled;
 - `--first-damping D`: the first step of every load shortened to D times the
   line search's;
+- `--load-offset`: after an iteration that changed more than 6 nodes of the contact set,
+  the load is restored by a uniform offset, `p ← max(p + c, 0)` on F with `c ≤ 0` (the
+  nearest point of `{p ≥ 0, mean p = p̄}`), instead of rescaling (contact stage version 10:
+  version 9's options above and `--load-offset`);
 - `--cell C`, `--long-cell C`: the smoothing of the first or second term on cells of C × C
   nodes, as the solver does it (1, the default: a Gaussian on the fine grid);
 - `--first-on-contact K`: the first K iterations of a warm-started load act on the contact
@@ -147,6 +151,18 @@ def extended_preconditioner(op, F, P, terms):
     return M
 
 
+def offset_to_load(x, F, load):
+    """max(x + c, 0) on F (0 elsewhere) with the c for which it sums to `load`, from the
+    values on F sorted in decreasing order (the largest k with x_(k) + c_k > 0)."""
+    values = x[F]
+    ordered = np.sort(values)[::-1]
+    c_k = (load - np.cumsum(ordered)) / np.arange(1, len(ordered) + 1)
+    c = c_k[np.nonzero(ordered + c_k > 0)[0].max()]
+    out = np.zeros_like(x)
+    out[F] = np.maximum(values + c, 0.0)
+    return out
+
+
 def coarse_space(op, F, block=BLOCK):
     """Deflation space of the free set F: indicators of the block × block blocks on F (Z, one
     row per block that F touches), A Z for A = P K P (P: restrict to F, centre; one
@@ -214,6 +230,7 @@ def main():
     ap.add_argument("--long-cell", type=int, default=1)
     ap.add_argument("--unsettled-weight", type=float, default=0.0)
     ap.add_argument("--first-damping", type=float, default=1.0)
+    ap.add_argument("--load-offset", action="store_true")
     args = ap.parse_args()
     n = args.n
     h = np.load(args.surface)
@@ -308,7 +325,10 @@ def main():
                 print(f"  iteration {it:3d}: error {error:.2e}, interpenetrating "
                       f"{int(F.sum() - S.sum())}, left {left}, entered {entered}, "
                       f"restart {restart}, beta {beta:.3f}", flush=True)
-            p = p_new * (target / p_new.mean())
+            if args.load_offset and changed > 6:
+                p = offset_to_load(p - tau * t, F, target * n * n)
+            else:
+                p = p_new * (target / p_new.mean())
             u = conv(p, k_hat)
         raise RuntimeError("no convergence in 20000 iterations")
 

@@ -31,6 +31,46 @@ impl Solver<'_> {
         self.lane_sums.iter().map(|p| p[0]).sum()
     }
 
+    /// `Σ max(p + c, 0)` and the number of nodes where `p + c > 0`, reduced over the fixed
+    /// blocks.
+    fn shifted_sum(&mut self, c: f64) -> (f64, f64) {
+        self.pressure
+            .par_chunks(self.chunk)
+            .zip(self.offset_acc.par_iter_mut())
+            .for_each(|(pc, [sums, counts])| {
+                *sums = [0.0; LANES];
+                *counts = [0.0; LANES];
+                dispatch_offset_sums(c, pc, sums, counts);
+            });
+        self.offset_acc
+            .iter()
+            .fold((0.0, 0.0), |(s, k), [sums, counts]| {
+                (s + sums.iter().sum::<f64>(), k + counts.iter().sum::<f64>())
+            })
+    }
+
+    /// The offset `c ≤ 0` for which `Σ max(p + c, 0)` is `load`, for pressures summing to
+    /// `total > load` on `count` positive nodes, and that sum (`load` up to rounding):
+    /// Newton's method on the convex, piecewise linear `Σ max(p + c, 0)`, which from
+    /// `c = 0` approaches the root from above and is exact once a step keeps the same nodes
+    /// positive (one or two passes over `p` on the paper's sweeps). `p` is not changed.
+    pub(super) fn load_offset(&mut self, load: f64, total: f64, count: f64) -> (f64, f64) {
+        let (mut c, mut sum, mut count) = (0.0f64, total, count);
+        for _ in 0..64 {
+            if sum <= load || count <= 0.0 {
+                break;
+            }
+            let next = c - (sum - load) / count;
+            let (next_sum, next_count) = self.shifted_sum(next);
+            let same_piece = next_count == count;
+            (c, sum, count) = (next, next_sum, next_count);
+            if same_piece {
+                break;
+            }
+        }
+        (c, sum)
+    }
+
     /// `u ← s (u + K Δ)` for the changed nodes gathered in `self.sparse` (direct summation,
     /// row by row), `p ← s p`, and the gradient statistics ([`gradient_row`]) in the same pass.
     pub(super) fn sparse_update(&mut self, scale: f64, shift: f64) -> GradientStats {
@@ -77,14 +117,43 @@ impl Solver<'_> {
             |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
             &mut self.ws,
         );
-        self.finish_deflection(false, scale, shift)
+        self.finish_deflection(false, None, scale, shift)
     }
 
-    /// Second half of [`Self::exact_deflection`] (`add = false`: `u ← s K x`) and of
-    /// [`Self::fft_correction`] (`add = true`: `u ← s (u + K x)`), with `p ← s p` and the
+    /// [`Self::exact_deflection`] of the offset pressure: `p ← s max(p + c, 0)`,
+    /// `u ← K p`, the offset applied as the rows enter the forward transform and again as
+    /// they are finished (no pass of its own).
+    pub(super) fn offset_deflection(
+        &mut self,
+        offset: f64,
+        scale: f64,
+        shift: f64,
+    ) -> GradientStats {
+        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        self.op.start_rows(
+            self.pressure.par_chunks(chunk),
+            |rows: &mut &[f64], r, buf| {
+                for (b, &p) in buf.iter_mut().zip(&rows[r * n..(r + 1) * n]) {
+                    *b = (p + offset).max(0.0);
+                }
+            },
+            &mut self.ws,
+        );
+        self.finish_deflection(false, Some(offset), scale, shift)
+    }
+
+    /// Second half of [`Self::exact_deflection`] (`add = false`: `u ← s K x`; with an
+    /// `offset`, first `p ← max(p + offset, 0)`) and of [`Self::fft_correction`]
+    /// (`add = true`: `u ← s (u + K x)`), with `p ← s p` and the
     /// gradient statistics ([`gradient_row`]) gathered as the rows of `K x` come out of the
     /// inverse FFT started by `start_rows`.
-    pub(super) fn finish_deflection(&mut self, add: bool, scale: f64, shift: f64) -> GradientStats {
+    pub(super) fn finish_deflection(
+        &mut self,
+        add: bool,
+        offset: Option<f64>,
+        scale: f64,
+        shift: f64,
+    ) -> GradientStats {
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         let blocks = self
             .pressure
@@ -106,6 +175,9 @@ impl Solver<'_> {
                     }
                     dispatch_gradient(shift, Some(scale), p, w, h, &mut acc.grad);
                 } else {
+                    if let Some(c) = offset {
+                        p.iter_mut().for_each(|p| *p = (*p + c).max(0.0));
+                    }
                     dispatch_exact(scale, p, w, kx, h);
                     dispatch_gradient(shift, None, p, w, h, &mut acc.grad);
                 }
@@ -269,7 +341,7 @@ impl Solver<'_> {
             },
             &mut self.ws,
         );
-        self.finish_deflection(true, scale, shift)
+        self.finish_deflection(true, None, scale, shift)
     }
 
     /// Record `min w`, the rigid-body level of the gap `w − min w` ([`Solver::gap`]; `w = u − h`

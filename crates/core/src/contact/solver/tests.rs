@@ -127,3 +127,58 @@ pub(super) mod support {
         }
     }
 }
+
+/// The load offset `c` of [`Solver::load_offset`] (Newton's method from above) is the one a
+/// sort gives: with the values in decreasing order `x_(1) ≥ x_(2) ≥ …`, the largest `k` for
+/// which `c_k = (load − Σ_{j ≤ k} x_(j)) / k` leaves `x_(k) + c_k > 0`. Random pressures
+/// with zeros and ties, loads that keep most nodes or leave one; the offset pressure sums to
+/// the load.
+#[test]
+fn load_offset_matches_a_sorted_projection() {
+    let n = 32;
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let heights = vec![0.0; n * n];
+    let mut next = support::sequence(11);
+    for (case, keep) in [0.999, 0.9, 0.5, 0.1, 1e-3].into_iter().enumerate() {
+        let mut solver = Solver::new(&op, &heights).unwrap();
+        for p in solver.pressure.iter_mut() {
+            let v = next();
+            // A third of the nodes at zero, some ties (values on a coarse lattice).
+            *p = if v < -1.0 / 3.0 {
+                0.0
+            } else {
+                ((v + 1.0) * 32.0).floor() / 16.0
+            };
+        }
+        let total: f64 = solver.pressure.iter().sum();
+        let count = solver.pressure.iter().filter(|&&p| p > 0.0).count() as f64;
+        let load = keep * total;
+        let (c, sum) = solver.load_offset(load, total, count);
+        let mut sorted: Vec<f64> = solver
+            .pressure
+            .iter()
+            .copied()
+            .filter(|&p| p > 0.0)
+            .collect();
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        let (mut prefix, mut expected) = (0.0, 0.0);
+        for (k, &x) in sorted.iter().enumerate() {
+            prefix += x;
+            let ck = (load - prefix) / (k + 1) as f64;
+            if x + ck > 0.0 {
+                expected = ck;
+            }
+        }
+        assert!(c <= 0.0, "case {case}: offset {c}");
+        assert!(
+            (c - expected).abs() <= 1e-12 * sorted[0],
+            "case {case}: offset {c}, sorted {expected}"
+        );
+        let recomputed: f64 = solver.pressure.iter().map(|p| (p + c).max(0.0)).sum();
+        assert!(
+            (sum / load - 1.0).abs() <= 1e-12,
+            "case {case}: {sum} vs {load}"
+        );
+        assert!((recomputed / load - 1.0).abs() <= 1e-12, "case {case}");
+    }
+}
