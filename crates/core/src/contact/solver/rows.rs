@@ -197,31 +197,6 @@ avx2_dispatch! {
 }
 
 avx2_dispatch! {
-    /// Adds `max(p + c, 0)` and `[p + c > 0]` over `p` to the lane sums `sums` and `counts`
-    /// (the load of an offset pressure, [`super::Solver::load_offset`]).
-    pub(super) fn dispatch_offset_sums(
-        c: f64,
-        p: &[f64],
-        sums: &mut [f64; LANES],
-        counts: &mut [f64; LANES],
-    ) {
-        let mut blocks = p.chunks_exact(LANES);
-        for x in &mut blocks {
-            for k in 0..LANES {
-                let v = x[k] + c;
-                sums[k] += if v > 0.0 { v } else { 0.0 };
-                counts[k] += if v > 0.0 { 1.0 } else { 0.0 };
-            }
-        }
-        for (k, &x) in blocks.remainder().iter().enumerate() {
-            let v = x + c;
-            sums[k] += if v > 0.0 { v } else { 0.0 };
-            counts[k] += if v > 0.0 { 1.0 } else { 0.0 };
-        }
-    }
-}
-
-avx2_dispatch! {
     /// [`exact_row`] with AVX2 where available.
     pub(super) fn dispatch_exact = exact_row(scale: f64, p: &mut [f64], w: &mut [f64], kx: &[f64], h: &[f64]);
 }
