@@ -43,7 +43,7 @@ pub struct SolveArgs {
     #[arg(long, conflicts_with = "plain_cg")]
     pub no_extension: bool,
     /// Restore the load after each projection by rescaling every pressure instead of the
-    /// default's uniform shift of the contact pressures (the same solution in about 1.1
+    /// default's uniform offset of the contact pressures (the same solution in about 1.1
     /// times the iterations; docs/BENCHMARKS.md).
     #[arg(long, conflicts_with = "plain_cg")]
     pub scale_to_load: bool,
@@ -397,7 +397,7 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         max_iterations: args.max_iter,
         preconditioned: !args.plain_cg,
         extension: (!args.no_extension).then(wearcoef::contact::solver::Extension::default),
-        shift_to_load: !args.scale_to_load,
+        offset_to_load: !args.scale_to_load,
         ..SolverConfig::default()
     };
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();

@@ -563,7 +563,7 @@ fn non_convergence_is_reported_not_hidden() {
                 stall_window: 1000,
                 preconditioned: false,
                 extension: None,
-                shift_to_load: false,
+                offset_to_load: false,
             },
         )
         .unwrap();
@@ -703,7 +703,7 @@ fn load_offset_reaches_the_rescaled_solution_in_fewer_iterations() {
     let h = rough_surface(n, 128.0, 4.0, 5);
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let scaled = SolverConfig {
-        shift_to_load: false,
+        offset_to_load: false,
         ..cfg(1e-12)
     };
     let (mut shift, mut scale) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());

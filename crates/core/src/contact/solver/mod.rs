@@ -41,9 +41,9 @@
 //! when it is switched on or off). Together 38–44 % fewer iterations than `P K⁻¹ P` alone
 //! on the paper spectrum's 30-load sweeps at 1024²–4096² (docs/BENCHMARKS.md).
 //!
-//! **Load** (the default, [`SolverConfig::shift_to_load`]): after the projection, the load
+//! **Load** (the default, [`SolverConfig::offset_to_load`]): after the projection, the load
 //! is restored by a uniform offset of the pressures, `p ← max(p + c, 0)` (`c ≤ 0`, found by
-//! Newton's method in one or two passes), the nearest point of `{p ≥ 0, mean p = p̄}`,
+//! Newton's method, mostly in one to three passes), the nearest point of `{p ≥ 0, mean p = p̄}`,
 //! wherever the step changed more than [`MAX_SPARSE`] nodes of the contact set (`u = K p`
 //! is then recomputed, one convolution, as a correction of that many changes needs); where
 //! it changed fewer, by the rescaling `p ← s p` that keeps `p` and `u` linear. Rescaling
@@ -151,15 +151,15 @@ pub struct SolverConfig {
     /// contact fraction is large, at a pass and two coarse smoothings per iteration. On
     /// (`Extension::default()`) by default; `None` gives `P K⁻¹ P` alone.
     pub extension: Option<Extension>,
-    /// Restore the load after the projection `p ← max(p − τ t, 0)` by a uniform shift of the
-    /// pressures, `p ← max(p + c, 0)` with `c ≤ 0` such that the mean is `p̄` (the nearest
-    /// point of `{p ≥ 0, mean p = p̄}`), instead of rescaling them by the same factor; used
-    /// (when `preconditioned`) in the iterations that change more than [`MAX_SPARSE`]
-    /// nodes of the contact set, which convolve anyway. Rescaling multiplies every
-    /// pressure of the box, the largest most, to give back the load the clipped nodes
-    /// took: on a moving contact set that perturbs the whole box where the shift mostly
-    /// moves the nodes about to leave. The default (`true`); `false` rescales.
-    pub shift_to_load: bool,
+    /// Restore the load after the projection `p ← max(p − τ t, 0)` by a uniform offset of
+    /// the pressures, `p ← max(p + c, 0)` with `c ≤ 0` such that the mean is `p̄` (the
+    /// nearest point of `{p ≥ 0, mean p = p̄}`), instead of rescaling them by one factor;
+    /// used (when `preconditioned`) in the iterations that change more than [`MAX_SPARSE`]
+    /// nodes of the contact set, which convolve anyway. Rescaling takes the load the
+    /// clipped nodes gave up from every pressure of the box, the largest most, which on a
+    /// moving contact set perturbs the whole box; the offset takes the same amount from
+    /// each. The default (`true`); `false` rescales.
+    pub offset_to_load: bool,
 }
 
 impl Default for SolverConfig {
@@ -170,7 +170,7 @@ impl Default for SolverConfig {
             stall_window: 1000,
             preconditioned: true,
             extension: Some(Extension::default()),
-            shift_to_load: true,
+            offset_to_load: true,
         }
     }
 }
@@ -540,7 +540,7 @@ impl<'a> Solver<'a> {
             }
             let load = target * len as f64;
             stats = if cfg.preconditioned
-                && cfg.shift_to_load
+                && cfg.offset_to_load
                 && totals.changed > MAX_SPARSE
                 && total > load
             {
