@@ -656,6 +656,40 @@ fn area_load_slope_at_small_loads() {
     assert!(mean[0] > mean[3], "{mean:?}");
 }
 
+/// Two warm-started sweeps over the loads `loads` of the heights `h`, one per setting, at
+/// tolerance 1e-12: at every load both converge with the same contact pixels and pressures
+/// within 1e-6 of each other, and the first setting's pressure carries the load exactly and
+/// passes the complementarity recomputed independently. Returns the two sweeps' iterations.
+fn compare_sweeps(
+    op: &ElasticOperator,
+    h: &[f64],
+    first: &SolverConfig,
+    second: &SolverConfig,
+    loads: &[f64],
+) -> (usize, usize) {
+    let (mut a, mut b) = (Solver::new(op, h).unwrap(), Solver::new(op, h).unwrap());
+    let (mut iterations_a, mut iterations_b) = (0, 0);
+    for &w in loads {
+        let ra = a.solve(w, first).unwrap();
+        let rb = b.solve(w, second).unwrap();
+        assert!(ra.converged() && rb.converged(), "W/W0 {w}: {ra:?} {rb:?}");
+        assert_eq!(a.contact_count(), b.contact_count(), "W/W0 {w}");
+        let d = relative_l2(a.pressure(), b.pressure());
+        assert!(d <= 1e-6, "W/W0 {w}: pressures differ by {d}");
+        let p = a.pressure();
+        let mean_p = p.iter().sum::<f64>() / p.len() as f64;
+        assert!((mean_p / w - 1.0).abs() <= 1e-12, "W/W0 {w}: load {mean_p}");
+        let err = independent_error(op, h, p);
+        assert!(
+            err <= 1e-12 * 1.01,
+            "W/W0 {w}: complementarity recomputed {err}"
+        );
+        iterations_a += ra.iterations;
+        iterations_b += rb.iterations;
+    }
+    (iterations_a, iterations_b)
+}
+
 /// The extension's near term (on once the contact set has settled) is what makes the
 /// default take fewer iterations than the long term alone on a warm-started sweep over a
 /// rough surface (measured: 149 against 176 at n = 128 through W/W0 = 0.01 … 0.1), with
@@ -673,18 +707,13 @@ fn near_term_saves_iterations_on_a_settled_contact_set() {
         }),
         ..cfg(1e-12)
     };
-    let (mut with, mut without) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());
-    let (mut iterations_with, mut iterations_without) = (0, 0);
-    for w in [0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.1] {
-        let a = with.solve(w, &cfg(1e-12)).unwrap();
-        let b = without.solve(w, &long_only).unwrap();
-        assert!(a.converged() && b.converged(), "{a:?} {b:?}");
-        assert_eq!(with.contact_count(), without.contact_count(), "W/W0 {w}");
-        let d = relative_l2(with.pressure(), without.pressure());
-        assert!(d <= 1e-6, "W/W0 {w}: pressures differ by {d}");
-        iterations_with += a.iterations;
-        iterations_without += b.iterations;
-    }
+    let (iterations_with, iterations_without) = compare_sweeps(
+        &op,
+        &h,
+        &cfg(1e-12),
+        &long_only,
+        &[0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.1],
+    );
     assert!(
         (iterations_with as f64) < 0.95 * iterations_without as f64,
         "{iterations_with} iterations with the near term, {iterations_without} without"
@@ -706,26 +735,16 @@ fn load_offset_reaches_the_rescaled_solution_in_fewer_iterations() {
         offset_to_load: false,
         ..cfg(1e-12)
     };
-    let (mut shift, mut scale) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());
-    let (mut iterations_shift, mut iterations_scale) = (0, 0);
-    for w in [0.01, 0.03, 0.06, 0.1, 0.15] {
-        let a = shift.solve(w, &cfg(1e-12)).unwrap();
-        let b = scale.solve(w, &scaled).unwrap();
-        assert!(a.converged() && b.converged(), "{a:?} {b:?}");
-        assert_eq!(shift.contact_count(), scale.contact_count(), "W/W0 {w}");
-        let d = relative_l2(shift.pressure(), scale.pressure());
-        assert!(d <= 1e-6, "W/W0 {w}: pressures differ by {d}");
-        let p = shift.pressure();
-        let mean_p = p.iter().sum::<f64>() / p.len() as f64;
-        assert!((mean_p / w - 1.0).abs() <= 1e-12, "load {mean_p} vs {w}");
-        let err = independent_error(&op, &h, p);
-        assert!(err <= 1e-12 * 1.01, "complementarity recomputed: {err}");
-        iterations_shift += a.iterations;
-        iterations_scale += b.iterations;
-    }
+    let (iterations_offset, iterations_scale) = compare_sweeps(
+        &op,
+        &h,
+        &cfg(1e-12),
+        &scaled,
+        &[0.01, 0.03, 0.06, 0.1, 0.15],
+    );
     assert!(
-        (iterations_shift as f64) < 0.95 * iterations_scale as f64,
-        "{iterations_shift} iterations with the offset, {iterations_scale} rescaling"
+        (iterations_offset as f64) < 0.95 * iterations_scale as f64,
+        "{iterations_offset} iterations with the offset, {iterations_scale} rescaling"
     );
 }
 
@@ -750,24 +769,7 @@ fn extended_preconditioner_reaches_the_same_solution() {
             extension: None,
             ..cfg(1e-12)
         };
-        let (mut plain, mut ext) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());
-        for w in [0.01, 0.05, 0.1, 0.2] {
-            let a = plain.solve(w, &alone).unwrap();
-            let b = ext.solve(w, &extended).unwrap();
-            assert!(a.converged() && b.converged(), "{a:?} {b:?}");
-            assert_eq!(
-                plain.contact_count(),
-                ext.contact_count(),
-                "n {n}, W/W0 {w}"
-            );
-            let d = relative_l2(ext.pressure(), plain.pressure());
-            assert!(d <= 1e-6, "n {n}, W/W0 {w}: pressures differ by {d}");
-            let p = ext.pressure();
-            let mean_p = p.iter().sum::<f64>() / p.len() as f64;
-            assert!((mean_p / w - 1.0).abs() <= 1e-12, "load {mean_p} vs {w}");
-            let err = independent_error(&op, &h, p);
-            assert!(err <= 1e-12 * 1.01, "complementarity recomputed: {err}");
-        }
+        compare_sweeps(&op, &h, &extended, &alone, &[0.01, 0.05, 0.1, 0.2]);
         // From a uniform start in full contact F is every node, E = 1: the exact inverse
         // and the iterations of P K⁻¹ P alone.
         let full_default = Solver::new(&op, &h)
