@@ -47,6 +47,11 @@ pub struct SolveArgs {
     /// times the iterations; docs/BENCHMARKS.md).
     #[arg(long, conflicts_with = "plain_cg")]
     pub scale_to_load: bool,
+    /// Start each load from the last solution scaled to it, instead of the default's
+    /// extrapolation from the last two (the same solution in about 1.1 times the
+    /// iterations; docs/BENCHMARKS.md).
+    #[arg(long)]
+    pub scale_start: bool,
     /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.
     #[arg(long)]
     pub pressure_out: Option<PathBuf>,
@@ -398,6 +403,7 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         preconditioned: !args.plain_cg,
         extension: (!args.no_extension).then(wearcoef::contact::solver::Extension::default),
         offset_to_load: !args.scale_to_load,
+        extrapolate_start: !args.scale_start,
         ..SolverConfig::default()
     };
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();

@@ -92,6 +92,7 @@
 //!   `max_iterations` reached: `MaxIterations`. Neither is ever a result that looks valid.
 
 mod extension;
+mod history;
 mod passes;
 mod precond;
 mod report;
@@ -160,6 +161,11 @@ pub struct SolverConfig {
     /// moving contact set perturbs the whole box; the offset takes the same amount from
     /// each. The default (`true`); `false` rescales.
     pub offset_to_load: bool,
+    /// Start each load of a sweep from the secant through the last two solutions
+    /// (extrapolated linearly in the load, clipped at 0; solver/history.rs) instead of the last
+    /// one scaled: about 10 % fewer iterations on rough surfaces, for 0.25 n² doubles and
+    /// one convolution per load. The default (`true`).
+    pub extrapolate_start: bool,
 }
 
 impl Default for SolverConfig {
@@ -171,6 +177,7 @@ impl Default for SolverConfig {
             preconditioned: true,
             extension: Some(Extension::default()),
             offset_to_load: true,
+            extrapolate_start: true,
         }
     }
 }
@@ -232,6 +239,10 @@ pub struct Solver<'a> {
     /// The coarse-grid state of the preconditioner's extension, when it is on.
     coarse: Option<extension::Coarse>,
     has_solution: bool,
+    /// The mean pressure of the last solution (when `has_solution`).
+    solved_mean: f64,
+    /// The solution before the last, for the extrapolated start.
+    history: history::History,
     /// Whether `separation` is `K p − h` for the current `pressure`, computed exactly (after
     /// a converged solve; not after [`Self::set_start`]).
     separation_exact: bool,
@@ -240,7 +251,8 @@ pub struct Solver<'a> {
 impl<'a> Solver<'a> {
     /// Check the surface and allocate every buffer: 4 n² doubles (the transform's rows, `p`,
     /// `w`, `t`), n²/8 for the lists of changed nodes, and n²/2 more at the first
-    /// preconditioned solve (`z`, single precision); besides the heights and the operator's
+    /// preconditioned solve (`z`, single precision), n²/4 at a sweep's second load (the
+    /// solution before the last, bfloat16); besides the heights and the operator's
     /// kernel (n²/2).
     pub fn new(op: &'a ElasticOperator, heights: &'a [f64]) -> Result<Self, ContactError> {
         let n = op.grid().n();
@@ -291,6 +303,8 @@ impl<'a> Solver<'a> {
             preconditioned: Vec::new(),
             coarse: None,
             has_solution: false,
+            solved_mean: 0.0,
+            history: history::History::new(),
             separation_exact: false,
         })
     }
@@ -345,13 +359,15 @@ impl<'a> Solver<'a> {
             ));
         }
         self.pressure.copy_from_slice(pressure);
+        self.history.forget();
         self.has_solution = true;
         self.separation_exact = false;
         Ok(())
     }
 
     /// Solve for the mean pressure `mean_pressure` (≥ 0), warm-starting from the previous
-    /// solution scaled to the new load if there is one.
+    /// solutions if there are any: extrapolated from the last two
+    /// ([`SolverConfig::extrapolate_start`]) or the last one, scaled to the new load.
     pub fn solve(
         &mut self,
         mean_pressure: f64,
@@ -389,6 +405,16 @@ impl<'a> Solver<'a> {
             self.uniform_solution(target);
             report.error_history.push(0.0);
             return Ok(report);
+        }
+        if cfg.extrapolate_start && self.has_solution && self.separation_exact {
+            if self
+                .history
+                .advance(&mut self.pressure, self.solved_mean, target)
+            {
+                self.separation_exact = false;
+            }
+        } else {
+            self.history.forget();
         }
         let mut stats = self.start(target, &mut report);
         self.has_solution = false;
@@ -565,6 +591,7 @@ impl<'a> Solver<'a> {
 
         self.finish_gap();
         self.has_solution = report.status == Status::Converged;
+        self.solved_mean = target;
         // A converged state was confirmed by an exact deflection (or is the flat or zero
         // solution, `w = −h`).
         self.separation_exact = self.has_solution;
@@ -601,6 +628,7 @@ impl Solver<'_> {
             .for_each(|(w, &h)| *w = -h);
         self.finish_gap();
         self.has_solution = target > 0.0;
+        self.solved_mean = target;
         self.separation_exact = true;
     }
 
