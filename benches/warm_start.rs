@@ -2,9 +2,11 @@
 //! scaled or extrapolated, measured. The 30-load sweep of
 //! `make bench-peers` (H = 0.8, λ_l = n/4, λ_s = 8 px, W/W0 log-spaced in [0.001, 0.06],
 //! tolerance 1e-8) is solved with four starts for each load:
-//! - `scaled`: the previous solution scaled to the new load (what `Solver::solve` does);
+//! - `scaled`: the previous solution scaled to the new load
+//!   (`SolverConfig::extrapolate_start` off);
 //! - `cold`: uniform pressure (a new solver per load);
-//! - `linear`: `p_k + r (p_k − p_{k−1})` clipped at 0, `r = (W − W_k)/(W_k − W_{k−1})`;
+//! - `linear`: `p_k + r (p_k − p_{k−1})` clipped at 0, `r = (W − W_k)/(W_k − W_{k−1})`
+//!   (what `Solver::solve` does by default, `p_{k−1}` kept in bfloat16);
 //! - `geometric`: per node `p_k (p_k/p_{k−1})^r` with `r = ln(W/W_k)/ln(W_k/W_{k−1})`
 //!   where both are positive, `p_k W/W_k` elsewhere (a power law in the load per node);
 //! - `nested`: the same load solved first on the grid of n/2 (the heights at every other
@@ -48,9 +50,9 @@ impl Start {
 
     fn name(self) -> &'static str {
         match self {
-            Start::Scaled => "scaled (default)",
+            Start::Scaled => "scaled",
             Start::Cold => "cold (uniform)",
-            Start::Linear => "linear extrapolation",
+            Start::Linear => "linear extrapolation (default)",
             Start::Geometric => "geometric extrapolation",
             Start::Nested => "nested (n/2 first)",
         }
@@ -68,8 +70,11 @@ struct Sweep {
 }
 
 fn sweep(op: &ElasticOperator, heights: &[f64], means: &[f64], start: Start) -> Sweep {
+    // The solver's own start extrapolates; every other start is set from outside (which
+    // the solver then scales to the load) or scaled.
     let cfg = SolverConfig {
         tolerance: 1e-8,
+        extrapolate_start: start == Start::Linear,
         ..SolverConfig::default()
     };
     let mut solver = Solver::new(op, heights).expect("finite heights");
@@ -93,27 +98,20 @@ fn sweep(op: &ElasticOperator, heights: &[f64], means: &[f64], start: Start) -> 
     let mut last_load = 0.0;
     for &load in means {
         let begin = Instant::now();
-        let extrapolate = matches!(start, Start::Linear | Start::Geometric);
+        let extrapolate = start == Start::Geometric;
         if start == Start::Cold {
             solver = Solver::new(op, heights).expect("finite heights");
         } else if extrapolate && last_load > 0.0 {
             let mut made = false;
             if let Some((prev_load, prev)) = &previous {
                 let p = solver.pressure();
-                if start == Start::Linear {
-                    let r = (load - last_load) / (last_load - prev_load);
-                    for ((g, &pk), &pj) in guess.iter_mut().zip(p).zip(prev) {
-                        *g = (pk + r * (pk - pj)).max(0.0);
-                    }
-                } else {
-                    let r = (load / last_load).ln() / (last_load / prev_load).ln();
-                    for ((g, &pk), &pj) in guess.iter_mut().zip(p).zip(prev) {
-                        *g = if pk > 0.0 && pj > 0.0 {
-                            pk * (pk / pj).powf(r)
-                        } else {
-                            pk * load / last_load
-                        };
-                    }
+                let r = (load / last_load).ln() / (last_load / prev_load).ln();
+                for ((g, &pk), &pj) in guess.iter_mut().zip(p).zip(prev) {
+                    *g = if pk > 0.0 && pj > 0.0 {
+                        pk * (pk / pj).powf(r)
+                    } else {
+                        pk * load / last_load
+                    };
                 }
                 made = guess.iter().any(|&g| g > 0.0);
             }

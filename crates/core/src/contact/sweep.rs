@@ -1,5 +1,6 @@
 //! Load sweeps: one surface, a list of loads W/W0 solved in the order given, each step
-//! warm-started from the previous solution scaled to the new load.
+//! warm-started from the previous solutions (extrapolated linearly in the load from the last
+//! two, the first warm step scaled from the last one).
 
 use super::elastic::ElasticOperator;
 use super::solver::{ContactError, SolveReport, Solver, SolverConfig};

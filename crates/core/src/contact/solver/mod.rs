@@ -53,8 +53,10 @@
 //! (docs/BENCHMARKS.md).
 //!
 //! **Cost.** One convolution (`K t`) per iteration (plus `K⁻¹ P g` when preconditioned).
-//! A sweep's warm start scales the previous converged state, `p` and `K p` alike
-//! (`K (s p) = s K p`), in one pass without a convolution.
+//! A sweep's warm start extrapolates the last two converged states linearly in the load
+//! ([`SolverConfig::extrapolate_start`], one convolution for `K p`); the first warm load, or
+//! with it off, scales the previous state, `p` and `K p` alike (`K (s p) = s K p`), in one
+//! pass without a convolution.
 //! The deflection is updated by linearity, `u ← s (u − τ K t + K Δ)` (stored as `w = u − h`,
 //! so that the passes of an iteration read the heights only when the load is rescaled), where
 //! `Δ` is the departure of the projected pressure from the linear step at the nodes that left
@@ -198,8 +200,8 @@ pub enum ContactError {
 }
 
 /// A solver bound to one operator and one surface; it keeps its fields between solves so
-/// that a load sweep warm-starts each step from the previous solution (scaled to the new
-/// load).
+/// that a load sweep warm-starts each step from the previous solutions (extrapolated to the
+/// new load, or scaled to it).
 pub struct Solver<'a> {
     op: &'a ElasticOperator,
     heights: &'a [f64],
@@ -331,9 +333,9 @@ impl<'a> Solver<'a> {
     }
 
     /// Start the next [`Self::solve`] from `pressure` (row-major, finite, ≥ 0, not all
-    /// zero) instead of the previous solution; like the previous solution, it is scaled to
-    /// the new load first. For warm starts other than the sweep's own (e.g. extrapolation
-    /// over loads, compared in `cargo bench --bench warm_start`).
+    /// zero) instead of the previous solutions; it is scaled to the new load first, and the
+    /// next solve does not extrapolate through it. For warm starts other than the sweep's
+    /// own (compared in `cargo bench --bench warm_start`).
     pub fn set_start(&mut self, pressure: &[f64]) -> Result<(), ContactError> {
         let n = self.op.grid().n();
         if pressure.len() != self.pressure.len() {
