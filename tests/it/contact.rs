@@ -695,6 +695,24 @@ fn compare_sweeps(
     (iterations_a, iterations_b)
 }
 
+/// [`compare_sweeps`] of the default settings against `without` (the default with one
+/// feature off) on the rough surface `rough_surface(n, lambda_l_px, 4.0, seed)`, and the
+/// default's iterations below `fraction` of `without`'s.
+fn assert_default_saves_iterations(
+    (n, lambda_l_px, seed): (usize, f64, u64),
+    without: SolverConfig,
+    loads: &[f64],
+    fraction: f64,
+) {
+    let h = rough_surface(n, lambda_l_px, 4.0, seed);
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let (with, without) = compare_sweeps(&op, &h, &cfg(1e-12), &without, loads);
+    assert!(
+        (with as f64) < fraction * without as f64,
+        "{with} iterations with the default, {without} without the feature"
+    );
+}
+
 /// The extension's near term (on once the contact set has settled) is what makes the
 /// default take fewer iterations than the long term alone on a warm-started sweep over a
 /// rough surface (measured: 138 against 166 at n = 128 through W/W0 = 0.01 … 0.1), with
@@ -702,9 +720,6 @@ fn compare_sweeps(
 #[test]
 fn near_term_saves_iterations_on_a_settled_contact_set() {
     use wearcoef::contact::solver::Extension;
-    let n = 128;
-    let h = rough_surface(n, 64.0, 4.0, 3);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let long_only = SolverConfig {
         extension: Some(Extension {
             near_weight: 0.0,
@@ -712,16 +727,11 @@ fn near_term_saves_iterations_on_a_settled_contact_set() {
         }),
         ..cfg(1e-12)
     };
-    let (iterations_with, iterations_without) = compare_sweeps(
-        &op,
-        &h,
-        &cfg(1e-12),
-        &long_only,
+    assert_default_saves_iterations(
+        (128, 64.0, 3),
+        long_only,
         &[0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.1],
-    );
-    assert!(
-        (iterations_with as f64) < 0.95 * iterations_without as f64,
-        "{iterations_with} iterations with the near term, {iterations_without} without"
+        0.95,
     );
 }
 
@@ -733,23 +743,15 @@ fn near_term_saves_iterations_on_a_settled_contact_set() {
 /// the box, docs/BENCHMARKS.md).
 #[test]
 fn load_offset_reaches_the_rescaled_solution_in_fewer_iterations() {
-    let n = 256;
-    let h = rough_surface(n, 128.0, 4.0, 5);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-    let scaled = SolverConfig {
+    let rescaled = SolverConfig {
         offset_to_load: false,
         ..cfg(1e-12)
     };
-    let (iterations_offset, iterations_scale) = compare_sweeps(
-        &op,
-        &h,
-        &cfg(1e-12),
-        &scaled,
+    assert_default_saves_iterations(
+        (256, 128.0, 5),
+        rescaled,
         &[0.01, 0.03, 0.06, 0.1, 0.15],
-    );
-    assert!(
-        (iterations_offset as f64) < 0.95 * iterations_scale as f64,
-        "{iterations_offset} iterations with the offset, {iterations_scale} rescaling"
+        0.95,
     );
 }
 
@@ -763,9 +765,6 @@ fn load_offset_reaches_the_rescaled_solution_in_fewer_iterations() {
 /// 8192² on the paper's spectrum at 1e-10, docs/BENCHMARKS.md).
 #[test]
 fn extrapolated_start_reaches_the_scaled_solution_in_fewer_iterations() {
-    let n = 256;
-    let h = rough_surface(n, 128.0, 4.0, 5);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let scaled = SolverConfig {
         extrapolate_start: false,
         ..cfg(1e-12)
@@ -774,12 +773,7 @@ fn extrapolated_start_reaches_the_scaled_solution_in_fewer_iterations() {
         .map(|k| 0.01 * 1.15f64.powi(k))
         .chain([0.03])
         .collect();
-    let (iterations_extrapolated, iterations_scaled) =
-        compare_sweeps(&op, &h, &cfg(1e-12), &scaled, &loads);
-    assert!(
-        (iterations_extrapolated as f64) < 0.97 * iterations_scaled as f64,
-        "{iterations_extrapolated} iterations extrapolated, {iterations_scaled} scaled"
-    );
+    assert_default_saves_iterations((256, 128.0, 5), scaled, &loads, 0.97);
 }
 
 /// The preconditioner's free-set extension (the default) reaches the same solution as
