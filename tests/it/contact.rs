@@ -735,6 +735,45 @@ fn near_term_saves_iterations_on_a_settled_contact_set() {
     );
 }
 
+/// The extension's far term, on a box of at least FAR_BOX_SIGMAS σ_far (here σ_far = 16
+/// nodes on 16² cells, so that a 256² box holds it), changes the iteration but not the
+/// solution: the same contact pixels at every load, pressures within the tolerance's reach,
+/// the load exact and the complementarity recomputed independently (`compare_sweeps`); and
+/// the pressures are not bit for bit those without it, so the term is in use.
+#[test]
+fn far_term_keeps_the_solution() {
+    use wearcoef::contact::solver::Extension;
+    let n = 256;
+    let small_far = Extension {
+        far_sigma: 16.0,
+        far_cell: 16,
+        ..Extension::default()
+    };
+    let with = SolverConfig {
+        extension: Some(small_far),
+        ..cfg(1e-12)
+    };
+    let without = SolverConfig {
+        extension: Some(Extension {
+            far_weight: 0.0,
+            ..small_far
+        }),
+        ..cfg(1e-12)
+    };
+    let h = rough_surface(n, 128.0, 4.0, 7);
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let loads = [0.02, 0.04, 0.08];
+    compare_sweeps(&op, &h, &with, &without, &loads);
+    let (mut a, mut b) = (Solver::new(&op, &h).unwrap(), Solver::new(&op, &h).unwrap());
+    let mut differ = false;
+    for w in loads {
+        a.solve(w, &with).unwrap();
+        b.solve(w, &without).unwrap();
+        differ |= a.pressure() != b.pressure();
+    }
+    assert!(differ, "the far term left every pressure bit unchanged");
+}
+
 /// Restoring the load by a uniform offset of the pressures (the default) reaches the
 /// rescaling's solution in fewer iterations on a warm-started sweep over a rough surface:
 /// the same contact pixels at every load, pressures within the tolerance's reach, the load

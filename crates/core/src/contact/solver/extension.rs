@@ -14,11 +14,16 @@
 //! the cell's value on its nodes, `G_t`: a periodic Gaussian on the cells), `D_t = max(S_t
 //! 1_F, D_min)` the smoothed density of F. Two terms share the cells: the long one (σ = 32
 //! nodes, γ = 0.5) and the near one (σ = 6 nodes, γ = 0.3), which together continue the
-//! gradient across the clusters' edges, where `M` alone jumps from the gradient to zero.
+//! gradient across the clusters' edges, where `M` alone jumps from the gradient to zero. A
+//! third, far term (σ = 512 nodes, γ = 0.2) smooths on coarser cells (64 × 64 nodes, sums of
+//! the 8² cells, so `S_far = U_f G U_fᵀ / c_f²` has the same form): it carries modulations
+//! over many λ_l, which only boxes much larger than σ_far hold, so it is built on boxes of at
+//! least [`FAR_BOX_SIGMAS`] σ_far.
 //! Any extension gives `Eᵀ K⁻¹ E ≥ (P K P)⁻¹` on F, with equality for the one of least
 //! elastic energy, so the closer `E` comes to it the fewer iterations; but while the contact
 //! set still moves, the near term makes it oscillate, so it is used only once the set has
-//! settled ([`Extension::settled_fraction`]). `M_E` is symmetric and positive like `M` (the
+//! settled ([`Extension::settled_fraction`]), and so is the far term (used from the first
+//! iteration it makes the cold loads of a 4096² sweep crawl). `M_E` is symmetric and positive like `M` (the
 //! same `D_t` on both sides), equal to `M` in full contact (`E = 1`), and costs one pass over
 //! `p` and `w` for the cell sums plus two smoothings per term on the coarse grid (n/c per
 //! side) per iteration. The floor `D_min` fades the extension out where F is sparse, where
@@ -50,7 +55,20 @@ pub struct Extension {
     /// at most this fraction of the contact set left or entered it (while the set still
     /// moves it makes the iteration oscillate; docs/BENCHMARKS.md).
     pub settled_fraction: f64,
+    /// Standard deviation of the far term's Gaussian, in grid nodes (Δl); the term is built
+    /// on boxes of at least [`FAR_BOX_SIGMAS`] times this and used with the near term.
+    pub far_sigma: f64,
+    /// Weight γ_far of the far term (0: none).
+    pub far_weight: f64,
+    /// Side of the far term's cells, in grid nodes: a multiple of `cell`.
+    pub far_cell: usize,
 }
+
+/// The far term is built on boxes of at least this many `far_sigma` per side: on smaller ones
+/// its Gaussian spans the box, and a field centred on F smoothed over the box is about zero
+/// (measured: the same iterations at 1024², 0.7 % fewer at 2048², 3.7 % and 4.9 % fewer at
+/// 4096² and 8192²; docs/BENCHMARKS.md).
+pub const FAR_BOX_SIGMAS: f64 = 8.0;
 
 impl Default for Extension {
     /// The settings measured on the paper's spectrum and the bench surfaces at 1024²–4096²
@@ -59,7 +77,9 @@ impl Default for Extension {
     /// 6 nodes, γ_near = 0.3, after an iteration that changed at most 0.2 % of the contact
     /// set) takes 15 % of the paper spectrum's iterations away at 1024² and 19 % at 2048²;
     /// σ = 4–8 and γ_near = 0.3–0.4 are within 3 % of it, γ_near = 0.6 loses a third of
-    /// the gain.
+    /// the gain. The far term (σ = 512 nodes, γ_far = 0.2, on 64² cells) takes 4.9 % of the
+    /// 8192² sweep's iterations away; σ = 128–2048 and γ_far = 0.2–0.3 are within 3 % of it,
+    /// γ_far = 0.5 costs iterations.
     fn default() -> Self {
         Self {
             cell: 8,
@@ -69,6 +89,9 @@ impl Default for Extension {
             near_sigma: 6.0,
             near_weight: 0.3,
             settled_fraction: 0.002,
+            far_sigma: 512.0,
+            far_weight: 0.2,
+            far_cell: 64,
         }
     }
 }
@@ -79,7 +102,17 @@ impl Extension {
         if self.cell == 0 {
             return Err("extension cell must be ≥ 1 node".into());
         }
-        for (name, sigma) in [("sigma", self.sigma), ("near sigma", self.near_sigma)] {
+        if self.far_cell == 0 || !self.far_cell.is_multiple_of(self.cell) {
+            return Err(format!(
+                "extension far cell {} must be a positive multiple of the cell {}",
+                self.far_cell, self.cell
+            ));
+        }
+        for (name, sigma) in [
+            ("sigma", self.sigma),
+            ("near sigma", self.near_sigma),
+            ("far sigma", self.far_sigma),
+        ] {
             if !(sigma.is_finite() && sigma > 0.0) {
                 return Err(format!("extension {name} {sigma} must be finite and > 0"));
             }
@@ -87,6 +120,7 @@ impl Extension {
         for (name, value) in [
             ("weight", self.weight),
             ("near weight", self.near_weight),
+            ("far weight", self.far_weight),
             ("settled fraction", self.settled_fraction),
         ] {
             if !(value.is_finite() && (0.0..=1.0).contains(&value)) {
@@ -118,12 +152,19 @@ struct Term {
     weight: f64,
     /// Per cell: `D = max(G 1_F / c², D_min)`.
     density: Vec<f64>,
+    /// Cells per side of the term's own cells, `merge` × `merge` cells each (1: the shared
+    /// cells), and three values per own cell to smooth on.
+    merge: usize,
+    merged: [Vec<f64>; 3],
 }
 
 impl Term {
-    fn new(sigma_nodes: f64, weight: f64, cell: usize, m: usize) -> Self {
-        let sigma_cells = sigma_nodes / cell as f64;
-        let h = ((4.0 * sigma_cells).ceil() as usize).min(m / 2);
+    /// A term whose Gaussian of `sigma_nodes` runs on cells of `merge` × `merge` of the m × m
+    /// shared cells of `cell` nodes (`merge` divides m).
+    fn new(sigma_nodes: f64, weight: f64, cell: usize, m: usize, merge: usize) -> Self {
+        let own = m / merge;
+        let sigma_cells = sigma_nodes / (cell * merge) as f64;
+        let h = ((4.0 * sigma_cells).ceil() as usize).min(own / 2);
         let mut kernel: Vec<f64> = (0..=2 * h)
             .map(|k| {
                 let d = k as f64 - h as f64;
@@ -136,7 +177,40 @@ impl Term {
             kernel,
             weight,
             density: vec![0.0; m * m],
+            merge,
+            merged: if merge > 1 {
+                std::array::from_fn(|_| vec![0.0; own * own])
+            } else {
+                Default::default()
+            },
         }
+    }
+
+    /// `out = S x / c²` on the shared cells: the Gaussian on them, or on the term's own cells
+    /// (`x` summed over each, the result spread back over its shared cells divided by their
+    /// number), so that the term keeps constants and is symmetric either way.
+    fn smooth(&mut self, m: usize, x: &[f64], tmp: &mut [f64], out: &mut [f64]) {
+        let k = self.merge;
+        if k == 1 {
+            return smooth(&self.kernel, m, x, tmp, out);
+        }
+        let own = m / k;
+        let [sums, own_tmp, smoothed] = &mut self.merged;
+        sums.fill(0.0);
+        for (i, row) in x.chunks(m).enumerate() {
+            let at = (i / k) * own;
+            for (s, cells) in sums[at..at + own].iter_mut().zip(row.chunks(k)) {
+                *s += cells.iter().sum::<f64>();
+            }
+        }
+        smooth(&self.kernel, own, sums, own_tmp, smoothed);
+        let spread = 1.0 / (k * k) as f64;
+        out.par_chunks_mut(m).enumerate().for_each(|(i, row)| {
+            let at = (i / k) * own;
+            for (cells, &v) in row.chunks_mut(k).zip(&smoothed[at..at + own]) {
+                cells.fill(v * spread);
+            }
+        });
     }
 }
 
@@ -150,6 +224,8 @@ pub(super) struct Coarse {
     /// The long term (σ = `settings.sigma`) and the near term (`settings.near_sigma`).
     long: Term,
     near: Term,
+    /// The far term, on boxes of at least [`FAR_BOX_SIGMAS`] σ_far; used with the near term.
+    far: Option<Term>,
     /// Whether the near term is in use (see [`Extension::settled_fraction`]).
     near_on: bool,
     /// Per cell: `Σ_F g`.
@@ -186,8 +262,10 @@ impl Coarse {
             n,
             cell,
             m,
-            long: Term::new(settings.sigma, settings.weight, cell, m),
-            near: Term::new(settings.near_sigma, settings.near_weight, cell, m),
+            long: Term::new(settings.sigma, settings.weight, cell, m, 1),
+            near: Term::new(settings.near_sigma, settings.near_weight, cell, m, 1),
+            far: far_merge(n, cell, m, &settings)
+                .map(|merge| Term::new(settings.far_sigma, settings.far_weight, cell, m, merge)),
             near_on: false,
             sum_g: vec![0.0; m * m],
             count: vec![0.0; m * m],
@@ -235,19 +313,23 @@ impl Coarse {
         let floor = self.settings.density_floor;
         let [fraction, tmp, smoothed] = &mut self.work;
         self.value.fill(0.0);
-        let near = self.near_on.then_some(&mut self.near);
-        for term in std::iter::once(&mut self.long).chain(near) {
+        let settled = self.near_on;
+        let near = settled.then_some(&mut self.near);
+        let far = self.far.as_mut().filter(|_| settled);
+        for term in std::iter::once(&mut self.long).chain(near).chain(far) {
             fraction
                 .iter_mut()
                 .zip(&self.count)
                 .for_each(|(s, &k)| *s = k / area);
-            smooth(&term.kernel, m, fraction, tmp, &mut term.density);
-            term.density.iter_mut().for_each(|d| *d = d.max(floor));
+            let mut density = std::mem::take(&mut term.density);
+            term.smooth(m, fraction, tmp, &mut density);
+            density.iter_mut().for_each(|d| *d = d.max(floor));
+            term.density = density;
             fraction
                 .iter_mut()
                 .zip(&self.sum_g)
                 .for_each(|(s, &g)| *s = g / area);
-            smooth(&term.kernel, m, fraction, tmp, smoothed);
+            term.smooth(m, fraction, tmp, smoothed);
             let gamma = term.weight;
             self.value
                 .iter_mut()
@@ -308,13 +390,15 @@ impl Coarse {
         // `value` is free until the next `gather`: it holds `y / D` of each term in turn.
         let divided = &mut self.value;
         self.back.fill(0.0);
-        let near = self.near_on.then_some(&self.near);
-        for term in std::iter::once(&self.long).chain(near) {
+        let settled = self.near_on;
+        let near = settled.then_some(&mut self.near);
+        let far = self.far.as_mut().filter(|_| settled);
+        for term in std::iter::once(&mut self.long).chain(near).chain(far) {
             divided
                 .iter_mut()
                 .zip(off.iter().zip(&term.density))
                 .for_each(|(q, (&y, &d))| *q = y / d);
-            smooth(&term.kernel, m, divided, tmp, smoothed);
+            term.smooth(m, divided, tmp, smoothed);
             let gamma = term.weight;
             self.back
                 .iter_mut()
@@ -338,6 +422,18 @@ impl Coarse {
     pub(super) fn cell(&self) -> usize {
         self.cell
     }
+}
+
+/// The far term's cells in shared cells per side, when the box (n nodes) holds at least
+/// [`FAR_BOX_SIGMAS`] σ_far, the weight is positive and its cells tile the shared ones.
+fn far_merge(n: usize, cell: usize, m: usize, settings: &Extension) -> Option<usize> {
+    let merge = settings.far_cell / cell;
+    (settings.far_weight > 0.0
+        && n as f64 >= FAR_BOX_SIGMAS * settings.far_sigma
+        && merge >= 1
+        && m.is_multiple_of(merge)
+        && m / merge >= 2)
+        .then_some(merge)
 }
 
 avx2_dispatch! {
@@ -495,73 +591,4 @@ fn add_shifted(o: &mut [f64], x: &[f64], shift: usize, weight: f64) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The smoothing of either term is symmetric (⟨a, G b⟩ = ⟨G a, b⟩, to rounding) and
-    /// keeps constants and sums (the kernel sums to 1), so `S = U G Uᵀ / c²` is symmetric
-    /// and `M_E` with it.
-    #[test]
-    fn smoothing_is_symmetric_and_conservative() {
-        let coarse = Coarse::new(96, 4, Extension::default());
-        assert!(coarse.near.kernel.len() < coarse.long.kernel.len());
-        for term in [&coarse.long, &coarse.near] {
-            check_smoothing(&term.kernel);
-        }
-    }
-
-    /// The near term is switched on after an iteration that changed at most the settled
-    /// fraction of the contact set, off after one that changed more or before a load's
-    /// first iteration, never with weight 0 or in full contact; each switch is reported
-    /// (the direction restarts).
-    #[test]
-    fn near_term_follows_the_settled_contact_set() {
-        let settings = Extension::default();
-        let mut coarse = Coarse::new(128, 8, settings);
-        let contact = 10_000.0;
-        let settled = (settings.settled_fraction * contact) as usize;
-        assert!(!coarse.settle(None) && !coarse.near_on);
-        assert!(!coarse.settle(Some((settled + 1, contact))) && !coarse.near_on);
-        assert!(coarse.settle(Some((settled, contact))) && coarse.near_on);
-        assert!(!coarse.settle(Some((0, contact))) && coarse.near_on);
-        assert!(coarse.settle(None) && !coarse.near_on);
-        assert!(!coarse.settle(Some((0, (128 * 128) as f64))) && !coarse.near_on);
-        let mut without = Coarse::new(
-            128,
-            8,
-            Extension {
-                near_weight: 0.0,
-                ..settings
-            },
-        );
-        assert!(!without.settle(Some((0, contact))) && !without.near_on);
-    }
-
-    fn check_smoothing(kernel: &[f64]) {
-        let m = 12;
-        assert!(kernel.len() <= m + 1);
-        let mut state = 1u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let a: Vec<f64> = (0..m * m).map(|_| next()).collect();
-        let b: Vec<f64> = (0..m * m).map(|_| next()).collect();
-        let (mut tmp, mut ga, mut gb) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
-        smooth(kernel, m, &a, &mut tmp, &mut ga);
-        smooth(kernel, m, &b, &mut tmp, &mut gb);
-        let lhs: f64 = a.iter().zip(&gb).map(|(x, y)| x * y).sum();
-        let rhs: f64 = ga.iter().zip(&b).map(|(x, y)| x * y).sum();
-        assert!(
-            (lhs - rhs).abs() <= 1e-14 * lhs.abs().max(1.0),
-            "{lhs} {rhs}"
-        );
-        let (sa, sga): (f64, f64) = (a.iter().sum(), ga.iter().sum());
-        assert!((sa - sga).abs() <= 1e-13, "{sa} {sga}");
-        let ones = vec![1.0; m * m];
-        smooth(kernel, m, &ones, &mut tmp, &mut ga);
-        assert!(ga.iter().all(|&v| (v - 1.0).abs() < 1e-14));
-    }
-}
+mod tests;

@@ -1,0 +1,144 @@
+use super::*;
+
+/// The smoothing of either term is symmetric (⟨a, G b⟩ = ⟨G a, b⟩, to rounding) and
+/// keeps constants and sums (the kernel sums to 1), so `S = U G Uᵀ / c²` is symmetric
+/// and `M_E` with it.
+#[test]
+fn smoothing_is_symmetric_and_conservative() {
+    let coarse = Coarse::new(96, 4, Extension::default());
+    assert!(coarse.near.kernel.len() < coarse.long.kernel.len());
+    for term in [&coarse.long, &coarse.near] {
+        check_smoothing(&term.kernel);
+    }
+}
+
+/// The far term's smoothing on its own cells (sums over 3 × 3 shared cells, the Gaussian
+/// on them, spread back) is symmetric, keeps sums and constants, and is constant over
+/// each of its cells, like the shared cells' terms.
+#[test]
+fn far_smoothing_on_merged_cells_is_symmetric_and_conservative() {
+    let m = 24;
+    let mut term = Term::new(64.0, 0.2, 8, m, 3);
+    assert_eq!(
+        term.kernel.len(),
+        2 * (m / 3 / 2) + 1,
+        "σ spans the box: capped"
+    );
+    let mut narrow = Term::new(8.0, 0.2, 8, m, 3);
+    assert!(narrow.kernel.len() < term.kernel.len());
+    for term in [&mut term, &mut narrow] {
+        let a = random(m * m, 1);
+        let b = random(m * m, 2);
+        let (mut tmp, mut sa, mut sb) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
+        term.smooth(m, &a, &mut tmp, &mut sa);
+        term.smooth(m, &b, &mut tmp, &mut sb);
+        let lhs: f64 = a.iter().zip(&sb).map(|(x, y)| x * y).sum();
+        let rhs: f64 = sa.iter().zip(&b).map(|(x, y)| x * y).sum();
+        assert!(
+            (lhs - rhs).abs() <= 1e-14 * lhs.abs().max(1.0),
+            "{lhs} {rhs}"
+        );
+        let (total, smoothed): (f64, f64) = (a.iter().sum(), sa.iter().sum());
+        assert!((total - smoothed).abs() <= 1e-13, "{total} {smoothed}");
+        for i in 0..m {
+            for j in 0..m {
+                let corner = sa[(i / 3 * 3) * m + j / 3 * 3];
+                assert_eq!(sa[i * m + j], corner, "cell ({i}, {j})");
+            }
+        }
+        term.smooth(m, &vec![1.0; m * m], &mut tmp, &mut sa);
+        assert!(sa.iter().all(|&v| (v - 1.0).abs() < 1e-14));
+    }
+}
+
+/// The far term is built on boxes of at least FAR_BOX_SIGMAS σ_far, with a positive
+/// weight, and its cells must tile the shared ones.
+#[test]
+fn far_term_only_on_boxes_that_hold_it() {
+    let settings = Extension::default();
+    let n_min = (FAR_BOX_SIGMAS * settings.far_sigma) as usize;
+    let built = Coarse::new(n_min, 64, settings);
+    assert_eq!(
+        built.far.as_ref().map(|t| t.merge),
+        Some(settings.far_cell / settings.cell)
+    );
+    assert!(Coarse::new(n_min / 2, 64, settings).far.is_none());
+    let weightless = Extension {
+        far_weight: 0.0,
+        ..settings
+    };
+    assert!(Coarse::new(n_min, 64, weightless).far.is_none());
+    let untiled = Extension {
+        far_cell: 12,
+        ..settings
+    };
+    let message = untiled.check().unwrap_err();
+    assert!(message.contains("far cell"), "{message}");
+}
+
+fn random(len: usize, seed: u64) -> Vec<f64> {
+    let mut state = seed;
+    (0..len)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect()
+}
+
+/// The near term is switched on after an iteration that changed at most the settled
+/// fraction of the contact set, off after one that changed more or before a load's
+/// first iteration, never with weight 0 or in full contact; each switch is reported
+/// (the direction restarts).
+#[test]
+fn near_term_follows_the_settled_contact_set() {
+    let settings = Extension::default();
+    let mut coarse = Coarse::new(128, 8, settings);
+    let contact = 10_000.0;
+    let settled = (settings.settled_fraction * contact) as usize;
+    assert!(!coarse.settle(None) && !coarse.near_on);
+    assert!(!coarse.settle(Some((settled + 1, contact))) && !coarse.near_on);
+    assert!(coarse.settle(Some((settled, contact))) && coarse.near_on);
+    assert!(!coarse.settle(Some((0, contact))) && coarse.near_on);
+    assert!(coarse.settle(None) && !coarse.near_on);
+    assert!(!coarse.settle(Some((0, (128 * 128) as f64))) && !coarse.near_on);
+    let mut without = Coarse::new(
+        128,
+        8,
+        Extension {
+            near_weight: 0.0,
+            ..settings
+        },
+    );
+    assert!(!without.settle(Some((0, contact))) && !without.near_on);
+}
+
+fn check_smoothing(kernel: &[f64]) {
+    let m = 12;
+    assert!(kernel.len() <= m + 1);
+    let mut state = 1u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let a: Vec<f64> = (0..m * m).map(|_| next()).collect();
+    let b: Vec<f64> = (0..m * m).map(|_| next()).collect();
+    let (mut tmp, mut ga, mut gb) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
+    smooth(kernel, m, &a, &mut tmp, &mut ga);
+    smooth(kernel, m, &b, &mut tmp, &mut gb);
+    let lhs: f64 = a.iter().zip(&gb).map(|(x, y)| x * y).sum();
+    let rhs: f64 = ga.iter().zip(&b).map(|(x, y)| x * y).sum();
+    assert!(
+        (lhs - rhs).abs() <= 1e-14 * lhs.abs().max(1.0),
+        "{lhs} {rhs}"
+    );
+    let (sa, sga): (f64, f64) = (a.iter().sum(), ga.iter().sum());
+    assert!((sa - sga).abs() <= 1e-13, "{sa} {sga}");
+    let ones = vec![1.0; m * m];
+    smooth(kernel, m, &ones, &mut tmp, &mut ga);
+    assert!(ga.iter().all(|&v| (v - 1.0).abs() < 1e-14));
+}
