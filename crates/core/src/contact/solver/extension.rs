@@ -78,7 +78,7 @@ impl Default for Extension {
     /// set) takes 15 % of the paper spectrum's iterations away at 1024² and 19 % at 2048²;
     /// σ = 4–8 and γ_near = 0.3–0.4 are within 3 % of it, γ_near = 0.6 loses a third of
     /// the gain. The far term (σ = 512 nodes, γ_far = 0.2, on 64² cells) takes 4.9 % of the
-    /// 8192² sweep's iterations away; σ = 128–2048 and γ_far = 0.2–0.3 are within 3 % of it,
+    /// 8192² sweep's iterations away; σ = 128–2048 and γ_far = 0.2–0.3 are within 4 % of it,
     /// γ_far = 0.5 costs iterations.
     fn default() -> Self {
         Self {
