@@ -27,27 +27,16 @@ fn far_smoothing_on_merged_cells_is_symmetric_and_conservative() {
     let mut narrow = Term::new(8.0, 0.2, 8, m, 3);
     assert!(narrow.kernel.len() < term.kernel.len());
     for term in [&mut term, &mut narrow] {
-        let a = random(m * m, 1);
-        let b = random(m * m, 2);
-        let (mut tmp, mut sa, mut sb) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
-        term.smooth(m, &a, &mut tmp, &mut sa);
-        term.smooth(m, &b, &mut tmp, &mut sb);
-        let lhs: f64 = a.iter().zip(&sb).map(|(x, y)| x * y).sum();
-        let rhs: f64 = sa.iter().zip(&b).map(|(x, y)| x * y).sum();
-        assert!(
-            (lhs - rhs).abs() <= 1e-14 * lhs.abs().max(1.0),
-            "{lhs} {rhs}"
-        );
-        let (total, smoothed): (f64, f64) = (a.iter().sum(), sa.iter().sum());
-        assert!((total - smoothed).abs() <= 1e-13, "{total} {smoothed}");
+        let mut tmp = vec![0.0; m * m];
+        check_operator(m, |x, out| term.smooth(m, x, &mut tmp, out));
+        let mut smoothed = vec![0.0; m * m];
+        term.smooth(m, &random(m * m, 3), &mut tmp, &mut smoothed);
         for i in 0..m {
             for j in 0..m {
-                let corner = sa[(i / 3 * 3) * m + j / 3 * 3];
-                assert_eq!(sa[i * m + j], corner, "cell ({i}, {j})");
+                let corner = smoothed[(i / 3 * 3) * m + j / 3 * 3];
+                assert_eq!(smoothed[i * m + j], corner, "cell ({i}, {j})");
             }
         }
-        term.smooth(m, &vec![1.0; m * m], &mut tmp, &mut sa);
-        assert!(sa.iter().all(|&v| (v - 1.0).abs() < 1e-14));
     }
 }
 
@@ -76,16 +65,10 @@ fn far_term_only_on_boxes_that_hold_it() {
     assert!(message.contains("far cell"), "{message}");
 }
 
+/// `len` values of the solver tests' reproducible sequence in [−1, 1).
 fn random(len: usize, seed: u64) -> Vec<f64> {
-    let mut state = seed;
-    (0..len)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect()
+    let mut next = super::super::tests::support::sequence(seed);
+    (0..len).map(|_| next()).collect()
 }
 
 /// The near term is switched on after an iteration that changed at most the settled
@@ -118,18 +101,16 @@ fn near_term_follows_the_settled_contact_set() {
 fn check_smoothing(kernel: &[f64]) {
     let m = 12;
     assert!(kernel.len() <= m + 1);
-    let mut state = 1u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let a: Vec<f64> = (0..m * m).map(|_| next()).collect();
-    let b: Vec<f64> = (0..m * m).map(|_| next()).collect();
-    let (mut tmp, mut ga, mut gb) = (vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]);
-    smooth(kernel, m, &a, &mut tmp, &mut ga);
-    smooth(kernel, m, &b, &mut tmp, &mut gb);
+    let mut tmp = vec![0.0; m * m];
+    check_operator(m, |x, out| smooth(kernel, m, x, &mut tmp, out));
+}
+
+/// `apply` (x, out) on the m × m cells is symmetric to rounding, keeps sums and constants.
+fn check_operator(m: usize, mut apply: impl FnMut(&[f64], &mut [f64])) {
+    let (a, b) = (random(m * m, 1), random(m * m, 2));
+    let (mut ga, mut gb) = (vec![0.0; m * m], vec![0.0; m * m]);
+    apply(&a, &mut ga);
+    apply(&b, &mut gb);
     let lhs: f64 = a.iter().zip(&gb).map(|(x, y)| x * y).sum();
     let rhs: f64 = ga.iter().zip(&b).map(|(x, y)| x * y).sum();
     assert!(
@@ -138,7 +119,6 @@ fn check_smoothing(kernel: &[f64]) {
     );
     let (sa, sga): (f64, f64) = (a.iter().sum(), ga.iter().sum());
     assert!((sa - sga).abs() <= 1e-13, "{sa} {sga}");
-    let ones = vec![1.0; m * m];
-    smooth(kernel, m, &ones, &mut tmp, &mut ga);
+    apply(&vec![1.0; m * m], &mut ga);
     assert!(ga.iter().all(|&v| (v - 1.0).abs() < 1e-14));
 }
