@@ -144,24 +144,39 @@ pub(super) struct OffBlock {
     sums: Vec<f64>,
 }
 
-/// One Gaussian term of the extension on the cells: its kernel, weight and the smoothed
+/// One Gaussian term of the extension on the cells: its smoothing, weight and the smoothed
 /// density of F.
 struct Term {
-    /// The periodic Gaussian on the cells, offsets −h..=h, summing to 1.
-    kernel: Vec<f64>,
+    smoothing: Smoothing,
     weight: f64,
     /// Per cell: `D = max(G 1_F / c², D_min)`.
     density: Vec<f64>,
-    /// Cells per side of the term's own cells, `merge` × `merge` cells each (1: the shared
-    /// cells), and three values per own cell to smooth on.
-    merge: usize,
-    merged: [Vec<f64>; 3],
 }
 
 impl Term {
     /// A term whose Gaussian of `sigma_nodes` runs on cells of `merge` × `merge` of the m × m
     /// shared cells of `cell` nodes (`merge` divides m).
     fn new(sigma_nodes: f64, weight: f64, cell: usize, m: usize, merge: usize) -> Self {
+        Self {
+            smoothing: Smoothing::new(sigma_nodes, cell, m, merge),
+            weight,
+            density: vec![0.0; m * m],
+        }
+    }
+}
+
+/// A term's smoothing `S / c²` on the shared cells.
+struct Smoothing {
+    /// The periodic Gaussian on the term's own cells, offsets −h..=h, summing to 1.
+    kernel: Vec<f64>,
+    /// Shared cells per side of the term's own cells (1: its cells are the shared ones), and
+    /// three values per own cell to smooth on.
+    merge: usize,
+    merged: [Vec<f64>; 3],
+}
+
+impl Smoothing {
+    fn new(sigma_nodes: f64, cell: usize, m: usize, merge: usize) -> Self {
         let own = m / merge;
         let sigma_cells = sigma_nodes / (cell * merge) as f64;
         let h = ((4.0 * sigma_cells).ceil() as usize).min(own / 2);
@@ -175,8 +190,6 @@ impl Term {
         kernel.iter_mut().for_each(|k| *k /= total);
         Self {
             kernel,
-            weight,
-            density: vec![0.0; m * m],
             merge,
             merged: if merge > 1 {
                 std::array::from_fn(|_| vec![0.0; own * own])
@@ -186,10 +199,10 @@ impl Term {
         }
     }
 
-    /// `out = S x / c²` on the shared cells: the Gaussian on them, or on the term's own cells
-    /// (`x` summed over each, the result spread back over its shared cells divided by their
+    /// `out = S x / c²`: the Gaussian on the shared cells, or on the term's own cells (`x`
+    /// summed over each, the result spread back over its shared cells divided by their
     /// number), so that the term keeps constants and is symmetric either way.
-    fn smooth(&mut self, m: usize, x: &[f64], tmp: &mut [f64], out: &mut [f64]) {
+    fn apply(&mut self, m: usize, x: &[f64], tmp: &mut [f64], out: &mut [f64]) {
         let k = self.merge;
         if k == 1 {
             return smooth(&self.kernel, m, x, tmp, out);
@@ -321,15 +334,13 @@ impl Coarse {
                 .iter_mut()
                 .zip(&self.count)
                 .for_each(|(s, &k)| *s = k / area);
-            let mut density = std::mem::take(&mut term.density);
-            term.smooth(m, fraction, tmp, &mut density);
-            density.iter_mut().for_each(|d| *d = d.max(floor));
-            term.density = density;
+            term.smoothing.apply(m, fraction, tmp, &mut term.density);
+            term.density.iter_mut().for_each(|d| *d = d.max(floor));
             fraction
                 .iter_mut()
                 .zip(&self.sum_g)
                 .for_each(|(s, &g)| *s = g / area);
-            term.smooth(m, fraction, tmp, smoothed);
+            term.smoothing.apply(m, fraction, tmp, smoothed);
             let gamma = term.weight;
             self.value
                 .iter_mut()
@@ -398,7 +409,7 @@ impl Coarse {
                 .iter_mut()
                 .zip(off.iter().zip(&term.density))
                 .for_each(|(q, (&y, &d))| *q = y / d);
-            term.smooth(m, divided, tmp, smoothed);
+            term.smoothing.apply(m, divided, tmp, smoothed);
             let gamma = term.weight;
             self.back
                 .iter_mut()

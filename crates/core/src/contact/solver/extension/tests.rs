@@ -6,9 +6,9 @@ use super::*;
 #[test]
 fn smoothing_is_symmetric_and_conservative() {
     let coarse = Coarse::new(96, 4, Extension::default());
-    assert!(coarse.near.kernel.len() < coarse.long.kernel.len());
+    assert!(coarse.near.smoothing.kernel.len() < coarse.long.smoothing.kernel.len());
     for term in [&coarse.long, &coarse.near] {
-        check_smoothing(&term.kernel);
+        check_smoothing(&term.smoothing.kernel);
     }
 }
 
@@ -18,19 +18,19 @@ fn smoothing_is_symmetric_and_conservative() {
 #[test]
 fn far_smoothing_on_merged_cells_is_symmetric_and_conservative() {
     let m = 24;
-    let mut term = Term::new(64.0, 0.2, 8, m, 3);
+    let mut term = Smoothing::new(64.0, 8, m, 3);
     assert_eq!(
         term.kernel.len(),
         2 * (m / 3 / 2) + 1,
         "σ spans the box: capped"
     );
-    let mut narrow = Term::new(8.0, 0.2, 8, m, 3);
+    let mut narrow = Smoothing::new(8.0, 8, m, 3);
     assert!(narrow.kernel.len() < term.kernel.len());
     for term in [&mut term, &mut narrow] {
         let mut tmp = vec![0.0; m * m];
-        check_operator(m, |x, out| term.smooth(m, x, &mut tmp, out));
+        check_operator(m, |x, out| term.apply(m, x, &mut tmp, out));
         let mut smoothed = vec![0.0; m * m];
-        term.smooth(m, &random(m * m, 3), &mut tmp, &mut smoothed);
+        term.apply(m, &random(m * m, 3), &mut tmp, &mut smoothed);
         for i in 0..m {
             for j in 0..m {
                 let corner = smoothed[(i / 3 * 3) * m + j / 3 * 3];
@@ -48,7 +48,7 @@ fn far_term_only_on_boxes_that_hold_it() {
     let n_min = (FAR_BOX_SIGMAS * settings.far_sigma) as usize;
     let built = Coarse::new(n_min, 64, settings);
     assert_eq!(
-        built.far.as_ref().map(|t| t.merge),
+        built.far.as_ref().map(|t| t.smoothing.merge),
         Some(settings.far_cell / settings.cell)
     );
     assert!(Coarse::new(n_min / 2, 64, settings).far.is_none());
