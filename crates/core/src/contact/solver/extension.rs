@@ -22,8 +22,9 @@
 //! Any extension gives `Eᵀ K⁻¹ E ≥ (P K P)⁻¹` on F, with equality for the one of least
 //! elastic energy, so the closer `E` comes to it the fewer iterations; but while the contact
 //! set still moves, the near term makes it oscillate, so it is used only once the set has
-//! settled ([`Extension::settled_fraction`]), and so is the far term (used from the first
-//! iteration it makes the cold loads of a 4096² sweep crawl). `M_E` is symmetric and positive like `M` (the
+//! settled ([`Extension::settled_fraction`]), and the far term once the direction is no
+//! longer restarted ([`Extension::far_fraction`]; used from the first iteration it makes the
+//! cold loads of a 4096² sweep crawl). `M_E` is symmetric and positive like `M` (the
 //! same `D_t` on both sides), equal to `M` in full contact (`E = 1`), and costs one pass over
 //! `p` and `w` for the cell sums plus two smoothings per term on the coarse grid (n/c per
 //! side) per iteration. The floor `D_min` fades the extension out where F is sparse, where
@@ -56,12 +57,17 @@ pub struct Extension {
     /// moves it makes the iteration oscillate; docs/BENCHMARKS.md).
     pub settled_fraction: f64,
     /// Standard deviation of the far term's Gaussian, in grid nodes (Δl); the term is built
-    /// on boxes of at least [`FAR_BOX_SIGMAS`] times this and used with the near term.
+    /// on boxes of at least [`FAR_BOX_SIGMAS`] times this.
     pub far_sigma: f64,
     /// Weight γ_far of the far term (0: none).
     pub far_weight: f64,
     /// Side of the far term's cells, in grid nodes: a multiple of `cell`.
     pub far_cell: usize,
+    /// The far term is used after an iteration in which at most this fraction of the
+    /// contact set left or entered it: once the direction is no longer restarted at every
+    /// iteration, before the near term (used while the set moves by more, it makes the
+    /// iteration crawl; docs/BENCHMARKS.md).
+    pub far_fraction: f64,
 }
 
 /// The far term is built on boxes of at least this many `far_sigma` per side: on smaller ones
@@ -78,8 +84,10 @@ impl Default for Extension {
     /// set) takes 15 % of the paper spectrum's iterations away at 1024² and 19 % at 2048²;
     /// σ = 4–8 and γ_near = 0.3–0.4 are within 3 % of it, γ_near = 0.6 loses a third of
     /// the gain. The far term (σ = 512 nodes, γ_far = 0.2, on 64² cells) takes 4.9 % of the
-    /// 8192² sweep's iterations away; σ = 128–2048 and γ_far = 0.2–0.3 are within 4 % of it,
-    /// γ_far = 0.5 costs iterations.
+    /// 8192² sweep's iterations away when used with the near term; σ = 128–2048 and γ_far =
+    /// 0.2–0.3 are within 4 % of it, γ_far = 0.5 costs iterations. Used from an iteration
+    /// that changed at most 3 % of the contact set (the restart threshold) instead, it takes
+    /// 1.6 % and 2.4 % more away at 4096² and 8192²; 1 % and 10 % do less.
     fn default() -> Self {
         Self {
             cell: 8,
@@ -92,6 +100,7 @@ impl Default for Extension {
             far_sigma: 512.0,
             far_weight: 0.2,
             far_cell: 64,
+            far_fraction: 0.03,
         }
     }
 }
@@ -122,6 +131,7 @@ impl Extension {
             ("near weight", self.near_weight),
             ("far weight", self.far_weight),
             ("settled fraction", self.settled_fraction),
+            ("far fraction", self.far_fraction),
         ] {
             if !(value.is_finite() && (0.0..=1.0).contains(&value)) {
                 return Err(format!("extension {name} {value} must lie in [0, 1]"));
@@ -237,10 +247,12 @@ pub(super) struct Coarse {
     /// The long term (σ = `settings.sigma`) and the near term (`settings.near_sigma`).
     long: Term,
     near: Term,
-    /// The far term, on boxes of at least [`FAR_BOX_SIGMAS`] σ_far; used with the near term.
+    /// The far term, on boxes of at least [`FAR_BOX_SIGMAS`] σ_far.
     far: Option<Term>,
     /// Whether the near term is in use (see [`Extension::settled_fraction`]).
     near_on: bool,
+    /// Whether the far term is in use (see [`Extension::far_fraction`]).
+    far_on: bool,
     /// Per cell: `Σ_F g`.
     sum_g: Vec<f64>,
     /// Per cell: `|F|`.
@@ -280,6 +292,7 @@ impl Coarse {
             far: far_merge(n, cell, m, &settings)
                 .map(|merge| Term::new(settings.far_sigma, settings.far_weight, cell, m, merge)),
             near_on: false,
+            far_on: false,
             sum_g: vec![0.0; m * m],
             count: vec![0.0; m * m],
             value: vec![0.0; m * m],
@@ -289,19 +302,24 @@ impl Coarse {
         }
     }
 
-    /// Use the near term from the next [`Self::gather`] on, or not, after an iteration that
-    /// changed `changed` nodes of a contact set of `contact` nodes (none before a load's
-    /// first). Returns whether that switched it (the preconditioner changed: the conjugate
-    /// direction must restart). In full contact it stays off: there is nothing off F to
-    /// extend to, and a restart would only cost iterations.
+    /// Use the near and far terms from the next [`Self::gather`] on, or not, after an
+    /// iteration that changed `changed` nodes of a contact set of `contact` nodes (none
+    /// before a load's first): each once the change is at most its fraction of the set
+    /// ([`Extension::settled_fraction`], [`Extension::far_fraction`]). Returns whether that
+    /// switched either (the preconditioner changed: the conjugate direction must restart).
+    /// In full contact both stay off: there is nothing off F to extend to, and a restart
+    /// would only cost iterations.
     pub(super) fn settle(&mut self, changed: Option<(usize, f64)>) -> bool {
         let nodes = (self.n * self.n) as f64;
-        let on = self.settings.near_weight > 0.0
-            && changed.is_some_and(|(changed, contact)| {
-                changed as f64 <= self.settings.settled_fraction * contact && contact < nodes
-            });
-        let switched = on != self.near_on;
-        self.near_on = on;
+        let below = |fraction: f64| {
+            changed.is_some_and(|(changed, contact)| {
+                changed as f64 <= fraction * contact && contact < nodes
+            })
+        };
+        let near = self.settings.near_weight > 0.0 && below(self.settings.settled_fraction);
+        let far = self.far.is_some() && below(self.settings.far_fraction);
+        let switched = near != self.near_on || far != self.far_on;
+        (self.near_on, self.far_on) = (near, far);
         switched
     }
 
@@ -326,9 +344,8 @@ impl Coarse {
         let floor = self.settings.density_floor;
         let [fraction, tmp, smoothed] = &mut self.work;
         self.value.fill(0.0);
-        let settled = self.near_on;
-        let near = settled.then_some(&mut self.near);
-        let far = self.far.as_mut().filter(|_| settled);
+        let near = self.near_on.then_some(&mut self.near);
+        let far = self.far.as_mut().filter(|_| self.far_on);
         for term in std::iter::once(&mut self.long).chain(near).chain(far) {
             fraction
                 .iter_mut()
@@ -401,9 +418,8 @@ impl Coarse {
         // `value` is free until the next `gather`: it holds `y / D` of each term in turn.
         let divided = &mut self.value;
         self.back.fill(0.0);
-        let settled = self.near_on;
-        let near = settled.then_some(&mut self.near);
-        let far = self.far.as_mut().filter(|_| settled);
+        let near = self.near_on.then_some(&mut self.near);
+        let far = self.far.as_mut().filter(|_| self.far_on);
         for term in std::iter::once(&mut self.long).chain(near).chain(far) {
             divided
                 .iter_mut()

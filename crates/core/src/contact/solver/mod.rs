@@ -38,8 +38,8 @@
 //! weighs slow modulations over F as the whole surface does, at a pass and a few coarse
 //! smoothings per iteration and no convolution; a second, near term continues the gradient
 //! across the clusters' edges once the contact set has settled (the direction restarts
-//! when it is switched on or off), with a third, far one on boxes of 4096² and more.
-//! Together 38–44 % fewer iterations than `P K⁻¹ P` alone
+//! when it is switched on or off), and on boxes of 4096² and more a third, far one once the
+//! direction is no longer restarted. Together 38–44 % fewer iterations than `P K⁻¹ P` alone
 //! on the paper spectrum's 30-load sweeps at 1024²–4096² (docs/BENCHMARKS.md).
 //!
 //! **Load** (the default, [`SolverConfig::offset_to_load`]): after the projection, the load

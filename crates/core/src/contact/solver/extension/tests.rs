@@ -63,6 +63,13 @@ fn far_term_only_on_boxes_that_hold_it() {
     };
     let message = untiled.check().unwrap_err();
     assert!(message.contains("far cell"), "{message}");
+    let message = Extension {
+        far_fraction: 1.5,
+        ..settings
+    }
+    .check()
+    .unwrap_err();
+    assert!(message.contains("far fraction"), "{message}");
 }
 
 /// `len` values of the solver tests' reproducible sequence in [−1, 1).
@@ -96,6 +103,37 @@ fn near_term_follows_the_settled_contact_set() {
         },
     );
     assert!(!without.settle(Some((0, contact))) && !without.near_on);
+}
+
+/// The far term is switched on after an iteration that changed at most the far fraction of
+/// the contact set (before the near term, whose fraction is smaller), off after one that
+/// changed more or before a load's first; each switch of either term is reported; on a
+/// box too small for the term it is never on.
+#[test]
+fn far_term_follows_the_contact_set_before_the_near_term() {
+    let settings = Extension {
+        far_sigma: 16.0,
+        far_cell: 16,
+        ..Extension::default()
+    };
+    assert!(settings.settled_fraction < settings.far_fraction);
+    let mut coarse = Coarse::new(128, 8, settings);
+    assert!(coarse.far.is_some(), "a box of 8 σ_far holds the far term");
+    let contact = 10_000.0;
+    let far = (settings.far_fraction * contact) as usize;
+    let settled = (settings.settled_fraction * contact) as usize;
+    assert!(!coarse.settle(None) && !coarse.far_on && !coarse.near_on);
+    assert!(!coarse.settle(Some((far + 1, contact))) && !coarse.far_on);
+    assert!(coarse.settle(Some((far, contact))) && coarse.far_on && !coarse.near_on);
+    assert!(!coarse.settle(Some((settled + 1, contact))) && coarse.far_on && !coarse.near_on);
+    assert!(coarse.settle(Some((settled, contact))) && coarse.far_on && coarse.near_on);
+    assert!(coarse.settle(Some((far + 1, contact))) && !coarse.far_on && !coarse.near_on);
+    assert!(coarse.settle(Some((0, contact))) && coarse.far_on && coarse.near_on);
+    assert!(coarse.settle(None) && !coarse.far_on && !coarse.near_on);
+    assert!(!coarse.settle(Some((0, (128 * 128) as f64))) && !coarse.far_on);
+    let mut small = Coarse::new(64, 8, settings);
+    assert!(small.far.is_none());
+    assert!(!small.settle(Some((far, contact))) && !small.far_on);
 }
 
 fn check_smoothing(kernel: &[f64]) {
