@@ -28,6 +28,13 @@ an edge-against-core loading is across clusters), its participation ratio (Σv²
 evenly over F, small when localised) and the share of its energy in the most loaded block of
 256² nodes (n a multiple of 256).
 
+`--block-deflate B` deflates the preconditioner (balancing form, A Z exact, one convolution
+per block) by the indicators of F on blocks of B × B nodes, each centred on F (one dropped:
+they sum to 0), the coarse
+space of benches/deflation_probe.py, there tried with M alone: how much of what remains
+with the extension a coarse space of the blocks' loads takes away. The coarse vectors and
+their A Z are kept in single precision.
+
 `--cells C` smooths the extension on cells of C × C nodes as the solver does (default 1:
 on the fine grid), and `--near SIGMA,WEIGHT` adds the solver's near term (a second
 Gaussian of SIGMA nodes and weight WEIGHT; the solver's is 6,0.3 with `--cells 8`).
@@ -60,6 +67,7 @@ def main():
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--edge-scale", type=float, default=1.0)
     ap.add_argument("--ring-blocks", type=int, default=0)
+    ap.add_argument("--block-deflate", type=int, default=0)
     ap.add_argument("--ritz-deflate", default="")
     ap.add_argument("--cells", type=int, default=1)
     ap.add_argument("--near", default="")
@@ -100,6 +108,10 @@ def main():
     ring[np.isin(labels, ids[n_interior < 1])] = 0.0
     if args.ring_blocks > 0:
         M = deflate(M, A, P, ring_space(ring, n, args.ring_blocks, P))
+    if args.block_deflate > 0:
+        # The centred indicators sum to P 1_F = 0: one of them is dropped.
+        blocks = ring_space(F.astype(np.float64), n, n // args.block_deflate, P)[:-1]
+        M = deflate(M, A, P, blocks, np.float32)
 
     b = P(h) if args.rhs == "heights" else P(np.random.default_rng(1).standard_normal((n, n)))
     alphas, betas, zs, rzs = conjugate_gradients(A, M, b, args.max_iterations)
@@ -217,11 +229,12 @@ def ring_space(ring, n, blocks, P):
     return space
 
 
-def deflate(M, A, P, space):
+def deflate(M, A, P, space, dtype=np.float64):
     """The balancing form (I − Q A) M (I − A Q) + Q, Q = Z (Zᵀ A Z)⁻¹ Zᵀ, of M on the
-    coarse space Z (A Z exact, one convolution per vector)."""
-    AZ = [A(z) for z in space]
-    E = np.array([[np.sum(a * z) for z in space] for a in AZ])
+    coarse space Z (A Z exact, one convolution per vector; both kept as `dtype`)."""
+    AZ = [A(z).astype(dtype) for z in space]
+    E = np.array([[np.sum(a * z, dtype=np.float64) for z in space] for a in AZ])
+    space = [z.astype(dtype) for z in space]
     E_inv = np.linalg.inv(0.5 * (E + E.T))
 
     def combine(fields, c):
