@@ -30,10 +30,9 @@ evenly over F, small when localised) and the share of its energy in the most loa
 
 `--block-deflate B` deflates the preconditioner (balancing form, A Z exact, one convolution
 per block) by the indicators of F on blocks of B × B nodes, each centred on F (one dropped:
-they sum to 0), the coarse
-space of benches/deflation_probe.py, there tried with M alone: how much of what remains
-with the extension a coarse space of the blocks' loads takes away. The coarse vectors and
-their A Z are kept in single precision.
+they sum to 0), the coarse space of benches/deflation_probe.py, there tried with M alone:
+how much of what remains with the extension a coarse space of the blocks' loads takes away.
+The coarse vectors and their A Z are kept in single precision.
 
 `--cells C` smooths the extension on cells of C × C nodes as the solver does (default 1:
 on the fine grid), and `--near SIGMA,WEIGHT` adds the solver's near term (a second
@@ -107,10 +106,10 @@ def main():
     ring[interior] = -(n_edge / np.maximum(n_interior, 1))[labels[interior] - 1]
     ring[np.isin(labels, ids[n_interior < 1])] = 0.0
     if args.ring_blocks > 0:
-        M = deflate(M, A, P, ring_space(ring, n, args.ring_blocks, P))
+        M = deflate(M, A, P, block_space(ring, n, args.ring_blocks, P))
     if args.block_deflate > 0:
         # The centred indicators sum to P 1_F = 0: one of them is dropped.
-        blocks = ring_space(F.astype(np.float64), n, n // args.block_deflate, P)[:-1]
+        blocks = block_space(F.astype(np.float64), n, n // args.block_deflate, P)[:-1]
         M = deflate(M, A, P, blocks, np.float32)
 
     b = P(h) if args.rhs == "heights" else P(np.random.default_rng(1).standard_normal((n, n)))
@@ -213,16 +212,16 @@ def edge_above_core(v, labels, ids, edge, interior, n_interior):
     return float(np.sum(energy[keep] * (edge_mean > core_mean)[keep]) / np.sum(energy[keep]))
 
 
-def ring_space(ring, n, blocks, P):
-    """The ring pattern cut into blocks × blocks equal blocks, each centred on F (the empty
-    ones dropped)."""
+def block_space(field, n, blocks, P):
+    """`field` (the ring pattern, or F's indicator) cut into blocks × blocks equal blocks,
+    each centred on F (the empty ones dropped)."""
     side = n // blocks
     space = []
     for i in range(blocks):
         for j in range(blocks):
             z = np.zeros((n, n))
             cut = (slice(i * side, (i + 1) * side), slice(j * side, (j + 1) * side))
-            z[cut] = ring[cut]
+            z[cut] = field[cut]
             z = P(z)
             if np.any(z):
                 space.append(z)
