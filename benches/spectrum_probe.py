@@ -32,7 +32,14 @@ evenly over F, small when localised) and the share of its energy in the most loa
 per block) by the indicators of F on blocks of B × B nodes, each centred on F (one dropped:
 they sum to 0), the coarse space of benches/deflation_probe.py, there tried with M alone:
 how much of what remains with the extension a coarse space of the blocks' loads takes away.
-The coarse vectors and their A Z are kept in single precision.
+The coarse vectors and their A Z are kept in single precision. `--model-cell C` replaces
+A Z by a model that needs no fine convolution per block: the deflection under the block's
+load averaged over cells of C × C nodes (P K Π P, Π the cell average), its output
+interpolated bilinearly between the cells' centres (`--model-output bilinear`, the
+default; `cells`: the cells' staircase; `fine`: K Π on the fine grid), plus the local
+field K (1_F − Π 1_F) of F inside the cells scaled by the block's value (left out with
+`--no-local`); E = Zᵀ W from the same model. The solver's own form of it is
+`Extension::coarse_block` (crates/core/src/contact/solver/deflation.rs).
 
 `--cells C` smooths the extension on cells of C × C nodes as the solver does (default 1:
 on the fine grid), and `--near SIGMA,WEIGHT` adds the solver's near term (a second
@@ -67,6 +74,9 @@ def main():
     ap.add_argument("--edge-scale", type=float, default=1.0)
     ap.add_argument("--ring-blocks", type=int, default=0)
     ap.add_argument("--block-deflate", type=int, default=0)
+    ap.add_argument("--model-cell", type=int, default=0)
+    ap.add_argument("--model-output", choices=["cells", "bilinear", "fine"], default="bilinear")
+    ap.add_argument("--no-local", action="store_true")
     ap.add_argument("--ritz-deflate", default="")
     ap.add_argument("--cells", type=int, default=1)
     ap.add_argument("--near", default="")
@@ -110,7 +120,12 @@ def main():
     if args.block_deflate > 0:
         # The centred indicators sum to P 1_F = 0: one of them is dropped.
         blocks = block_space(F.astype(np.float64), n, n // args.block_deflate, P)[:-1]
-        M = deflate(M, A, P, blocks, np.float32)
+        model = A
+        if args.model_cell > 0:
+            model = cell_model(op, P, args.model_cell, args.model_output)
+            if not args.no_local:
+                model = local_model(op, P, F, model, args.model_cell, args.block_deflate)
+        M = deflate(M, model, P, blocks, np.float32)
 
     b = P(h) if args.rhs == "heights" else P(np.random.default_rng(1).standard_normal((n, n)))
     alphas, betas, zs, rzs = conjugate_gradients(A, M, b, args.max_iterations)
@@ -226,6 +241,52 @@ def block_space(field, n, blocks, P):
             if np.any(z):
                 space.append(z)
     return space
+
+
+def cell_model(op, P, cell, output):
+    """x ↦ P K Π P x, Π the average over cells of cell × cell nodes: the deflection under the
+    cell-averaged load, on the fine grid (`fine`), averaged over the cells again (`cells`:
+    P Π K Π P, the cells' staircase), or interpolated bilinearly between the cells' centres
+    from those averages (`bilinear`: what the coarse grid alone can give)."""
+    n, m = op.n, op.n // cell
+
+    def average(x):
+        means = x.reshape(m, cell, m, cell).mean(axis=(1, 3))
+        return np.repeat(np.repeat(means, cell, axis=0), cell, axis=1)
+
+    if output == "bilinear":
+        xi = (np.arange(n) + 0.5) / cell - 0.5
+        i0 = np.floor(xi).astype(int)
+        w = xi - i0
+        i0, i1 = i0 % m, (i0 + 1) % m
+
+        def interpolate(x):
+            means = x.reshape(m, cell, m, cell).mean(axis=(1, 3))
+            rows = (1 - w)[:, None] * means[i0] + w[:, None] * means[i1]
+            return (1 - w)[None, :] * rows[:, i0] + w[None, :] * rows[:, i1]
+
+        return lambda x: P(interpolate(op.conv(average(P(x)), op.k_hat)))
+    if output == "fine":
+        return lambda x: P(op.conv(average(P(x)), op.k_hat))
+    return lambda x: P(average(op.conv(average(P(x)), op.k_hat)))
+
+
+def local_model(op, P, F, model, cell, block):
+    """W x = P (model x + Y ⊙ L): the cell model plus the local field L = K (1_F − Π 1_F) of
+    F's structure inside the cells, scaled by Y, the block means of x over F (for x a
+    block-constant field on F, K x up to the blocks' edges)."""
+    n, m, b = op.n, op.n // cell, op.n // block
+    Ff = F.astype(np.float64)
+    means = Ff.reshape(m, cell, m, cell).mean(axis=(1, 3))
+    L = op.conv(Ff - np.repeat(np.repeat(means, cell, axis=0), cell, axis=1), op.k_hat)
+    counts = Ff.reshape(b, block, b, block).sum(axis=(1, 3))
+
+    def W(x):
+        sums = np.where(F, x, 0.0).reshape(b, block, b, block).sum(axis=(1, 3))
+        Y = np.where(counts > 0, sums / np.maximum(counts, 1), 0.0)
+        return P(model(x) + np.repeat(np.repeat(Y, block, axis=0), block, axis=1) * L)
+
+    return W
 
 
 def deflate(M, A, P, space, dtype=np.float64):

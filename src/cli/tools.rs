@@ -42,6 +42,11 @@ pub struct SolveArgs {
     /// iterations on rough surfaces; docs/BENCHMARKS.md).
     #[arg(long, conflicts_with = "plain_cg")]
     pub no_extension: bool,
+    /// Deflate the preconditioner by the loads of blocks of this many nodes per side once
+    /// the contact set has settled (0, the default: never; a multiple of 16, used on boxes
+    /// of at least 4 blocks per side; docs/BENCHMARKS.md).
+    #[arg(long, default_value_t = 0, conflicts_with_all = ["plain_cg", "no_extension"])]
+    pub coarse_block: usize,
     /// Restore the load after each projection by rescaling every pressure instead of the
     /// default's uniform offset of the contact pressures (the same solution in about 1.1
     /// times the iterations; docs/BENCHMARKS.md).
@@ -346,6 +351,16 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if args.max_iter == 0 {
         return Err(InputError("--max-iter 0: at least one iteration is needed".into()).into());
     }
+    let cell = wearcoef::contact::solver::Extension::default().cell;
+    if !args.coarse_block.is_multiple_of(2 * cell) {
+        return Err(InputError(format!(
+            "--coarse-block {}: blocks must be a multiple of {} nodes (twice the extension's \
+             cell), or 0 for none",
+            args.coarse_block,
+            2 * cell
+        ))
+        .into());
+    }
     let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
     if let Some(p) = &args.pressure_out {
         outputs.push(("--pressure-out", p));
@@ -401,7 +416,10 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         tolerance: args.tol,
         max_iterations: args.max_iter,
         preconditioned: !args.plain_cg,
-        extension: (!args.no_extension).then(wearcoef::contact::solver::Extension::default),
+        extension: (!args.no_extension).then_some(wearcoef::contact::solver::Extension {
+            coarse_block: args.coarse_block,
+            ..Default::default()
+        }),
         offset_to_load: !args.scale_to_load,
         extrapolate_start: !args.scale_start,
         ..SolverConfig::default()

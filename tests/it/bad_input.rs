@@ -311,6 +311,12 @@ fn parameters_outside_their_domain_are_refused_on_every_tool() {
         ),
         case("modulus 0", &format!("{s} --e-star 0"), 2, &["--e-star 0"]),
         case(
+            "coarse block off the cells",
+            &format!("{s} --coarse-block 100"),
+            2,
+            &["--coarse-block 100", "multiple of 16"],
+        ),
+        case(
             "negative load",
             "solve --surface ok.npy --loads=-0.1",
             2,

@@ -579,27 +579,16 @@ fn identical_bits_for_one_and_two_threads() {
     let h = rough_surface(n, 64.0, 8.0, 9);
     for pre in VARIANTS {
         let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-                    let mut solver = Solver::new(&op, &h).unwrap();
-                    // Three loads: the third starts from the extrapolated secant.
-                    let iterations: Vec<usize> = [0.02, 0.025, 0.03]
-                        .iter()
-                        .map(|&w| solver.solve(w, &cfgp(pre, 1e-10)).unwrap().iterations)
-                        .collect();
-                    (
-                        iterations,
-                        solver
-                            .pressure()
-                            .iter()
-                            .map(|p| p.to_bits())
-                            .collect::<Vec<_>>(),
-                    )
-                })
+            on_threads(threads, || {
+                let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+                let mut solver = Solver::new(&op, &h).unwrap();
+                // Three loads: the third starts from the extrapolated secant.
+                let iterations: Vec<usize> = [0.02, 0.025, 0.03]
+                    .iter()
+                    .map(|&w| solver.solve(w, &cfgp(pre, 1e-10)).unwrap().iterations)
+                    .collect();
+                (iterations, pressure_bits(&solver))
+            })
         };
         assert_eq!(run(1), run(2), "preconditioned: {pre}");
     }
@@ -746,27 +735,93 @@ fn near_term_saves_iterations_on_a_settled_contact_set() {
 #[test]
 fn far_term_keeps_the_solution() {
     use wearcoef::contact::solver::Extension;
-    let n = 256;
     let small_far = Extension {
         far_sigma: 16.0,
         far_cell: 16,
         ..Extension::default()
     };
-    let with = SolverConfig {
-        extension: Some(small_far),
-        ..cfg(1e-12)
+    let without = Extension {
+        far_weight: 0.0,
+        ..small_far
     };
-    let without = SolverConfig {
-        extension: Some(Extension {
-            far_weight: 0.0,
-            ..small_far
-        }),
-        ..cfg(1e-12)
-    };
-    let h = rough_surface(n, 128.0, 4.0, 7);
-    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-    let (_, _, identical) = compare_sweeps(&op, &h, &with, &without, &[0.02, 0.04, 0.08]);
+    let identical = compare_extensions(small_far, without, &[0.02, 0.04, 0.08]);
     assert!(!identical, "the far term left every pressure bit unchanged");
+}
+
+/// The deflation by the blocks' loads once the contact set has settled (on blocks of 64
+/// nodes, so that a 256² box holds 4 × 4 of them) changes the iteration but not the
+/// solution (`compare_sweeps`, as above), and not the bits between 1 and 2 threads.
+#[test]
+fn coarse_deflation_keeps_the_solution_and_the_bits() {
+    use wearcoef::contact::solver::Extension;
+    let deflated = Extension {
+        coarse_block: 64,
+        ..Extension::default()
+    };
+    let without = Extension {
+        coarse_block: 0,
+        ..deflated
+    };
+    let loads = [0.02, 0.04, 0.08];
+    let identical = compare_extensions(deflated, without, &loads);
+    assert!(
+        !identical,
+        "the deflation left every pressure bit unchanged"
+    );
+    let with = SolverConfig {
+        extension: Some(deflated),
+        ..cfg(1e-12)
+    };
+    let (n, h) = extension_surface();
+    let run = |threads: usize| {
+        on_threads(threads, || {
+            let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+            let mut solver = Solver::new(&op, &h).unwrap();
+            for &w in &loads {
+                assert!(solver.solve(w, &with).unwrap().converged());
+            }
+            pressure_bits(&solver)
+        })
+    };
+    assert!(
+        run(1) == run(2),
+        "the deflated sweep differs between 1 and 2 threads"
+    );
+}
+
+/// `f` on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// The bits of the solver's pressures.
+fn pressure_bits(solver: &Solver) -> Vec<u64> {
+    solver.pressure().iter().map(|p| p.to_bits()).collect()
+}
+
+/// The rough 256² surface (L/λ_l = 2) of the extension's tests.
+fn extension_surface() -> (usize, Vec<f64>) {
+    (256, rough_surface(256, 128.0, 4.0, 7))
+}
+
+/// [`compare_sweeps`] of two settings of the extension at tolerance 1e-12 on
+/// [`extension_surface`]; whether every pressure bit was the same.
+fn compare_extensions(
+    with: wearcoef::contact::solver::Extension,
+    without: wearcoef::contact::solver::Extension,
+    loads: &[f64],
+) -> bool {
+    let (n, h) = extension_surface();
+    let config = |extension| SolverConfig {
+        extension: Some(extension),
+        ..cfg(1e-12)
+    };
+    let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    compare_sweeps(&op, &h, &config(with), &config(without), loads).2
 }
 
 /// Restoring the load by a uniform offset of the pressures (the default) reaches the

@@ -32,8 +32,10 @@
 
 use rayon::prelude::*;
 
+use super::deflation::{Bilinear, Deflation};
 use super::precond::free;
 use super::rows::avx2_dispatch;
+use crate::contact::elastic::ElasticOperator;
 
 /// Settings of the preconditioner's free-set extension.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -68,6 +70,13 @@ pub struct Extension {
     /// iteration, before the near term (used while the set moves by more, it makes the
     /// iteration crawl; docs/BENCHMARKS.md).
     pub far_fraction: f64,
+    /// Side of the blocks whose loads deflate the preconditioner once the contact set has
+    /// settled (module `deflation`), in grid nodes: 0 (the default: never) or a multiple of
+    /// twice `cell`, used on boxes of at least 4 blocks per side that it divides. Measured
+    /// on the paper's spectrum (docs/BENCHMARKS.md): 1024 takes 13 % of the iterations of
+    /// four loads near W/W0 = 0.05 away at 8192², 5 % at 4096², but adds half again to a
+    /// cold first load at W/W0 = 0.001, so the 30-load sweep gains nothing yet.
+    pub coarse_block: usize,
 }
 
 /// The far term is built on boxes of at least this many `far_sigma` per side: on smaller ones
@@ -101,6 +110,7 @@ impl Default for Extension {
             far_weight: 0.2,
             far_cell: 64,
             far_fraction: 0.03,
+            coarse_block: 0,
         }
     }
 }
@@ -137,6 +147,12 @@ impl Extension {
                 return Err(format!("extension {name} {value} must lie in [0, 1]"));
             }
         }
+        if !self.coarse_block.is_multiple_of(2 * self.cell) {
+            return Err(format!(
+                "extension coarse block {} must be 0 or a multiple of twice the cell {}",
+                self.coarse_block, self.cell
+            ));
+        }
         if !(self.density_floor.is_finite() && self.density_floor > 0.0) {
             return Err(format!(
                 "extension density floor {} must be finite and > 0",
@@ -152,6 +168,10 @@ pub(super) struct OffBlock {
     first_row: usize,
     first_cell_row: usize,
     sums: Vec<f64>,
+    /// With the deflation: the restriction of the output on F to the model rows from
+    /// `restrict_low` (unwrapped) that the block's rows reach.
+    pub(super) restrict_low: i64,
+    pub(super) restrict: Vec<f64>,
 }
 
 /// One Gaussian term of the extension on the cells: its smoothing, weight and the smoothed
@@ -264,6 +284,8 @@ pub(super) struct Coarse {
     /// Working values on the cells.
     work: [Vec<f64>; 3],
     pub(super) blocks: Vec<OffBlock>,
+    /// The coarse-space deflation, on boxes large enough for it.
+    deflation: Option<Deflation>,
 }
 
 impl Coarse {
@@ -279,6 +301,8 @@ impl Coarse {
                     first_row: first,
                     first_cell_row: first / cell,
                     sums: vec![0.0; cells * m],
+                    restrict_low: 0,
+                    restrict: Vec::new(),
                 }
             })
             .collect();
@@ -299,6 +323,22 @@ impl Coarse {
             back: vec![0.0; m * m],
             work: std::array::from_fn(|_| vec![0.0; m * m]),
             blocks,
+            deflation: None,
+        }
+    }
+
+    /// Adds the coarse-space deflation for `op`'s grid, when the box is large enough
+    /// ([`Extension::coarse_block`]).
+    pub(super) fn deflate(&mut self, op: &ElasticOperator) {
+        self.deflation = Deflation::new(op, self.settings.coarse_block, self.cell);
+        if let Some(d) = &self.deflation {
+            let firsts: Vec<usize> = self.blocks.iter().map(|b| b.first_row).collect();
+            for (k, block) in self.blocks.iter_mut().enumerate() {
+                let last = firsts.get(k + 1).map_or(self.n, |&f| f) - 1;
+                let (low, count) = d.bilinear.rows_reached(block.first_row, last);
+                block.restrict_low = low;
+                block.restrict = vec![0.0; count * d.bilinear.cells()];
+            }
         }
     }
 
@@ -320,6 +360,9 @@ impl Coarse {
         let far = self.far.is_some() && below(self.settings.far_fraction);
         let switched = near != self.near_on || far != self.far_on;
         (self.near_on, self.far_on) = (near, far);
+        if let Some(d) = self.deflation.as_mut() {
+            d.switch(near);
+        }
         switched
     }
 
@@ -340,6 +383,13 @@ impl Coarse {
                     dispatch_cell_sums(c, level, sg, cnt, pr, wr);
                 }
             });
+        let sums = match self.deflation.as_mut().filter(|d| d.on) {
+            Some(d) => {
+                d.prepare(p, w, level, &self.sum_g, &self.count);
+                &d.adjusted
+            }
+            None => &self.sum_g,
+        };
         let area = (c * c) as f64;
         let floor = self.settings.density_floor;
         let [fraction, tmp, smoothed] = &mut self.work;
@@ -355,7 +405,7 @@ impl Coarse {
             term.density.iter_mut().for_each(|d| *d = d.max(floor));
             fraction
                 .iter_mut()
-                .zip(&self.sum_g)
+                .zip(sums)
                 .for_each(|(s, &g)| *s = g / area);
             term.smoothing.apply(m, fraction, tmp, smoothed);
             let gamma = term.weight;
@@ -372,6 +422,9 @@ impl Coarse {
         let (c, m) = (self.cell, self.m);
         let values = &self.value[(i / c) * m..(i / c + 1) * m];
         dispatch_input(c, values, level, o, p, w);
+        if let Some(d) = self.deflation.as_ref().filter(|d| d.on) {
+            d.subtract_row(i, o, p, w, level);
+        }
     }
 
     /// Adds one row of `K⁻¹ E g` off F to its block's cell sums.
@@ -379,6 +432,7 @@ impl Coarse {
     pub(super) fn output_row(
         cell: usize,
         m: usize,
+        bilinear: Option<&Bilinear>,
         block: &mut OffBlock,
         r: usize,
         row: &[f32],
@@ -389,6 +443,10 @@ impl Coarse {
         let i = block.first_row + r;
         if r == 0 {
             block.sums.fill(0.0);
+            block.restrict.fill(0.0);
+        }
+        if let Some(b) = bilinear {
+            Deflation::restrict_row(b, block, i, row, p, w, level);
         }
         let local = i / cell - block.first_cell_row;
         let sums = &mut block.sums[local * m..(local + 1) * m];
@@ -397,13 +455,18 @@ impl Coarse {
 
     /// The cell size and cells per side, for [`Self::output_row`] while the blocks are
     /// borrowed.
-    pub(super) fn output_parts(&mut self) -> (usize, usize, &mut [OffBlock]) {
-        (self.cell, self.m, &mut self.blocks)
+    pub(super) fn output_parts(&mut self) -> (usize, usize, Option<&Bilinear>, &mut [OffBlock]) {
+        let bilinear = self
+            .deflation
+            .as_ref()
+            .filter(|d| d.on)
+            .map(|d| &d.bilinear);
+        (self.cell, self.m, bilinear, &mut self.blocks)
     }
 
-    /// After the output pass: the correction on F per cell, and its sums
-    /// `(Σ_F b, Σ_F g b)` (cells in order).
-    pub(super) fn finish(&mut self) -> (f64, f64) {
+    /// After the output pass (`z_sum`: the sum of its rows over F): the correction on F
+    /// per cell, and its sums `(Σ_F b, Σ_F g b)` (cells in order).
+    pub(super) fn finish(&mut self, z_sum: f64) -> (f64, f64) {
         let m = self.m;
         let area = (self.cell * self.cell) as f64;
         let [off, tmp, smoothed] = &mut self.work;
@@ -431,6 +494,9 @@ impl Coarse {
                 .iter_mut()
                 .zip(smoothed.iter())
                 .for_each(|(b, &s)| *b += gamma * s);
+        }
+        if let Some(d) = self.deflation.as_mut().filter(|d| d.on) {
+            d.finish(&mut self.back, &self.count, z_sum, &self.blocks);
         }
         let (mut sum_b, mut sum_gb) = (0.0, 0.0);
         for ((&b, &k), &g) in self.back.iter().zip(&self.count).zip(&self.sum_g) {

@@ -40,7 +40,8 @@
 //! across the clusters' edges once the contact set has settled (the direction restarts
 //! when it is switched on or off), and on boxes of 4096² and more a third, far one once the
 //! direction is no longer restarted. Together 38–44 % fewer iterations than `P K⁻¹ P` alone
-//! on the paper spectrum's 30-load sweeps at 1024²–4096² (docs/BENCHMARKS.md).
+//! on the paper spectrum's 30-load sweeps at 1024²–4096² (docs/BENCHMARKS.md). Opt-in, the
+//! settled phase deflated by the loads of large blocks (module `deflation`).
 //!
 //! **Load** (the default, [`SolverConfig::offset_to_load`]): after the projection, the load
 //! is restored by a uniform offset of the pressures, `p ← max(p + c, 0)` (`c ≤ 0`, found by
@@ -94,6 +95,7 @@
 //! - no progress for `stall_window` iterations, or a non-finite error: `Stalled`;
 //!   `max_iterations` reached: `MaxIterations`. Neither is ever a result that looks valid.
 
+mod deflation;
 mod extension;
 mod history;
 mod passes;
@@ -385,11 +387,9 @@ impl<'a> Solver<'a> {
             Some(settings) => {
                 if self.coarse.as_ref().map(|c| c.settings) != Some(settings) {
                     let n = self.op.grid().n();
-                    self.coarse = Some(extension::Coarse::new(
-                        n,
-                        self.op.rows_per_block(),
-                        settings,
-                    ));
+                    let mut coarse = extension::Coarse::new(n, self.op.rows_per_block(), settings);
+                    coarse.deflate(self.op);
+                    self.coarse = Some(coarse);
                 }
             }
             None => self.coarse = None,

@@ -52,8 +52,11 @@ impl Solver<'_> {
         let blocks = self.precondition_acc.len();
         let (extension, off_blocks) = match coarse.as_mut() {
             Some(c) => {
-                let (cell, m, off) = c.output_parts();
-                (Some((cell, m)), Either::Left(off.par_iter_mut().map(Some)))
+                let (cell, m, bilinear, off) = c.output_parts();
+                (
+                    Some((cell, m, bilinear)),
+                    Either::Left(off.par_iter_mut().map(Some)),
+                )
             }
             None => (
                 None,
@@ -75,13 +78,20 @@ impl Solver<'_> {
                 let at = r * n..(r + 1) * n;
                 let (p, w) = (&pc[at.clone()], &wc[at.clone()]);
                 dispatch_precondition_output(level, row, &mut zc[at.clone()], p, w, &tc[at], acc);
-                if let (Some((cell, m)), Some(block)) = (extension, block) {
-                    super::extension::Coarse::output_row(cell, m, block, r, row, p, w, level);
+                if let (Some((cell, m, bilinear)), Some(block)) = (extension, block) {
+                    super::extension::Coarse::output_row(
+                        cell, m, bilinear, block, r, row, p, w, level,
+                    );
                 }
             },
             &mut self.ws,
         );
-        let (sum_b, sum_gb) = coarse.as_mut().map_or((0.0, 0.0), |c| c.finish());
+        let z_sum: f64 = self
+            .precondition_acc
+            .iter()
+            .map(|acc| acc[0].iter().sum::<f64>())
+            .sum();
+        let (sum_b, sum_gb) = coarse.as_mut().map_or((0.0, 0.0), |c| c.finish(z_sum));
         self.coarse = coarse;
         self.precondition_sums(sum_b, sum_gb)
     }
