@@ -189,13 +189,13 @@ impl Deflation {
         })
     }
 
-    /// Use the deflation from the next iteration on, or not; a new settled phase builds
-    /// `E` anew.
-    pub(super) fn switch(&mut self, on: bool) {
+    /// Use the deflation from the next iteration on, or not (a new settled phase builds
+    /// `E` anew); whether that changed it.
+    pub(super) fn switch(&mut self, on: bool) -> bool {
         if on && !self.on {
             self.built = false;
         }
-        self.on = on;
+        std::mem::replace(&mut self.on, on) != on
     }
 
     /// `out = Π K Π x` on the model cells.

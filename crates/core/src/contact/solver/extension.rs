@@ -75,8 +75,11 @@ pub struct Extension {
     /// twice `cell`, used on boxes of at least 4 blocks per side that it divides. Measured
     /// on the paper's spectrum (docs/BENCHMARKS.md): 1024 takes 13 % of the iterations of
     /// four loads near W/W0 = 0.05 away at 8192², 5 % at 4096², but adds half again to a
-    /// cold first load at W/W0 = 0.001, so the 30-load sweep gains nothing yet.
+    /// cold first load at W/W0 = 0.001 (hence [`Self::coarse_fraction`]).
     pub coarse_block: usize,
+    /// The deflation is used only where the contact set covers at least this fraction of
+    /// the box: on sparser sets it costs iterations (docs/BENCHMARKS.md).
+    pub coarse_fraction: f64,
 }
 
 /// The far term is built on boxes of at least this many `far_sigma` per side: on smaller ones
@@ -111,6 +114,7 @@ impl Default for Extension {
             far_cell: 64,
             far_fraction: 0.03,
             coarse_block: 0,
+            coarse_fraction: 0.02,
         }
     }
 }
@@ -142,6 +146,7 @@ impl Extension {
             ("far weight", self.far_weight),
             ("settled fraction", self.settled_fraction),
             ("far fraction", self.far_fraction),
+            ("coarse fraction", self.coarse_fraction),
         ] {
             if !(value.is_finite() && (0.0..=1.0).contains(&value)) {
                 return Err(format!("extension {name} {value} must lie in [0, 1]"));
@@ -358,10 +363,12 @@ impl Coarse {
         };
         let near = self.settings.near_weight > 0.0 && below(self.settings.settled_fraction);
         let far = self.far.is_some() && below(self.settings.far_fraction);
-        let switched = near != self.near_on || far != self.far_on;
+        let mut switched = near != self.near_on || far != self.far_on;
         (self.near_on, self.far_on) = (near, far);
         if let Some(d) = self.deflation.as_mut() {
-            d.switch(near);
+            let dense = changed
+                .is_some_and(|(_, contact)| contact >= self.settings.coarse_fraction * nodes);
+            switched |= d.switch(near && dense);
         }
         switched
     }

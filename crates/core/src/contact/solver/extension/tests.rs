@@ -160,3 +160,37 @@ fn check_operator(m: usize, mut apply: impl FnMut(&[f64], &mut [f64])) {
     apply(&vec![1.0; m * m], &mut ga);
     assert!(ga.iter().all(|&v| (v - 1.0).abs() < 1e-14));
 }
+
+/// The deflation is built only on boxes of at least 4 blocks per side and used with the
+/// near term, once the contact set covers the coarse fraction of the box; switching it
+/// alone is reported too (the direction restarts).
+#[test]
+fn deflation_follows_the_settled_and_dense_contact_set() {
+    let n = 128;
+    let op =
+        crate::contact::elastic::ElasticOperator::new(crate::grid::Grid::unit(n).unwrap(), 1.0);
+    let settings = Extension {
+        coarse_block: 32,
+        ..Extension::default()
+    };
+    let mut small = Coarse::new(
+        n,
+        8,
+        Extension {
+            coarse_block: 64,
+            ..settings
+        },
+    );
+    small.deflate(&op);
+    assert!(small.deflation.is_none(), "2 blocks per side");
+    let mut coarse = Coarse::new(n, 8, settings);
+    coarse.deflate(&op);
+    let on = |c: &Coarse| c.deflation.as_ref().unwrap().on;
+    let dense = settings.coarse_fraction * (n * n) as f64;
+    let sparse = dense - 1.0;
+    assert!(coarse.settle(Some((0, dense))) && coarse.near_on && on(&coarse));
+    // Near stays on; the deflation alone goes off, then on again.
+    assert!(coarse.settle(Some((0, sparse))) && coarse.near_on && !on(&coarse));
+    assert!(coarse.settle(Some((0, dense))) && on(&coarse));
+    assert!(coarse.settle(None) && !on(&coarse));
+}
