@@ -9,18 +9,23 @@
 //! `M_B = (I − Z̃ E⁻¹ W̃ᵀ) M (I − W̃ E⁻¹ Z̃ᵀ) + Z̃ E⁻¹ Z̃ᵀ`,
 //!
 //! gives the coarse modes their exact weight when `W̃ = A Z̃` and `E = Z̃ᵀ A Z̃`. Both would
-//! take a convolution per block; here `W̃` is a model that needs none: the deflection under
-//! the block's load averaged over cells of 2c × 2c nodes (`c` the extension's cell),
-//! computed on the grid of those cells with the exact cell-averaged kernel (`Π K Π`, the
-//! aliases of the fine multiplier summed), and interpolated bilinearly between the cells'
-//! centres back to the nodes of F, then centred on F. `E = Z̃ᵀ W̃` (symmetrised) follows
-//! from one coarse convolution per block when the set settles. `M_B` is symmetric and
+//! take a convolution per block; here `W̃` is a model that needs none: the block's load on
+//! F restricted to the centres of cells of 2c × 2c nodes (`c` the extension's cell; the
+//! transpose of the bilinear interpolation), its deflection on the grid of those cells with
+//! the exact cell-averaged kernel (`Π K Π`, the aliases of the fine multiplier summed),
+//! interpolated bilinearly back to the nodes of F and centred there. `E` is the Gram
+//! matrix of the restricted loads under `Π K Π` (positive semi-definite by construction,
+//! projected off the constant block vector, `Σ_a Z̃_a = 0`), one coarse convolution per
+//! block when the set settles; should its Cholesky factorisation fail, `E⁻¹ = 0` gives back
+//! `M`. It is used only on contact sets that cover [`super::Extension::coarse_fraction`] of
+//! the box (sparser ones lose iterations; docs/BENCHMARKS.md). `M_B` is symmetric and
 //! positive for any `W̃` and positive `E` (it is `Xᵀ M X + Z̃ E⁻¹ Z̃ᵀ`, `X = I − W̃ E⁻¹
 //! Z̃ᵀ`), so the model changes the rate, never the solution. Per iteration: a pass over `p`
 //! and `w` for the interpolation weights, the bilinear correction of the input and the
 //! restriction of the output in the preconditioner's own passes, three convolutions on the
 //! coarse grid ((n/2c)² nodes) and two products with the dense `E⁻¹` (one row and column per
-//! block).
+//! block). Memory: about n²/9 doubles, most of it the four interpolation weights per
+//! extension cell.
 
 use rayon::prelude::*;
 use rustfft::num_complex::Complex;
@@ -660,35 +665,4 @@ fn solve_dense(inverse: &[f64], rhs: &[f64], out: &mut [f64]) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::grid::Grid;
-
-    /// The coarse convolution is `Π K Π`: the fine operator applied to a load constant on
-    /// each model cell, its deflection averaged over each.
-    #[test]
-    fn coarse_convolution_is_the_cell_averaged_operator() {
-        let n = 256;
-        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
-        let mut d = Deflation::new(&op, 64, 8).unwrap();
-        let (cell, m) = (16, n / 16);
-        let x: Vec<f64> = (0..m * m)
-            .map(|k| ((k * 7919 % 101) as f64) / 101.0)
-            .collect();
-        let mut coarse = vec![0.0; m * m];
-        d.convolve(&x, &mut coarse);
-        let fine: Vec<f64> = (0..n * n)
-            .map(|i| x[(i / n / cell) * m + (i % n) / cell])
-            .collect();
-        let mut u = vec![0.0; n * n];
-        op.apply(&fine, &mut u, &mut op.make_workspace());
-        let mut averaged = vec![0.0; m * m];
-        for (i, v) in u.iter().enumerate() {
-            averaged[(i / n / cell) * m + (i % n) / cell] += v / (cell * cell) as f64;
-        }
-        let scale = averaged.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        for (k, (a, b)) in coarse.iter().zip(&averaged).enumerate() {
-            assert!((a - b).abs() <= 1e-12 * scale, "cell {k}: {a} against {b}");
-        }
-    }
-}
+mod tests;
