@@ -121,10 +121,9 @@ pub(super) struct Deflation {
     /// model cells they lie between (rows below/above × columns left/right).
     weights: Vec<[f64; 4]>,
     /// Per model cell: the restriction of `1_F` (`R`), the coarse deflection `V` of the
-    /// correction, `Π K Π R`, and working values.
+    /// correction, and working values.
     restricted: Vec<f64>,
     field: Vec<f64>,
-    compliance_r: Vec<f64>,
     work: [Vec<f64>; 2],
     /// Per extension cell: `Σ_F g` less the correction's sum, for the extension's values.
     pub(super) adjusted: Vec<f64>,
@@ -177,7 +176,6 @@ impl Deflation {
             weights: vec![[0.0; 4]; (n / half) * (n / half)],
             restricted: vec![0.0; m * m],
             field: vec![0.0; m * m],
-            compliance_r: vec![0.0; m * m],
             work: std::array::from_fn(|_| vec![0.0; m * m]),
             adjusted: vec![0.0; (n / half) * (n / half)],
             shift: 0.0,
@@ -265,7 +263,6 @@ impl Deflation {
         }
         let total: f64 = self.count.iter().sum();
         let total_g: f64 = sum_block.iter().sum();
-
         for ((r, &s), &k) in self.rhs.iter_mut().zip(&sum_block).zip(&self.count) {
             *r = s - k / total * total_g;
         }
@@ -276,8 +273,9 @@ impl Deflation {
         let mut field = std::mem::take(&mut self.field);
         self.convolve(&x, &mut field);
         self.field = field;
+        // ω_a = ⟨W̃_a, 1_F⟩ from Π K Π R (in the second working field).
         let restricted = std::mem::take(&mut self.restricted);
-        let mut compliance = std::mem::take(&mut self.compliance_r);
+        let mut compliance = std::mem::take(&mut self.work[1]);
         self.convolve(&restricted, &mut compliance);
         self.shift = restricted
             .iter()
@@ -289,8 +287,7 @@ impl Deflation {
         self.block_dots(&compliance, &mut omega);
         self.omega = omega;
         self.restricted = restricted;
-        self.compliance_r = compliance;
-        self.work[0] = x;
+        self.work = [x, compliance];
         for ci in 0..mh {
             for cj in 0..mh {
                 let k = ci * mh + cj;
