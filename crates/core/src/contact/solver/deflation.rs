@@ -118,8 +118,8 @@ pub(super) struct Deflation {
     /// Whether `inverse` belongs to the current settled phase.
     built: bool,
     /// Per extension cell: the interpolation weights of its nodes in F towards the four
-    /// model cells they lie between (rows below/above × columns left/right).
-    weights: Vec<[f64; 4]>,
+    /// model cells they lie between (rows below/above × columns left/right), exact in f32.
+    weights: Vec<[f32; 4]>,
     /// Per model cell: the restriction of `1_F` (`R`), the coarse deflection `V` of the
     /// correction, and working values.
     restricted: Vec<f64>,
@@ -250,7 +250,7 @@ impl Deflation {
         for ci in 0..mh {
             for cj in 0..mh {
                 let k = ci * mh + cj;
-                for (t, wt) in self.targets(ci, cj).into_iter().zip(self.weights[k]) {
+                for (t, wt) in self.targets(ci, cj).into_iter().zip(self.weights_of(k)) {
                     self.restricted[t] += wt;
                 }
                 let b = self.block_of(ci, cj);
@@ -309,7 +309,7 @@ impl Deflation {
                 for (t, wt) in self
                     .targets(ci, cj)
                     .into_iter()
-                    .zip(self.weights[ci * mh + cj])
+                    .zip(self.weights_of(ci * mh + cj))
                 {
                     x[t] += wt * value;
                 }
@@ -332,12 +332,20 @@ impl Deflation {
     fn cell_dot(&self, ci: usize, cj: usize, field: &[f64]) -> f64 {
         self.targets(ci, cj)
             .into_iter()
-            .zip(self.weights[ci * self.m_half + cj])
+            .zip(self.weights_of(ci * self.m_half + cj))
             .map(|(t, wt)| wt * field[t])
             .sum()
     }
 
+    /// The interpolation weights of extension cell `k`.
+    fn weights_of(&self, k: usize) -> [f64; 4] {
+        self.weights[k].map(f64::from)
+    }
+
     /// The interpolation weights of F per extension cell, in parallel over rows of cells.
+    /// Stored in single precision without rounding for the committed cells: a node's
+    /// weights are multiples of 1/(2·2c) = 1/32, their products multiples of 1/1024, and a
+    /// cell's sums of at most 64 of them need 16 bits of the mantissa's 24.
     fn gather_weights(&mut self, p: &[f64], w: &[f64], level: f64) {
         let (n, half) = (self.n, self.half);
         let bilinear = &self.bilinear;
@@ -357,10 +365,10 @@ impl Deflation {
                                 kb += bilinear.col_weight[j];
                             }
                         }
-                        cell[0] += (1.0 - a) * (k - kb);
-                        cell[1] += (1.0 - a) * kb;
-                        cell[2] += a * (k - kb);
-                        cell[3] += a * kb;
+                        cell[0] += ((1.0 - a) * (k - kb)) as f32;
+                        cell[1] += ((1.0 - a) * kb) as f32;
+                        cell[2] += (a * (k - kb)) as f32;
+                        cell[3] += (a * kb) as f32;
                     }
                 }
             });
@@ -380,7 +388,7 @@ impl Deflation {
                 let r0 = (ci as i64 - 1).div_euclid(2) - (bi * self.per_block) as i64 + 1;
                 let c0 = (cj as i64 - 1).div_euclid(2) - (bj * self.per_block) as i64 + 1;
                 let region = &mut regions[b * span * span..(b + 1) * span * span];
-                let wts = self.weights[ci * mh + cj];
+                let wts = self.weights_of(ci * mh + cj);
                 for (k, wt) in wts.into_iter().enumerate() {
                     let (r, c) = (r0 as usize + k / 2, c0 as usize + k % 2);
                     region[r * span + c] += wt;
@@ -532,7 +540,7 @@ impl Deflation {
             for cj in 0..mh {
                 let k = ci * mh + cj;
                 s_sum += count[k] * back[k];
-                for (target, wt) in self.targets(ci, cj).into_iter().zip(self.weights[k]) {
+                for (target, wt) in self.targets(ci, cj).into_iter().zip(self.weights_of(k)) {
                     t[target] += back[k] * wt;
                 }
             }
