@@ -43,10 +43,10 @@ pub struct SolveArgs {
     #[arg(long, conflicts_with = "plain_cg")]
     pub no_extension: bool,
     /// Deflate the preconditioner by the loads of blocks of this many nodes per side once
-    /// the contact set has settled and covers at least 2 % of the box (0, the default:
-    /// never; a multiple of 16, used on boxes of at least 4 blocks per side;
-    /// docs/BENCHMARKS.md).
-    #[arg(long, default_value_t = 0, conflicts_with_all = ["plain_cg", "no_extension"])]
+    /// the contact set has settled and covers at least 2 % of the box (a multiple of 16,
+    /// used on boxes of at least 4 blocks per side, so by default on 4096² and larger; 0:
+    /// never; docs/BENCHMARKS.md).
+    #[arg(long, default_value_t = 1024, conflicts_with_all = ["plain_cg", "no_extension"])]
     pub coarse_block: usize,
     /// Restore the load after each projection by rescaling every pressure instead of the
     /// default's uniform offset of the contact pressures (the same solution in about 1.1

@@ -71,11 +71,12 @@ pub struct Extension {
     /// iteration crawl; docs/BENCHMARKS.md).
     pub far_fraction: f64,
     /// Side of the blocks whose loads deflate the preconditioner once the contact set has
-    /// settled (module `deflation`), in grid nodes: 0 (the default: never) or a multiple of
-    /// twice `cell`, used on boxes of at least 4 blocks per side that it divides. Measured
-    /// on the paper's spectrum (docs/BENCHMARKS.md): 1024 takes 13 % of the iterations of
-    /// four loads near W/W0 = 0.05 away at 8192², 5 % at 4096², but adds half again to a
-    /// cold first load at W/W0 = 0.001 (hence [`Self::coarse_fraction`]).
+    /// settled (module `deflation`), in grid nodes: 0 (never) or a multiple of twice
+    /// `cell`, used on boxes of at least 4 blocks per side that it divides (the default,
+    /// 1024: boxes of 4096² and more). Measured on the paper's spectrum
+    /// (docs/BENCHMARKS.md): 1024 takes 13 % of the iterations of four loads near W/W0 =
+    /// 0.05 away at 8192², 5 % at 4096² (512: 7 % and 1 %; 256 is not safe), but adds half
+    /// again to a cold first load at W/W0 = 0.001 (hence [`Self::coarse_fraction`]).
     pub coarse_block: usize,
     /// The deflation is used only where the contact set covers at least this fraction of
     /// the box: on sparser sets it costs iterations (docs/BENCHMARKS.md).
@@ -99,7 +100,11 @@ impl Default for Extension {
     /// 8192² sweep's iterations away when used with the near term; σ = 128–2048 and γ_far =
     /// 0.2–0.3 are within 4 % of it, γ_far = 0.5 costs iterations. Used from an iteration
     /// that changed at most 3 % of the contact set (the restart threshold) instead, it takes
-    /// 1.6 % and 2.4 % more away at 4096² and 8192²; 1 % and 10 % do less.
+    /// 1.6 % and 2.4 % more away at 4096² and 8192²; 1 % and 10 % do less. The deflation
+    /// on blocks of 1024² nodes, where the contact set covers at least 2 % of the box, takes
+    /// 6 % of the 8192² sweep's iterations away and 1 % of the 4096² one's; used while the
+    /// set still moves by up to 3 % (its `E` rebuilt every iteration) it costs 9 % on four
+    /// loads at 4096², and from the first iteration the solve stalls.
     fn default() -> Self {
         Self {
             cell: 8,
@@ -113,7 +118,7 @@ impl Default for Extension {
             far_weight: 0.2,
             far_cell: 64,
             far_fraction: 0.03,
-            coarse_block: 0,
+            coarse_block: 1024,
             coarse_fraction: 0.02,
         }
     }
