@@ -129,6 +129,8 @@ pub(super) struct Deflation {
     pub(super) adjusted: Vec<f64>,
     /// The mean of the correction over F, subtracted with it.
     shift: f64,
+    /// The number of nodes in F, from [`Self::prepare`].
+    total: f64,
     /// `E⁻¹` (blocks² × blocks², dense), `E` and its Cholesky factor while it is built,
     /// and the per-block vectors.
     inverse: Vec<f64>,
@@ -179,6 +181,7 @@ impl Deflation {
             work: std::array::from_fn(|_| vec![0.0; m * m]),
             adjusted: vec![0.0; (n / half) * (n / half)],
             shift: 0.0,
+            total: 0.0,
             inverse: vec![0.0; nb * nb],
             matrix: vec![0.0; nb * nb],
             factor: vec![0.0; nb * nb],
@@ -262,6 +265,7 @@ impl Deflation {
             self.build();
         }
         let total: f64 = self.count.iter().sum();
+        self.total = total;
         let total_g: f64 = sum_block.iter().sum();
         for ((r, &s), &k) in self.rhs.iter_mut().zip(&sum_block).zip(&self.count) {
             *r = s - k / total * total_g;
@@ -545,8 +549,7 @@ impl Deflation {
                 }
             }
         }
-        let total: f64 = self.count.iter().sum();
-        let mean = s_sum / total;
+        let mean = s_sum / self.total;
         let mut q = std::mem::take(&mut self.work[1]);
         self.convolve(&t, &mut q);
         let mut e = std::mem::take(&mut self.rhs);

@@ -342,9 +342,10 @@ impl Coarse {
     pub(super) fn deflate(&mut self, op: &ElasticOperator) {
         self.deflation = Deflation::new(op, self.settings.coarse_block, self.cell);
         if let Some(d) = &self.deflation {
-            let firsts: Vec<usize> = self.blocks.iter().map(|b| b.first_row).collect();
-            for (k, block) in self.blocks.iter_mut().enumerate() {
-                let last = firsts.get(k + 1).map_or(self.n, |&f| f) - 1;
+            // Every block but the last holds the same number of rows.
+            let rows = self.blocks.get(1).map_or(self.n, |b| b.first_row);
+            for block in &mut self.blocks {
+                let last = (block.first_row + rows).min(self.n) - 1;
                 let (low, count) = d.bilinear.rows_reached(block.first_row, last);
                 block.restrict_low = low;
                 block.restrict = vec![0.0; count * d.bilinear.cells()];

@@ -86,40 +86,22 @@ impl Solver<'_> {
             },
             &mut self.ws,
         );
-        let z_sum: f64 = self
-            .precondition_acc
-            .iter()
-            .map(|acc| acc[0].iter().sum::<f64>())
-            .sum();
-        let (sum_b, sum_gb) = coarse.as_mut().map_or((0.0, 0.0), |c| c.finish(z_sum));
+        let sums = self.output_sums();
+        let (sum_b, sum_gb) = coarse.as_mut().map_or((0.0, 0.0), |c| c.finish(sums[0]));
         self.coarse = coarse;
-        self.precondition_sums(sum_b, sum_gb)
+        PreconditionSums::new(sums, sum_b, sum_gb)
     }
 
-    /// The sums of the output pass over the blocks in order, with the extension's
-    /// correction `b` on F (`Σ_F b`, `Σ_F g b`; 0 without it).
-    fn precondition_sums(&self, sum_b: f64, sum_gb: f64) -> PreconditionSums {
+    /// The sums of the output pass over the blocks in order: `Σ_F z`, `|F|`, `Σ_F g z`,
+    /// `Σ_F g`, `Σ_F g t`, `Σ_F t`.
+    fn output_sums(&self) -> [f64; 6] {
         let mut sums = [0.0; 6];
         for acc in &self.precondition_acc {
             for (s, lanes) in sums.iter_mut().zip(acc) {
                 *s += lanes.iter().sum::<f64>();
             }
         }
-        let [sz, count, sgz, sg, sgt, st] = sums;
-        let (sz, sgz) = (sz + sum_b, sgz + sum_gb);
-        let (z_mean, t_mean) = if count > 0.0 {
-            (sz / count, st / count)
-        } else {
-            (0.0, 0.0)
-        };
-        // Σ_F g (z − z̄) = Σ_F g z − z̄ Σ_F g.
-        PreconditionSums {
-            z_mean,
-            g_dot_z: sgz - z_mean * sg,
-            g_dot_t_old: sgt,
-            g_sum: sg,
-            t_old_mean: t_mean,
-        }
+        sums
     }
 
     /// [`Self::direction_and_transform`] with the preconditioned gradient:
@@ -403,6 +385,28 @@ pub(super) struct PreconditionSums {
     pub g_sum: f64,
     /// Mean of the previous direction over F.
     pub t_old_mean: f64,
+}
+
+impl PreconditionSums {
+    /// From the output pass's sums ([`Solver::output_sums`]) with the extension's correction
+    /// `b` on F (`Σ_F b`, `Σ_F g b`; 0 without it).
+    fn new(sums: [f64; 6], sum_b: f64, sum_gb: f64) -> Self {
+        let [sz, count, sgz, sg, sgt, st] = sums;
+        let (sz, sgz) = (sz + sum_b, sgz + sum_gb);
+        let (z_mean, t_mean) = if count > 0.0 {
+            (sz / count, st / count)
+        } else {
+            (0.0, 0.0)
+        };
+        // Σ_F g (z − z̄) = Σ_F g z − z̄ Σ_F g.
+        Self {
+            z_mean,
+            g_dot_z: sgz - z_mean * sg,
+            g_dot_t_old: sgt,
+            g_sum: sg,
+            t_old_mean: t_mean,
+        }
+    }
 }
 
 #[cfg(test)]
