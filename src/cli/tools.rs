@@ -352,16 +352,13 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if args.max_iter == 0 {
         return Err(InputError("--max-iter 0: at least one iteration is needed".into()).into());
     }
-    let cell = wearcoef::contact::solver::Extension::default().cell;
-    if !args.coarse_block.is_multiple_of(2 * cell) {
-        return Err(InputError(format!(
-            "--coarse-block {}: blocks must be a multiple of {} nodes (twice the extension's \
-             cell), or 0 for none",
-            args.coarse_block,
-            2 * cell
-        ))
-        .into());
-    }
+    let extension = wearcoef::contact::solver::Extension {
+        coarse_block: args.coarse_block,
+        ..Default::default()
+    };
+    extension
+        .check()
+        .map_err(|e| InputError(format!("--coarse-block {}: {e}", args.coarse_block)))?;
     let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
     if let Some(p) = &args.pressure_out {
         outputs.push(("--pressure-out", p));
@@ -417,10 +414,7 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         tolerance: args.tol,
         max_iterations: args.max_iter,
         preconditioned: !args.plain_cg,
-        extension: (!args.no_extension).then_some(wearcoef::contact::solver::Extension {
-            coarse_block: args.coarse_block,
-            ..Default::default()
-        }),
+        extension: (!args.no_extension).then_some(extension),
         offset_to_load: !args.scale_to_load,
         extrapolate_start: !args.scale_start,
         ..SolverConfig::default()

@@ -126,7 +126,7 @@ impl Default for Extension {
 
 impl Extension {
     /// A message naming the invalid setting, if any.
-    pub(super) fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), String> {
         if self.cell == 0 {
             return Err("extension cell must be ≥ 1 node".into());
         }
@@ -159,8 +159,10 @@ impl Extension {
         }
         if !self.coarse_block.is_multiple_of(2 * self.cell) {
             return Err(format!(
-                "extension coarse block {} must be 0 or a multiple of twice the cell {}",
-                self.coarse_block, self.cell
+                "extension coarse block {} must be 0 or a multiple of {} nodes (twice the \
+                 cell)",
+                self.coarse_block,
+                2 * self.cell
             ));
         }
         if !(self.density_floor.is_finite() && self.density_floor > 0.0) {
