@@ -225,14 +225,13 @@ fn deflated_preconditioner_is_symmetric() {
     let inside = contact.iter().filter(|&&c| c).count() as f64;
     // Random values on the contact set, centred there.
     let field = |seed: u64| -> Vec<f64> {
-        let mut state = seed;
-        let mut x: Vec<f64> = (0..n * n)
-            .map(|i| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                if contact[i] {
-                    (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        let mut next = support::sequence(seed);
+        let mut x: Vec<f64> = contact
+            .iter()
+            .map(|&c| {
+                let v = next();
+                if c {
+                    v
                 } else {
                     0.0
                 }
