@@ -101,10 +101,7 @@ impl Default for Extension {
     /// 0.2–0.3 are within 4 % of it, γ_far = 0.5 costs iterations. Used from an iteration
     /// that changed at most 3 % of the contact set (the restart threshold) instead, it takes
     /// 1.6 % and 2.4 % more away at 4096² and 8192²; 1 % and 10 % do less. The deflation
-    /// on blocks of 1024² nodes, where the contact set covers at least 2 % of the box, takes
-    /// 6 % of the 8192² sweep's iterations away and 1 % of the 4096² one's; used while the
-    /// set still moves by up to 3 % (its `E` rebuilt every iteration) it costs 9 % on four
-    /// loads at 4096², and from the first iteration the solve stalls.
+    /// takes 6 % of the 8192² sweep's iterations away (1 % at 4096²); used earlier, it loses.
     fn default() -> Self {
         Self {
             cell: 8,
