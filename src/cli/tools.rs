@@ -48,6 +48,12 @@ pub struct SolveArgs {
     /// never; docs/BENCHMARKS.md).
     #[arg(long, default_value_t = 1024, conflicts_with_all = ["plain_cg", "no_extension"])]
     pub coarse_block: usize,
+    /// On boxes of 4096² and more, let a node off the contact set join the free set only
+    /// where it interpenetrates by more than this times the current error times the
+    /// heights' standard deviation (in [0, 1]; 0: every interpenetrating node joins, as on
+    /// smaller boxes; docs/BENCHMARKS.md).
+    #[arg(long, default_value_t = 0.1, conflicts_with_all = ["plain_cg", "no_extension"])]
+    pub entry_margin: f64,
     /// Restore the load after each projection by rescaling every pressure instead of the
     /// default's uniform offset of the contact pressures (the same solution in about 1.1
     /// times the iterations; docs/BENCHMARKS.md).
@@ -352,8 +358,16 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if args.max_iter == 0 {
         return Err(InputError("--max-iter 0: at least one iteration is needed".into()).into());
     }
+    if !(args.entry_margin.is_finite() && (0.0..=1.0).contains(&args.entry_margin)) {
+        return Err(InputError(format!(
+            "--entry-margin {}: the margin must lie in [0, 1] (0.1 is the default, 0 turns it off)",
+            args.entry_margin
+        ))
+        .into());
+    }
     let extension = wearcoef::contact::solver::Extension {
         coarse_block: args.coarse_block,
+        entry_margin: args.entry_margin,
         ..Default::default()
     };
     extension

@@ -42,7 +42,7 @@ pub fn pressure_file(index: usize) -> String {
 
 impl Stage for Contact {
     const NAME: &'static str = "contact";
-    const VERSION: u32 = 14;
+    const VERSION: u32 = 15;
     type Job = ContactJob;
 
     fn compute(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

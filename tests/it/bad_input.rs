@@ -317,6 +317,12 @@ fn parameters_outside_their_domain_are_refused_on_every_tool() {
             &["--coarse-block 100", "multiple of 16"],
         ),
         case(
+            "entry margin out of range",
+            &format!("{s} --entry-margin 2"),
+            2,
+            &["--entry-margin 2", "[0, 1]"],
+        ),
+        case(
             "negative load",
             "solve --surface ok.npy --loads=-0.1",
             2,

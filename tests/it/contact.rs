@@ -760,14 +760,42 @@ fn coarse_deflation_keeps_the_solution_and_the_bits() {
         coarse_block: 0,
         ..deflated
     };
+    keeps_the_solution_and_the_bits(deflated, without, "the deflation");
+}
+
+/// The free set's entry margin (forced on the 256² box, whose side is below its default
+/// `entry_box`) changes the iteration but not the solution (`compare_sweeps`: the same
+/// contact pixels, pressures within the tolerance's reach, complementarity recomputed
+/// independently), and not the bits between 1 and 2 threads.
+#[test]
+fn entry_margin_keeps_the_solution_and_the_bits() {
+    use wearcoef::contact::solver::Extension;
+    let default = Extension::default();
+    assert!(default.entry_margin > 0.0 && default.entry_box > 256);
+    let margin = Extension {
+        entry_box: 0,
+        ..default
+    };
+    let without = Extension {
+        entry_margin: 0.0,
+        ..margin
+    };
+    keeps_the_solution_and_the_bits(margin, without, "the entry margin");
+}
+
+/// [`compare_extensions`] of `with` against `without` on three loads must find the bits
+/// changed (so `with` acts) and the solution kept, and a sweep with `with` must give the
+/// same bits on 1 and 2 threads.
+fn keeps_the_solution_and_the_bits(
+    with: wearcoef::contact::solver::Extension,
+    without: wearcoef::contact::solver::Extension,
+    what: &str,
+) {
     let loads = [0.02, 0.04, 0.08];
-    let identical = compare_extensions(deflated, without, &loads);
-    assert!(
-        !identical,
-        "the deflation left every pressure bit unchanged"
-    );
-    let with = SolverConfig {
-        extension: Some(deflated),
+    let identical = compare_extensions(with, without, &loads);
+    assert!(!identical, "{what} left every pressure bit unchanged");
+    let config = SolverConfig {
+        extension: Some(with),
         ..cfg(1e-12)
     };
     let (n, h) = extension_surface();
@@ -776,14 +804,14 @@ fn coarse_deflation_keeps_the_solution_and_the_bits() {
             let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
             let mut solver = Solver::new(&op, &h).unwrap();
             for &w in &loads {
-                assert!(solver.solve(w, &with).unwrap().converged());
+                assert!(solver.solve(w, &config).unwrap().converged());
             }
             pressure_bits(&solver)
         })
     };
     assert!(
         run(1) == run(2),
-        "the deflated sweep differs between 1 and 2 threads"
+        "{what}: the sweep differs between 1 and 2 threads"
     );
 }
 
@@ -920,6 +948,17 @@ fn extended_preconditioner_reaches_the_same_solution() {
     };
     match solver.solve(0.1, &bad) {
         Err(ContactError::BadConfig(msg)) => assert!(msg.contains("near weight"), "{msg}"),
+        other => panic!("expected BadConfig, got {other:?}"),
+    }
+    let bad = SolverConfig {
+        extension: Some(Extension {
+            entry_margin: f64::NAN,
+            ..Extension::default()
+        }),
+        ..cfg(1e-8)
+    };
+    match solver.solve(0.1, &bad) {
+        Err(ContactError::BadConfig(msg)) => assert!(msg.contains("entry margin"), "{msg}"),
         other => panic!("expected BadConfig, got {other:?}"),
     }
 }

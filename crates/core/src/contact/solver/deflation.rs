@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
 use super::extension::OffBlock;
-use super::precond::free;
+use super::precond::{free, Level};
 use crate::contact::elastic::ElasticOperator;
 use crate::spectral::{Fft2, Fft2Scratch};
 
@@ -240,7 +240,7 @@ impl Deflation {
         &mut self,
         p: &[f64],
         w: &[f64],
-        level: f64,
+        level: Level,
         sum_g: &[f64],
         count: &[f64],
     ) {
@@ -350,7 +350,7 @@ impl Deflation {
     /// Stored in single precision without rounding for the committed cells: a node's
     /// weights are multiples of 1/(2·2c) = 1/32, their products multiples of 1/1024, and a
     /// cell's sums of at most 64 of them need 16 bits of the mantissa's 24.
-    fn gather_weights(&mut self, p: &[f64], w: &[f64], level: f64) {
+    fn gather_weights(&mut self, p: &[f64], w: &[f64], level: Level) {
         let (n, half) = (self.n, self.half);
         let bilinear = &self.bilinear;
         self.weights
@@ -463,7 +463,7 @@ impl Deflation {
     }
 
     /// One row of the preconditioner's input on F less the correction `W̃ y` there.
-    pub(super) fn subtract_row(&self, i: usize, o: &mut [f32], p: &[f64], w: &[f64], level: f64) {
+    pub(super) fn subtract_row(&self, i: usize, o: &mut [f32], p: &[f64], w: &[f64], level: Level) {
         let b = &self.bilinear;
         let m = b.m;
         let (r0, a) = Bilinear::split(b.cell, m, i);
@@ -477,7 +477,7 @@ impl Deflation {
                 let top = v0[c0] + t * (v0[c1] - v0[c0]);
                 let bottom = v1[c0] + t * (v1[c1] - v1[c0]);
                 let value = top + a * (bottom - top) - self.shift;
-                *o = ((w[j] - level) - value) as f32;
+                *o = ((w[j] - level.mean) - value) as f32;
             }
         }
     }
@@ -490,7 +490,7 @@ impl Deflation {
         row: &[f32],
         p: &[f64],
         w: &[f64],
-        level: f64,
+        level: Level,
     ) {
         let (m, half) = (bilinear.m, bilinear.cell / 2);
         let (first, a) = Bilinear::unwrapped(bilinear.cell, i);

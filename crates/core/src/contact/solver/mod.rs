@@ -14,7 +14,9 @@
 //! replaced by `z = P K⁻¹ P g` on the free set `F` (`K⁻¹`: the multiplier `E*|q|/2`, 0 at
 //! q = 0; `P`: zero off F and centred on it), with `β = ⟨g, z⟩/⟨g, z⟩_old` — the
 //! preconditioned conjugate gradient, projected as below. `F` is the contact set and the
-//! nodes off it that interpenetrate (`g` below the contact set's mean level): the direction
+//! nodes off it that interpenetrate (`g` below the contact set's mean level; on boxes of
+//! 4096² and more, by more than a margin that falls with the error,
+//! [`Extension::entry_margin`]: 5 % fewer iterations at 8192²): the direction
 //! raises their pressure with the same preconditioned step, instead of re-admitting them
 //! one by one afterwards as the plain iteration does, and the conjugate direction is kept
 //! unless more than [`RESTART_FRACTION`] of the contact set changed (or the direction would
@@ -110,6 +112,7 @@ use rayon::prelude::*;
 
 use super::elastic::{ElasticOperator, OperatorWorkspace};
 pub use extension::Extension;
+use precond::Level;
 pub use report::{SolveReport, Status};
 use rows::{GradientStats, UpdateAcc, LANES};
 
@@ -489,11 +492,13 @@ impl<'a> Solver<'a> {
             let preconditioned = if cfg.preconditioned {
                 // The extension's near term is used once the contact set has settled; the
                 // direction restarts when the preconditioner changes.
+                let mut entry = level;
                 if let Some(coarse) = self.coarse.as_mut() {
                     restart |= coarse.settle(changes);
+                    entry -= coarse.entry_margin(error * self.height_std);
                 }
                 report.convolutions += 1;
-                Some(self.precondition(level))
+                Some(self.precondition(Level { mean: level, entry }))
             } else {
                 None
             };
@@ -661,39 +666,5 @@ impl Solver<'_> {
             report.convolutions += 1;
             self.exact_deflection(1.0, 0.0)
         }
-    }
-
-    /// The deflection after an update pass, the cheapest way that stays exact: the linear
-    /// update itself when no node changed, a direct correction for a few changed nodes, an
-    /// FFT correction for more, or an exact recomputation (every [`RESYNC`] steps, and when
-    /// a block changed more nodes than its list holds). `linear_steps` counts the updates
-    /// since the last exact one (0 after one).
-    fn next_deflection(
-        &mut self,
-        totals: &passes::UpdateTotals,
-        linear_stats: GradientStats,
-        scale: f64,
-        shift: f64,
-        linear_steps: &mut usize,
-        report: &mut SolveReport,
-    ) -> GradientStats {
-        let linear = *linear_steps + 1 < RESYNC;
-        let stats = if totals.changed == 0 && linear {
-            // Nothing left or entered the set: p and u are both exact linear updates and
-            // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next exact
-            // step.
-            linear_stats
-        } else if totals.changed <= MAX_SPARSE && linear && self.gather_changes() {
-            self.sparse_update(scale, shift)
-        } else if linear && self.changes_listed() {
-            report.convolutions += 1;
-            self.fft_correction(scale, shift)
-        } else {
-            report.convolutions += 1;
-            *linear_steps = 0;
-            return self.exact_deflection(scale, shift);
-        };
-        *linear_steps += 1;
-        stats
     }
 }

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::rows::*;
-use super::{Solver, MAX_SPARSE};
+use super::{SolveReport, Solver, MAX_SPARSE, RESYNC};
 
 /// Totals of one update pass ([`Solver::update_from_transform`]).
 #[derive(Debug, Default, Clone, Copy)]
@@ -377,5 +377,41 @@ avx2_dispatch! {
             sums[k] += if v > 0.0 { v } else { 0.0 };
             counts[k] += if v > 0.0 { 1.0 } else { 0.0 };
         }
+    }
+}
+
+impl Solver<'_> {
+    /// The deflection after an update pass, the cheapest way that stays exact: the linear
+    /// update itself when no node changed, a direct correction for a few changed nodes, an
+    /// FFT correction for more, or an exact recomputation (every [`RESYNC`] steps, and when
+    /// a block changed more nodes than its list holds). `linear_steps` counts the updates
+    /// since the last exact one (0 after one).
+    pub(super) fn next_deflection(
+        &mut self,
+        totals: &UpdateTotals,
+        linear_stats: GradientStats,
+        scale: f64,
+        shift: f64,
+        linear_steps: &mut usize,
+        report: &mut SolveReport,
+    ) -> GradientStats {
+        let linear = *linear_steps + 1 < RESYNC;
+        let stats = if totals.changed == 0 && linear {
+            // Nothing left or entered the set: p and u are both exact linear updates and
+            // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next exact
+            // step.
+            linear_stats
+        } else if totals.changed <= MAX_SPARSE && linear && self.gather_changes() {
+            self.sparse_update(scale, shift)
+        } else if linear && self.changes_listed() {
+            report.convolutions += 1;
+            self.fft_correction(scale, shift)
+        } else {
+            report.convolutions += 1;
+            *linear_steps = 0;
+            return self.exact_deflection(scale, shift);
+        };
+        *linear_steps += 1;
+        stats
     }
 }

@@ -12,8 +12,9 @@ use super::Solver;
 
 impl Solver<'_> {
     /// The preconditioned gradient `z = P K⁻¹ P g` on the free set
-    /// `F = {p > 0} ∪ {p = 0, g < 0}` (the contact set and the nodes that interpenetrate;
-    /// `g = u − h − level`, `level` the mean of `u − h` over the contact set; `P`: zero off
+    /// `F = {p > 0} ∪ {p = 0, u − h < entry}` (the contact set and the nodes that
+    /// interpenetrate, [`Level`]; `g = u − h − mean`, `mean` that of `u − h` over the
+    /// contact set; `P`: zero off
     /// F, centred on F). Each row of `K⁻¹ P g` is stored raw in `self.preconditioned` as it
     /// leaves the inverse FFT, and summed over F in the same pass: `Σ z`, `|F|`, `Σ g z`,
     /// `Σ g`, `Σ g t_old`, `Σ t_old`. The centring is left to the direction pass, which
@@ -22,7 +23,7 @@ impl Solver<'_> {
     /// extension (module `extension`) the input is `E g` instead of `P g`, and the values
     /// of `K⁻¹ E g` off F are summed per cell for the correction `Σ γ S D⁻¹ (1 − 1_F) y` that
     /// the direction pass adds on F.
-    pub(super) fn precondition(&mut self, level: f64) -> PreconditionSums {
+    pub(super) fn precondition(&mut self, level: Level) -> PreconditionSums {
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let rows = self.op.rows_per_block();
         let mut coarse = self.coarse.take();
@@ -163,10 +164,10 @@ impl Solver<'_> {
 
 avx2_dispatch! {
     /// One row of the preconditioner's input, with AVX2 where available:
-    /// `o = w − level` on the free set F, 0 elsewhere, rounded to single precision.
-    fn dispatch_precondition_input(level: f64, o: &mut [f32], p: &[f64], w: &[f64]) {
+    /// `o = w − level.mean` on the free set F, 0 elsewhere, rounded to single precision.
+    fn dispatch_precondition_input(level: Level, o: &mut [f32], p: &[f64], w: &[f64]) {
         for ((o, &p), &w) in o.iter_mut().zip(p).zip(w) {
-            *o = if free(p, w, level) { (w - level) as f32 } else { 0.0 };
+            *o = if free(p, w, level) { (w - level.mean) as f32 } else { 0.0 };
         }
     }
 }
@@ -176,7 +177,7 @@ avx2_dispatch! {
     /// ([`precondition_output_avx2`]: one pass over the row instead of two, the sums kept in
     /// registers). Same operations in the same order, so the same bits either way.
     fn dispatch_precondition_output = precondition_output_row / precondition_output_avx2(
-        level: f64,
+        level: Level,
         row: &[f32],
         z: &mut [f32],
         p: &[f64],
@@ -194,7 +195,7 @@ avx2_dispatch! {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn precondition_output_avx2(
-    level: f64,
+    level: Level,
     row: &[f32],
     z: &mut [f32],
     p: &[f64],
@@ -207,7 +208,8 @@ unsafe fn precondition_output_avx2(
     let n = row.len();
     assert!(z.len() == n && p.len() == n && w.len() == n && t.len() == n);
     let whole = n / LANES * LANES;
-    let level_v = _mm256_set1_pd(level);
+    let level_v = _mm256_set1_pd(level.mean);
+    let entry_v = _mm256_set1_pd(level.entry);
     let zero = _mm256_setzero_pd();
     let one = _mm256_set1_pd(1.0);
     let off = _mm256_set1_pd(OFF_FREE_SET as f64);
@@ -226,10 +228,10 @@ unsafe fn precondition_output_avx2(
                 _mm256_loadu_pd(t.as_ptr().add(i)),
             )
         };
-        // `free`: p > 0 || w < level.
+        // `free`: p > 0 || w < entry.
         let on = _mm256_or_pd(
             _mm256_cmp_pd::<_CMP_GT_OQ>(pv, zero),
-            _mm256_cmp_pd::<_CMP_LT_OQ>(wv, level_v),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(wv, entry_v),
         );
         // z on F (v, exactly the f32 value), NaN off it.
         let stored = _mm256_cvtpd_ps(_mm256_blendv_pd(off, v, on));
@@ -263,12 +265,12 @@ unsafe fn precondition_output_avx2(
 
 /// One row of `K⁻¹ P g` as it leaves the inverse FFT: stored
 /// in `z` on the free set F and marked off it (NaN, [`OFF_FREE_SET`]), so that the
-/// direction pass needs neither `p` nor `w`; and with `g = w − level`, `Σ z`, `|F|`,
+/// direction pass needs neither `p` nor `w`; and with `g = w − level.mean`, `Σ z`, `|F|`,
 /// `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over F added to `acc` (lane `k mod LANES` takes node `k`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn precondition_output_row(
-    level: f64,
+    level: Level,
     row: &[f32],
     z: &mut [f32],
     p: &[f64],
@@ -319,7 +321,7 @@ fn widened(slice: &[f32]) -> [f64; LANES] {
 /// [`dispatch_precondition_output`]'s sums for one block of [`LANES`] nodes.
 #[inline(always)]
 fn precondition_sums(
-    level: f64,
+    level: Level,
     z: &[f64; LANES],
     p: &[f64; LANES],
     w: &[f64; LANES],
@@ -328,7 +330,7 @@ fn precondition_sums(
 ) {
     for k in 0..LANES {
         let on = free(p[k], w[k], level);
-        let g = if on { w[k] - level } else { 0.0 };
+        let g = if on { w[k] - level.mean } else { 0.0 };
         let zk = if on { z[k] } else { 0.0 };
         acc[0][k] += zk;
         acc[1][k] += if on { 1.0 } else { 0.0 };
@@ -365,11 +367,22 @@ avx2_dispatch! {
 /// non-finite state ends the solve as `Stalled` before a direction is made from it).
 const OFF_FREE_SET: f32 = f32::NAN;
 
-/// Membership of the free set `F = {p > 0} ∪ {p = 0, w − level < 0}`: the contact set and
-/// the nodes that interpenetrate, whose pressure the next step may raise.
+/// The level of the gradient `g = w − mean` on the free set (the mean of `w = u − h` over
+/// the contact set) and the free set's entry threshold `entry ≤ mean`: a node off the
+/// contact set joins F where `w < entry`. `entry = mean − margin`, with the margin of
+/// [`super::Extension::entry_margin`] on large boxes and 0 elsewhere.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Level {
+    pub mean: f64,
+    pub entry: f64,
+}
+
+/// Membership of the free set `F = {p > 0} ∪ {p = 0, w < entry}`: the contact set and the
+/// nodes that interpenetrate (by more than the margin), whose pressure the next step may
+/// raise.
 #[inline(always)]
-pub(super) fn free(p: f64, w: f64, level: f64) -> bool {
-    p > 0.0 || w < level
+pub(super) fn free(p: f64, w: f64, level: Level) -> bool {
+    p > 0.0 || w < level.entry
 }
 
 /// The sums of [`Solver::precondition`] over the free set `F`.
@@ -431,7 +444,12 @@ mod tests {
                 .map(|i| next() + if i % 3 == 1 { 2.0 } else { 0.0 })
                 .collect();
             let t: Vec<f64> = (0..len).map(|_| next()).collect();
-            let level = 0.1;
+            // An entry threshold below the mean: nodes off contact with w between the two
+            // are off F, and g = w − mean on F.
+            let level = Level {
+                mean: 0.1,
+                entry: -0.2,
+            };
             let run = |vector: bool| {
                 let mut z = vec![0.0f32; len];
                 let mut acc = [[0.5; LANES]; 6];
@@ -452,6 +470,26 @@ mod tests {
                 .count();
             assert!(off > 0 && off < len, "the row must have nodes on and off F");
             assert_eq!(scalar, vector, "len {len}");
+            let between =
+                (0..len).filter(|&i| p[i] == 0.0 && w[i] > level.entry && w[i] < level.mean);
+            assert!(
+                between.clone().count() > 0,
+                "no node between the entry and the mean"
+            );
+            assert!(between
+                .into_iter()
+                .all(|i| f32::from_bits(scalar.0[i]).is_nan()));
+            let sum_g: f64 = (0..len)
+                .filter(|&i| p[i] > 0.0 || w[i] < level.entry)
+                .map(|i| w[i] - level.mean)
+                .sum();
+            let lanes_sum: f64 = (0..LANES)
+                .map(|l| f64::from_bits(vector.1[3 * LANES + l]) - 0.5)
+                .sum();
+            assert!(
+                (lanes_sum - sum_g).abs() < 1e-12,
+                "Σ_F g {lanes_sum} against {sum_g}"
+            );
         }
     }
 }

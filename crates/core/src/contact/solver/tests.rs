@@ -204,7 +204,10 @@ fn preconditioned(
     let count = contact.iter().filter(|&&c| c).count();
     coarse.settle(Some((0, count as f64)));
     solver.coarse = Some(coarse);
-    let sums = solver.precondition(0.0);
+    let sums = solver.precondition(super::precond::Level {
+        mean: 0.0,
+        entry: 0.0,
+    });
     solver.preconditioned_direction_and_transform(sums.z_mean, 0.0, 0.0);
     solver.direction.clone()
 }
