@@ -89,7 +89,7 @@ pub struct Extension {
     /// solution meets the same tolerance. 0: none.
     pub entry_margin: f64,
     /// Smallest box side, in nodes, on which the entry margin is used. On the paper's
-    /// spectrum it saves 5 % of the 8192² sweep's iterations and 4 % at 4096², 3 % at 2048²,
+    /// spectrum it saves 5 % of the 8192² sweeps' iterations, 3 % at 4096² and 2 % at 2048²,
     /// and costs 1 % at 1024² (docs/BENCHMARKS.md); from 4096², like the far term and the
     /// deflation, so that smaller boxes keep their bits.
     pub entry_box: usize,
