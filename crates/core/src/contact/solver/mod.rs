@@ -491,7 +491,8 @@ impl<'a> Solver<'a> {
             // ⟨g, z⟩ replaces ⟨g, g⟩ in β when preconditioned.
             let preconditioned = if cfg.preconditioned {
                 // The extension's near term is used once the contact set has settled; the
-                // direction restarts when the preconditioner changes.
+                // direction restarts when the preconditioner changes. On large boxes a node
+                // joins F only below the level less a margin that falls with the error.
                 let mut entry = level;
                 if let Some(coarse) = self.coarse.as_mut() {
                     restart |= coarse.settle(changes);
