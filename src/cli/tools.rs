@@ -358,21 +358,29 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if args.max_iter == 0 {
         return Err(InputError("--max-iter 0: at least one iteration is needed".into()).into());
     }
-    if !(args.entry_margin.is_finite() && (0.0..=1.0).contains(&args.entry_margin)) {
-        return Err(InputError(format!(
-            "--entry-margin {}: the margin must lie in [0, 1] (0.1 is the default, 0 turns it off)",
-            args.entry_margin
-        ))
-        .into());
-    }
-    let extension = wearcoef::contact::solver::Extension {
+    // Each flag checked on the default with that flag alone changed, so the error names it.
+    use wearcoef::contact::solver::Extension;
+    let block = Extension {
         coarse_block: args.coarse_block,
+        ..Default::default()
+    };
+    block
+        .check()
+        .map_err(|e| InputError(format!("--coarse-block {}: {e}", args.coarse_block)))?;
+    let margin = Extension {
         entry_margin: args.entry_margin,
         ..Default::default()
     };
-    extension
-        .check()
-        .map_err(|e| InputError(format!("--coarse-block {}: {e}", args.coarse_block)))?;
+    margin.check().map_err(|e| {
+        InputError(format!(
+            "--entry-margin {}: {e} (0.1 is the default, 0 turns it off)",
+            args.entry_margin
+        ))
+    })?;
+    let extension = Extension {
+        coarse_block: args.coarse_block,
+        ..margin
+    };
     let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
     if let Some(p) = &args.pressure_out {
         outputs.push(("--pressure-out", p));

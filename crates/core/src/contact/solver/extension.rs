@@ -312,8 +312,6 @@ pub(super) struct Coarse {
     pub(super) blocks: Vec<OffBlock>,
     /// The coarse-space deflation, on boxes large enough for it.
     deflation: Option<Deflation>,
-    /// [`Extension::entry_margin`] on boxes of at least [`Extension::entry_box`], else 0.
-    entry_margin: f64,
 }
 
 impl Coarse {
@@ -352,11 +350,6 @@ impl Coarse {
             work: std::array::from_fn(|_| vec![0.0; m * m]),
             blocks,
             deflation: None,
-            entry_margin: if n >= settings.entry_box {
-                settings.entry_margin
-            } else {
-                0.0
-            },
         }
     }
 
@@ -379,7 +372,11 @@ impl Coarse {
     /// The free set's entry margin for an iteration whose error times σ_h is `error_scale`
     /// (0 on boxes below [`Extension::entry_box`]).
     pub(super) fn entry_margin(&self, error_scale: f64) -> f64 {
-        self.entry_margin * error_scale
+        if self.n >= self.settings.entry_box {
+            self.settings.entry_margin * error_scale
+        } else {
+            0.0
+        }
     }
 
     /// Use the near and far terms from the next [`Self::gather`] on, or not, after an
