@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+pub mod atomic;
+
 use ndarray::{Array2, Array3, Axis};
 use ndarray_npy::{read_npy, write_npy};
 
@@ -28,10 +30,16 @@ pub fn npy_header(path: &Path) -> Result<(String, Vec<usize>), IoError> {
         message,
     };
     let mut file = std::fs::File::open(path).map_err(|e| err(format!("cannot open ({e})")))?;
-    let file_len = file
+    let meta = file
         .metadata()
-        .map_err(|e| err(format!("cannot read ({e})")))?
-        .len();
+        .map_err(|e| err(format!("cannot read ({e})")))?;
+    if !meta.is_file() {
+        return Err(err(
+            "is not a regular file (a pipe, device or directory): a .npy file is checked against its size before it is read; save the data to a file and name that"
+                .into(),
+        ));
+    }
+    let file_len = meta.len();
     let not_npy = || err("not a .npy file (no NUMPY header)".into());
     let mut magic = [0u8; 8];
     file.read_exact(&mut magic).map_err(|_| not_npy())?;
@@ -102,21 +110,32 @@ pub fn npy_header(path: &Path) -> Result<(String, Vec<usize>), IoError> {
     Ok((descr, shape))
 }
 
-/// Read a square float64 `.npy` field; returns `(n, values row-major)`.
+/// Read a square float64 `.npy` field; returns `(n, values row-major)`. The header is
+/// checked first, so a file of another type or shape is refused with what it holds.
 pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
     let err = |message: String| IoError::File {
         path: path.display().to_string(),
         message,
     };
-    npy_header(path)?;
-    let array: Array2<f64> =
-        read_npy(path).map_err(|e| err(format!("not a 2-D float64 .npy file ({e})")))?;
-    let (rows, cols) = array.dim();
-    if rows != cols || rows == 0 {
+    let (descr, shape) = npy_header(path)?;
+    if !matches!(descr.as_str(), "<f8" | ">f8" | "=f8") {
         return Err(err(format!(
-            "expected a non-empty square array, got {rows} × {cols}"
+            "holds values of type '{descr}', not float64 ('<f8'): save the heights as float64 (numpy: h.astype('float64'))"
         )));
     }
+    if shape.len() != 2 || shape[0] != shape[1] || shape[0] == 0 {
+        return Err(err(format!(
+            "holds an array of shape ({}), not a non-empty square 2-D array of heights",
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    let array: Array2<f64> =
+        read_npy(path).map_err(|e| err(format!("cannot be read as float64 heights ({e})")))?;
+    let rows = array.nrows();
     let values = if array.is_standard_layout() {
         array.into_raw_vec_and_offset().0
     } else {
@@ -184,6 +203,13 @@ pub fn read_contact_map(
             let bytes = flat(a.view());
             if rows >= 2 && cols == rows.div_ceil(8) && cols != rows {
                 let n = rows;
+                // The last byte of a row holds 8·cols − n padding bits, zero in a packed map.
+                let pad: u8 = if n % 8 == 0 { 0 } else { 0xff >> (n % 8) };
+                if let Some(r) = (0..n).find(|r| bytes[r * cols + cols - 1] & pad != 0) {
+                    return Err(err(format!(
+                        "bit-packed map of {n} × {n}: row {r} has bits set past column {n} (the padding of its last byte); a packed map keeps them zero, so this file is damaged or not a packed map"
+                    )));
+                }
                 let map = (0..n * n)
                     .map(|i| bytes[(i / n) * cols + (i % n) / 8] & (0x80 >> (i % n % 8)) != 0)
                     .collect();
@@ -204,7 +230,7 @@ pub fn read_contact_map(
                 ContactMapFormat::ZeroOne,
             ))
         }
-        Err(first) => match read_npy::<_, Array2<bool>>(path) {
+        Err(_) => match read_npy::<_, Array2<bool>>(path) {
             Ok(a) => {
                 let (rows, cols) = a.dim();
                 if rows == 0 || cols == 0 {
@@ -217,9 +243,16 @@ pub fn read_contact_map(
                     ContactMapFormat::Bool,
                 ))
             }
-            Err(_) => Err(err(format!(
-                "not a 2-D bool or uint8 .npy contact map ({first})"
-            ))),
+            Err(_) => Err(err(match npy_header(path) {
+                Ok((descr, shape)) if shape.len() == 2 => format!(
+                    "holds values of type '{descr}'; a contact map is bool or uint8 0/1 ('|b1', '|u1'), or a contact stage's bit-packed uint8 map"
+                ),
+                Ok((_, shape)) => format!(
+                    "holds an array of shape ({}); a contact map is 2-D (or a 3-D uint8 stack of maps)",
+                    shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+                ),
+                Err(e) => e.to_string(),
+            })),
         },
     }
 }

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use anyhow::Context;
 use serde_json::json;
 
 use super::{load, InputError, StoreArgs};
@@ -18,9 +19,14 @@ pub struct RunArgs {
     /// Profile declared in the pipeline file.
     #[arg(long, default_value = "default")]
     pub profile: String,
-    /// Worker threads [default: number of cores].
+    /// Instances computed side by side, each on min(JOBS, cores) threads [default: number
+    /// of cores].
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// Instances side by side instead of JOBS; 1 computes one at a time on all its threads
+    /// and records each instance's peak memory in its manifest.
+    #[arg(long)]
+    pub at_once: Option<usize>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -51,6 +57,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         store,
         profile,
         jobs,
+        at_once,
         quiet,
         json,
         figures,
@@ -61,14 +68,25 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     let pipeline = load(&store.config)?;
     super::check_dir("--data", &store.data)?;
     super::check_dir("--figures", &figures)?;
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    if jobs == 0 {
-        return Err(InputError("--jobs must be ≥ 1".into()).into());
+    if super::same_dir(&store.data, &figures) {
+        return Err(InputError(format!(
+            "--figures {} is the data directory: the gallery and the catalog of a profile would share one directory; give the figures their own (default: figures)",
+            figures.display()
+        ))
+        .into());
     }
+    let jobs = jobs.unwrap_or_else(wearcoef::machine::cores);
+    // Up to `jobs` instances at once, each on a pool of at most one thread per core.
+    super::check_threads(
+        &format!("--jobs {jobs}"),
+        at_once.unwrap_or(jobs),
+        jobs.min(wearcoef::machine::cores()),
+    )?;
     let opts = RunOptions {
         profile,
         targets,
         jobs,
+        at_once,
         quiet,
         figures,
         force,
@@ -293,26 +311,69 @@ pub fn verify(args: VerifyArgs) -> anyhow::Result<ExitCode> {
 
 #[derive(clap::Args)]
 pub struct CleanArgs {
+    /// The store to remove. Only a directory whose every file is one a store holds
+    /// (cache/, failed/, campaigns/, catalogs) is removed; anything else is refused.
     #[arg(long, default_value = "data")]
     pub data: PathBuf,
+    /// Remove only the entries that fail `wearcoef verify`, those computed from an input
+    /// that has changed since, and the temporaries of dead processes.
     #[arg(long)]
     pub corrupt: bool,
+    /// Say what would be removed, remove nothing.
+    #[arg(long)]
+    pub dry_run: bool,
 }
 
 pub fn clean(args: CleanArgs) -> anyhow::Result<ExitCode> {
-    let CleanArgs { data, corrupt } = args;
-    let store = Store::new(&data);
+    let CleanArgs {
+        data,
+        corrupt,
+        dry_run,
+    } = args;
+    let store = require_store(&data)?;
+    let verb = if dry_run { "would remove" } else { "removed" };
     if corrupt {
-        let removed = store.remove_corrupt()?;
-        let stale = store.remove_stale_temporaries()?;
+        let removed = if dry_run {
+            store.verify()?.1.into_iter().map(|p| p.path).collect()
+        } else {
+            store.remove_corrupt()?
+        };
+        for path in &removed {
+            out!("{verb} {path}")?;
+        }
+        let stale = if dry_run {
+            0
+        } else {
+            store.remove_stale_temporaries()?
+        };
         out!(
-            "removed {} corrupt entries and {stale} stale temporary directories",
+            "{verb} {} damaged or outdated entries and {stale} stale temporary directories",
             removed.len()
         )?;
-    } else {
-        store.remove_all()?;
-        out!("removed {}", data.display())?;
+        return Ok(ExitCode::SUCCESS);
     }
+    let contents = store.contents().map_err(|why| {
+        InputError(format!(
+            "--data {}: {why}; clean removes only a store, so nothing was removed (remove other files yourself)",
+            data.display()
+        ))
+    })?;
+    let here = std::env::current_dir()?;
+    let root = data.canonicalize()?;
+    if here.starts_with(&root) && root != here {
+        return Err(InputError(format!(
+            "--data {}: holds the working directory {}; run clean from outside it",
+            data.display(),
+            here.display()
+        ))
+        .into());
+    }
+    if !dry_run {
+        store
+            .remove_contents(&contents)
+            .with_context(|| format!("removing the store {}", data.display()))?;
+    }
+    out!("{verb} the store {}: {contents}", data.display())?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -367,7 +428,7 @@ pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     if let Some(path) = &output {
-        super::check_outputs(&[("--output", path)])?;
+        super::check_outputs(&[("--output", path)], &[("--config", &store.config)])?;
     }
     let data = require_store(&store.data)?;
     let pipeline = load(&store.config)?;
@@ -456,7 +517,7 @@ pub fn gc(args: GcArgs) -> anyhow::Result<ExitCode> {
             .map(|m| m.len())
             .sum();
         if !dry_run {
-            std::fs::remove_dir_all(&dir)?;
+            data.remove_entry(&dir)?;
         }
         bytes += size;
         removed.push(json!({"stage": stage, "key": key, "bytes": size}));

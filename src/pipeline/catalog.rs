@@ -374,22 +374,12 @@ fn typed_column(name: &str, values: &[Option<&Value>]) -> Option<Column> {
 /// Write `df` as CSV (empty fields for nulls, floats in shortest round-trip form) through a
 /// temporary sibling and a rename.
 pub fn write_csv(path: &Path, df: &DataFrame) -> anyhow::Result<()> {
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp-{}",
-        path.file_name().unwrap_or_default().to_string_lossy(),
-        std::process::id()
-    ));
-    let result = (|| -> anyhow::Result<()> {
-        let mut w = csv::Writer::from_path(&tmp)?;
+    crate::io::atomic::write_atomically(path, |tmp| {
+        let mut w = csv::Writer::from_path(tmp)?;
         write_csv_to(&mut w, df)?;
         w.flush()?;
-        std::fs::rename(&tmp, path)?;
         Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(|e| anyhow::anyhow!(crate::io::cannot_write(path, &format!("{e:#}"))))
+    })
 }
 
 /// Write `df` as CSV records to `w`.

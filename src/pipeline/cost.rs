@@ -181,8 +181,9 @@ impl CostModel {
         let mut sums: BTreeMap<String, (f64, f64, usize)> = BTreeMap::new();
         let mut iterations: Vec<(f64, f64)> = Vec::new();
         let mut by_family: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+        // Manifests only: timings are read, no output is (so nothing is hashed here).
         for (stage, key, _) in store.entries()? {
-            let Ok(Some(m)) = store.lookup(&stage, &key) else {
+            let Some(m) = store.manifest(&stage, &key) else {
                 continue;
             };
             let work = match stage.as_str() {
@@ -190,10 +191,7 @@ impl CostModel {
                 "contact" => match (num(&m.results, "n"), num(&m.results, "total_iterations")) {
                     (Some(n), Some(it)) if it > 0.0 => {
                         iterations.push((n, it / loads_of(&m.params)));
-                        let surface = m
-                            .inputs
-                            .first()
-                            .and_then(|k| store.lookup("surface", k).ok().flatten());
+                        let surface = m.inputs.first().and_then(|k| store.manifest("surface", k));
                         if let Some(f) =
                             sweep_family(&m.params, surface.as_ref().map(|s| &s.params))
                         {
@@ -334,22 +332,7 @@ impl CostModel {
     }
 }
 
-/// Total memory of this machine (`MemTotal` of /proc/meminfo), if known; the environment
-/// variable `WEARCOEF_MEMORY_BYTES` overrides it (plan for a smaller share of a node).
-pub fn machine_memory_bytes() -> Option<u64> {
-    if let Ok(v) = std::env::var("WEARCOEF_MEMORY_BYTES") {
-        match v.trim().parse() {
-            Ok(bytes) => return Some(bytes),
-            Err(_) => eprintln!(
-                "warning: WEARCOEF_MEMORY_BYTES={v:?} is not a whole number of bytes; using /proc/meminfo"
-            ),
-        }
-    }
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
+pub use crate::machine::memory_bytes as machine_memory_bytes;
 
 #[cfg(test)]
 mod tests {
@@ -366,10 +349,12 @@ mod tests {
                 key: key.into(),
                 params,
                 inputs: inputs.iter().map(|s| s.to_string()).collect(),
+                input_digests: Default::default(),
                 outputs: Default::default(),
                 program: Program::current(),
                 wall_seconds: 1.0,
                 cpu_seconds: Some(1.0),
+                peak_rss_bytes: None,
                 results,
                 results_sha256: None,
             })

@@ -19,7 +19,9 @@ use super::store::Store;
 /// The record's file name.
 pub const PROVENANCE: &str = "provenance.json";
 
-/// Extensions of the files a figure writes (anything else in a gallery is left alone).
+/// Extensions of the files a figure writes. A run removes only files of these kinds that the
+/// gallery's previous `provenance.json` lists and the profile no longer draws; anything
+/// else in the directory is left alone.
 const FIGURE_FILES: [&str; 5] = ["png", "svg", "csv", "npy", "parquet"];
 
 /// One instance a figure was drawn from.
@@ -100,41 +102,52 @@ pub fn export(
 ) -> anyhow::Result<Option<Provenance>> {
     let out = dir(figures, profile);
     let mut provenance = expected(all, profile);
-    let mut written: BTreeSet<String> = BTreeSet::new();
+    // The files this program wrote here before (the last record): the only ones it removes.
+    let before: BTreeSet<String> = std::fs::read_to_string(out.join(PROVENANCE))
+        .ok()
+        .and_then(|t| serde_json::from_str::<Provenance>(&t).ok())
+        .map(|p| p.figures.into_iter().flat_map(|f| f.files).collect())
+        .unwrap_or_default();
+    let mut written: BTreeMap<String, String> = BTreeMap::new();
     for fig in &mut provenance.figures {
         let Some(manifest) = store.lookup("figures", &fig.key)? else {
             continue;
         };
         std::fs::create_dir_all(&out)?;
+        crate::io::atomic::remove_dead_temporaries(&out)?;
         for file in manifest.outputs.keys() {
+            if let Some(other) = written.insert(file.clone(), fig.figure.clone()) {
+                anyhow::bail!(
+                    "figures {other} and {} of profile {profile} both write {file}: give each \
+                     profile one figure of a kind whose files have fixed names",
+                    fig.figure
+                );
+            }
             let src = store.read_output(&manifest, file)?;
-            let tmp = out.join(format!(".{file}.tmp-{}", std::process::id()));
-            std::fs::copy(&src, &tmp)?;
-            std::fs::rename(&tmp, out.join(file))?;
+            crate::io::atomic::write_atomically(&out.join(file), |tmp| {
+                std::fs::copy(&src, tmp)?;
+                Ok(())
+            })?;
             fig.files.push(file.clone());
-            written.insert(file.clone());
         }
         fig.files.sort();
     }
     if !record || !out.is_dir() {
         return Ok(None);
     }
-    for entry in std::fs::read_dir(&out)? {
-        let path = entry?.path();
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+    for name in before.difference(&written.keys().cloned().collect()) {
+        let path = out.join(name);
         let ours = path
             .extension()
             .is_some_and(|e| FIGURE_FILES.iter().any(|f| e == *f));
-        if let Some(name) = name {
-            if ours && path.is_file() && !written.contains(&name) {
-                std::fs::remove_file(&path)?;
-            }
+        if ours && path.is_file() && !name.contains('/') {
+            std::fs::remove_file(&path)?;
         }
     }
     let text = serde_json::to_string_pretty(&provenance)? + "\n";
-    let tmp = out.join(format!(".{PROVENANCE}.tmp-{}", std::process::id()));
-    std::fs::write(&tmp, text)?;
-    std::fs::rename(&tmp, out.join(PROVENANCE))?;
+    crate::io::atomic::write_atomically(&out.join(PROVENANCE), |tmp| {
+        Ok(std::fs::write(tmp, text)?)
+    })?;
     Ok(Some(provenance))
 }
 

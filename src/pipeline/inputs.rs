@@ -38,6 +38,15 @@ impl<'a> Inputs<'a> {
         Ok(Self { store, entries })
     }
 
+    /// The content digest of every input, by key, as the manifest of an entry computed
+    /// from them records it.
+    pub fn digests(&self) -> std::collections::BTreeMap<String, String> {
+        self.entries
+            .iter()
+            .map(|(r, m)| (r.key.clone(), m.content_digest()))
+            .collect()
+    }
+
     pub fn len(&self) -> usize {
         self.entries.len()
     }

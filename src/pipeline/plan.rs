@@ -188,7 +188,7 @@ impl Plan {
             .map(|i| (i.key.clone(), i.params.clone()))
             .collect();
         for inst in &mut self.instances {
-            inst.cached = store.lookup(&inst.stage, &inst.key)?.is_some();
+            inst.cached = store.reusable(&inst.stage, &inst.key)?.is_some();
             let surface = inst.inputs.first().and_then(|r| surfaces.get(&r.key));
             inst.estimate = model.estimate(&inst.stage, &inst.params, surface);
         }

@@ -300,10 +300,9 @@ pub fn write(
     descriptions: &BTreeMap<String, String>,
 ) -> anyhow::Result<()> {
     let page = render(store, provenance, descriptions)?;
-    let tmp = dir.join(format!(".index.html.tmp-{}", std::process::id()));
-    std::fs::write(&tmp, page)?;
-    std::fs::rename(&tmp, dir.join("index.html"))?;
-    Ok(())
+    crate::io::atomic::write_atomically(&dir.join("index.html"), |tmp| {
+        Ok(std::fs::write(tmp, page)?)
+    })
 }
 
 #[cfg(test)]

@@ -23,8 +23,11 @@ pub struct RunOptions {
     pub profile: String,
     /// Stage or study names; empty means everything in the profile.
     pub targets: Vec<String>,
-    /// Worker threads (instances and FFTs share one pool).
+    /// Instances computed side by side, each on min(jobs, cores) threads.
     pub jobs: usize,
+    /// Instances side by side instead of `jobs` (1: one at a time on all its threads, so
+    /// each manifest records the instance's own peak memory).
+    pub at_once: Option<usize>,
     /// Hide the progress bar even on a terminal.
     pub quiet: bool,
     /// Root of the galleries: figures go to `<figures>/<profile>/`.
@@ -71,6 +74,13 @@ pub fn run(
 ) -> anyhow::Result<RunSummary> {
     let start = Instant::now();
     let mut plan = Plan::build(pipeline, origin, &opts.profile, &opts.targets)?;
+    if plan.instances.is_empty() {
+        return Err(crate::pipeline::UsageError(format!(
+            "profile {p} builds nothing: no study has an entry for it (studies.<name>.profiles.{p}) and no figure lists it; add one, or run another profile",
+            p = opts.profile
+        ))
+        .into());
+    }
     plan.mark(store, &CostModel::fit(store)?)?;
     let forced = forced_keys(&plan, &opts.force)?;
     for inst in &mut plan.instances {
@@ -92,13 +102,14 @@ pub fn run(
     }
     store.remove_stale_temporaries()?;
     let reused = plan.instances.iter().filter(|i| i.cached).count();
+    // Up to `jobs` instances at once, each on a pool of at most one thread per core.
     let outcome = execute_forcing(
         store,
         &plan.instances,
         &forced,
         opts.retry_failed,
-        opts.jobs,
-        opts.jobs,
+        opts.jobs.min(crate::machine::cores()),
+        opts.at_once.unwrap_or(opts.jobs),
         opts.quiet,
     )?;
     let computed = outcome.computed;
@@ -250,13 +261,26 @@ pub fn execute_forcing(
     let at_once = at_once.max(1);
     let levels = instances.iter().map(|i| i.level + 1).max().unwrap_or(0);
     let mut outcome = Outcome::default();
+    // Keys whose new entry replaces a stored one: the forced, and the outdated.
+    let mut replace = forced.clone();
     // Keys that failed, now or before, and everything downstream of them.
     let mut blocked: BTreeSet<String> = BTreeSet::new();
     for level in 0..levels {
         let mut missing = Vec::new();
         for inst in instances.iter().filter(|i| i.level == level) {
-            let wanted =
-                forced.contains(&inst.key) || store.lookup(&inst.stage, &inst.key)?.is_none();
+            let wanted = if forced.contains(&inst.key) {
+                true
+            } else if let Some(m) = store.lookup(&inst.stage, &inst.key)? {
+                // Computed from an input whose content has changed since (an input that
+                // was damaged, then rebuilt): recomputed, and replaced once complete.
+                let outdated = store.changed_input(&m)?.is_some();
+                if outdated {
+                    replace.insert(inst.key.clone());
+                }
+                outdated
+            } else {
+                true
+            };
             if !wanted {
                 continue;
             }
@@ -280,7 +304,7 @@ pub fn execute_forcing(
         let bar = progress(missing.len(), &label, quiet);
         // Off a terminal (a log file, CI) the bar is hidden: one plain line per instance.
         let lines = !quiet && bar.is_hidden();
-        let results = build_all(store, &missing, forced, jobs, at_once, &bar, lines)?;
+        let results = build_all(store, &missing, &replace, jobs, at_once, &bar, lines)?;
         bar.finish_and_clear();
         for (inst, r) in missing.iter().zip(results) {
             match r {
@@ -356,6 +380,8 @@ fn build_all(
 ) -> anyhow::Result<Vec<anyhow::Result<()>>> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     let workers = at_once.min(missing.len()).max(1);
+    // One instance at a time: the process's peak memory is that instance's.
+    let alone = workers == 1;
     let threads_each = jobs;
     let next = AtomicUsize::new(0);
     let mut results: Vec<Option<anyhow::Result<()>>> = (0..missing.len()).map(|_| None).collect();
@@ -375,12 +401,13 @@ fn build_all(
                         let started = std::time::Instant::now();
                         let before: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
                         let replace = forced.contains(&inst.key);
-                        let built = pool.install(|| build(store, inst, &pool, before, replace));
+                        let built =
+                            pool.install(|| build(store, inst, &pool, before, replace, alone));
                         let verdict = if built.is_ok() { "done" } else { "FAILED" };
                         out.push((i, built));
                         bar.inc(1);
                         if lines {
-                            eprintln!(
+                            crate::note!(
                                 "{verdict} {what} in {:.1} s ({}/{} of this level)",
                                 started.elapsed().as_secs_f64(),
                                 bar.position(),
@@ -430,6 +457,7 @@ fn build(
     pool: &rayon::ThreadPool,
     cpu_before: f64,
     replace: bool,
+    alone: bool,
 ) -> anyhow::Result<()> {
     let start = Instant::now();
     let stage = crate::pipeline::registry::find(&inst.stage).ok_or_else(|| {
@@ -449,11 +477,22 @@ fn build(
     );
     let inputs = Inputs::load(store, &inst.inputs)?;
     let entry = store.begin(&inst.stage, &inst.key)?;
+    // Messages in the user's terms: the entry's place in the store, not its temporary's.
+    let (temporary, place) = (
+        entry.path().display().to_string(),
+        store
+            .entry_dir(&inst.stage, &inst.key)
+            .display()
+            .to_string(),
+    );
+    let plain = |e: &dyn std::fmt::Display| format!("{e:#}").replace(&temporary, &place);
+    let measured = alone && crate::machine::reset_peak_rss();
     let results = match stage.compute(&inst.params, &inputs, entry.path()) {
         Ok(results) => results,
         Err(e) => {
+            let cause = plain(&e);
             let message = format!(
-                "stage {} ({}, realization {}, key {}) failed: {e:#}",
+                "stage {} ({}, realization {}, key {}) failed: {cause}",
                 inst.stage,
                 inst.name.as_ref().map_or_else(
                     || format!("studies {}", inst.studies.join(", ")),
@@ -501,7 +540,8 @@ fn build(
             params: &inst.params,
             realization: inst.realization,
         },
-    )?;
+    )
+    .map_err(|e| anyhow::anyhow!(plain(&e)))?;
     let wall_seconds = start.elapsed().as_secs_f64();
     let cpu_after: f64 = pool.broadcast(|_| thread_cpu_seconds()).iter().sum();
     let manifest = Manifest {
@@ -510,18 +550,21 @@ fn build(
         key: inst.key.clone(),
         params: inst.params.clone(),
         inputs: keys,
+        input_digests: inputs.digests(),
         outputs: Default::default(),
         program: Program::current(),
         wall_seconds,
         cpu_seconds: Some((cpu_after - cpu_before).max(0.0)),
+        peak_rss_bytes: measured.then(crate::machine::peak_rss_bytes).flatten(),
         results,
         results_sha256: None,
     };
     let outcome = if replace {
-        entry.commit_replacing(manifest)?
+        entry.commit_replacing(manifest)
     } else {
-        entry.commit(manifest)?
-    };
+        entry.commit(manifest)
+    }
+    .map_err(|e| anyhow::anyhow!(plain(&e)))?;
     match outcome {
         CommitOutcome::Stored | CommitOutcome::AlreadyPresent => {
             store.clear_failure(&inst.stage, &inst.key)?;

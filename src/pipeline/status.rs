@@ -102,7 +102,7 @@ fn status_line(
         .iter()
         .filter(|i| i.stage == stage && study.is_none_or(|s| i.studies.iter().any(|x| x == s)))
     {
-        if store.lookup(&inst.stage, &inst.key)?.is_some() {
+        if store.reusable(&inst.stage, &inst.key)?.is_some() {
             line.present += 1;
         } else {
             line.missing += 1;
@@ -136,7 +136,7 @@ pub fn status(
         instances: Vec::new(),
     };
     for inst in &plan.instances {
-        let present = store.lookup(&inst.stage, &inst.key)?.is_some();
+        let present = store.reusable(&inst.stage, &inst.key)?.is_some();
         let failure = (!present)
             .then(|| store.failure(&inst.stage, &inst.key))
             .flatten();
@@ -213,6 +213,13 @@ pub fn dry_run(
                     f.error
                 )
             }
+        } else if let Some(input) = store
+            .lookup(&inst.stage, &inst.key)?
+            .map(|m| store.changed_input(&m))
+            .transpose()?
+            .flatten()
+        {
+            format!("outdated: computed from {input}, whose content has changed since")
         } else {
             why_missing(store, inst, &previous)
         };

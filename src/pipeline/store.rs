@@ -22,7 +22,11 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::hash::{instance_key, sha256_file};
+use super::hash::sha256_file;
+
+mod fresh;
+mod layout;
+pub use layout::Contents;
 
 /// Name of the manifest file in every entry.
 pub const MANIFEST: &str = "manifest.json";
@@ -35,6 +39,8 @@ pub enum StoreError {
         path: String,
         source: std::io::Error,
     },
+    #[error("{0}")]
+    Write(String),
     #[error("corrupt cache entry {path}: {reason}. Fix: run `wearcoef verify` to list damaged entries and `wearcoef clean --corrupt` to remove them; the next run rebuilds them")]
     Corrupt { path: String, reason: String },
 }
@@ -83,6 +89,10 @@ pub struct Manifest {
     pub key: String,
     pub params: Value,
     pub inputs: Vec<String>,
+    /// The [`Manifest::content_digest`] of each input (by key) when this entry was computed
+    /// from it (absent in entries of older builds).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub input_digests: BTreeMap<String, String>,
     pub outputs: BTreeMap<String, OutputFile>,
     pub program: Program,
     pub wall_seconds: f64,
@@ -91,6 +101,11 @@ pub struct Manifest {
     /// cores and each one's wall time counts the others'.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cpu_seconds: Option<f64>,
+    /// Peak resident memory of the process while this instance ran alone in it (absent
+    /// when instances ran side by side, or in entries of older builds): what the cost
+    /// model's memory estimate is checked against.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_rss_bytes: Option<u64>,
     /// Stage-specific results (realised statistics, solver reports, ...).
     pub results: Value,
     /// SHA-256 of the canonical JSON of `results` and `wall_seconds`, so that `verify`
@@ -156,29 +171,28 @@ impl Store {
         self.cache_dir().join(stage).join(key)
     }
 
-    /// The manifest of a complete entry, `None` if absent. A present but damaged entry
-    /// (unreadable manifest, missing output, wrong size) is an error naming the fix.
-    /// Hashes are checked by [`Store::verify`] and by [`Store::read_output`].
+    /// The manifest of a complete entry, `None` if absent. A present entry must be sound:
+    /// its manifest readable and its own (stage, key and parameters hash to where it sits),
+    /// every output of the recorded size and, if it changed since it was last hashed, of
+    /// the recorded hash. Otherwise an error naming the file and the fix.
     pub fn lookup(&self, stage: &str, key: &str) -> Result<Option<Manifest>, StoreError> {
         let dir = self.entry_dir(stage, key);
         if !dir.exists() {
             return Ok(None);
         }
         let manifest = read_manifest(&dir)?;
-        for (name, file) in &manifest.outputs {
-            let path = dir.join(name);
-            let meta = std::fs::metadata(&path).map_err(|e| StoreError::Corrupt {
-                path: path.display().to_string(),
-                reason: format!("output file unreadable ({e})"),
-            })?;
-            if meta.len() != file.bytes {
-                return Err(StoreError::Corrupt {
-                    path: path.display().to_string(),
-                    reason: format!("size {} bytes, manifest says {}", meta.len(), file.bytes),
-                });
-            }
-        }
+        fresh::check_identity(stage, key, &manifest).map_err(|reason| StoreError::Corrupt {
+            path: dir.join(MANIFEST).display().to_string(),
+            reason,
+        })?;
+        self.check_outputs_fresh(&dir, &manifest)?;
         Ok(Some(manifest))
+    }
+
+    /// The manifest of an entry as it is, unchecked (`None` if absent or unreadable): for
+    /// reading what the entry reports, never for using its outputs.
+    pub fn manifest(&self, stage: &str, key: &str) -> Option<Manifest> {
+        read_manifest(&self.entry_dir(stage, key)).ok()
     }
 
     /// Path of an output of a complete entry after checking its SHA-256 against the manifest.
@@ -229,8 +243,18 @@ impl Store {
     /// Those of other hosts (a store on a shared file system) are left alone: their
     /// processes cannot be seen from here. They never look like entries (their names start
     /// with a dot) and are listed by [`Store::temporaries`].
+    /// Also removes the temporary files of dead processes (a catalog, a failure record, a
+    /// freshness record killed mid-write) in the store's directories.
     pub fn remove_stale_temporaries(&self) -> Result<usize, StoreError> {
         let mut removed = 0;
+        let mut dirs = list_dirs(&self.root)?;
+        dirs.extend(list_dirs(&self.cache_dir())?);
+        dirs.extend(list_dirs(&self.root.join("failed"))?);
+        dirs.extend(list_dirs(&self.root.join(fresh::CHECKED))?);
+        for dir in dirs {
+            removed += crate::io::atomic::remove_dead_temporaries(&dir).map_err(io_err(&dir))?;
+        }
+        removed += self.remove_orphan_records()?;
         let here = host_name();
         for (dir, host, pid) in self.temporaries()? {
             let local = host.is_empty() || host == here;
@@ -288,7 +312,7 @@ impl Store {
         let entries = self.entries()?;
         let mut problems = Vec::new();
         for (stage, key, dir) in &entries {
-            if let Err(reason) = check_entry(stage, key, dir) {
+            if let Err(reason) = check_entry(self, stage, key, dir) {
                 problems.push(EntryProblem {
                     path: dir.display().to_string(),
                     reason,
@@ -302,17 +326,9 @@ impl Store {
     pub fn remove_corrupt(&self) -> Result<Vec<String>, StoreError> {
         let (_, problems) = self.verify()?;
         for p in &problems {
-            std::fs::remove_dir_all(&p.path).map_err(io_err(Path::new(&p.path)))?;
+            self.remove_entry(Path::new(&p.path))?;
         }
         Ok(problems.into_iter().map(|p| p.path).collect())
-    }
-
-    /// Remove the whole data directory.
-    pub fn remove_all(&self) -> Result<(), StoreError> {
-        if self.root.exists() {
-            std::fs::remove_dir_all(&self.root).map_err(io_err(&self.root))?;
-        }
-        Ok(())
     }
 }
 
@@ -357,27 +373,13 @@ fn read_manifest(dir: &Path) -> Result<Manifest, StoreError> {
     })
 }
 
-fn check_entry(stage: &str, key: &str, dir: &Path) -> Result<(), String> {
+fn check_entry(store: &Store, stage: &str, key: &str, dir: &Path) -> Result<(), String> {
     let manifest = read_manifest(dir).map_err(|e| e.to_string())?;
-    if manifest.stage != stage || manifest.key != key {
+    fresh::check_identity(stage, key, &manifest)?;
+    if let Some(input) = store.changed_input(&manifest).map_err(|e| e.to_string())? {
         return Err(format!(
-            "manifest names {}/{} but the entry sits at {stage}/{key}",
-            manifest.stage, manifest.key
+            "computed from {input}, whose content has changed since: the next run recomputes it"
         ));
-    }
-    let recomputed = instance_key(stage, manifest.version, &manifest.params, &manifest.inputs);
-    if recomputed != key {
-        return Err(format!(
-            "manifest parameters hash to {recomputed}, not to the entry's key"
-        ));
-    }
-    if let Some(recorded) = &manifest.results_sha256 {
-        let hash = manifest.results_hash();
-        if &hash != recorded {
-            return Err(format!(
-                "manifest results hash to {hash}, not to the recorded {recorded}: a result was edited"
-            ));
-        }
     }
     for (name, file) in &manifest.outputs {
         let path = dir.join(name);
@@ -436,6 +438,7 @@ impl TempEntry {
         match std::fs::rename(&self.dir, &self.final_dir) {
             Ok(()) => {
                 self.committed = true;
+                fresh::record_seen(&self.final_dir, &manifest);
                 Ok(CommitOutcome::Stored)
             }
             Err(_) if self.final_dir.join(MANIFEST).exists() => Ok(CommitOutcome::AlreadyPresent),
@@ -525,13 +528,9 @@ impl Store {
         let path = self.failure_path(&failure.stage, &failure.key);
         let dir = path.parent().unwrap_or(Path::new("."));
         std::fs::create_dir_all(dir).map_err(io_err(dir))?;
-        let tmp = dir.join(format!(".{}.tmp-{}", failure.key, std::process::id()));
         let text = serde_json::to_string_pretty(failure).expect("a failure serialises");
-        let written = std::fs::write(&tmp, text + "\n").and_then(|_| std::fs::rename(&tmp, &path));
-        if written.is_err() {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        written.map_err(io_err(&path))
+        crate::io::atomic::write_atomically(&path, |tmp| Ok(std::fs::write(tmp, text + "\n")?))
+            .map_err(|e| StoreError::Write(format!("{e:#}")))
     }
 
     /// The failure record of an instance, if any (an unreadable one counts as none).

@@ -286,24 +286,14 @@ pub fn write_with_metadata(
         serde_json::Value::Object(units).to_string(),
     ));
     kv.push(("wearcoef.program".to_string(), program()));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
     kv.push(("ARROW:schema".to_string(), arrow_schema_with(&df, &kv)));
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| -> anyhow::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
+    crate::io::atomic::write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp)?;
         ParquetWriter::new(file)
             .with_key_value_metadata(Some(KeyValueMetadata::from_static(kv)))
             .finish(&mut df)?;
-        std::fs::rename(&tmp, path)?;
         Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(|e| anyhow::anyhow!(crate::io::cannot_write(path, &format!("{e:#}"))))
+    })
 }
 
 /// The `ARROW:schema` entry of a Parquet file of `df` (what polars writes itself: the Arrow IPC

@@ -14,6 +14,7 @@ mod stability;
 mod stages;
 mod store;
 mod store_cli;
+mod store_integrity;
 mod submit;
 mod surface;
 
