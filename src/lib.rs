@@ -16,8 +16,19 @@ pub use wearcoef_core::{
     analytic, clusters, contact, grid, pages, powerlaw, spectral, statistics, surface,
 };
 
+/// `eprintln!` that never panics: a closed standard error (`wearcoef run 2>&1 | head -1`)
+/// loses the line instead of aborting the command.
+#[macro_export]
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 pub mod config;
 pub mod figures;
 pub mod io;
+pub mod machine;
 pub mod pipeline;
 pub mod stages;

@@ -86,14 +86,16 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             // The reader closed the pipe (`wearcoef status | head -1`): it has what it wanted.
+            let broken = |io: &std::io::Error| io.kind() == std::io::ErrorKind::BrokenPipe;
             let closed_pipe = e.chain().any(|c| {
-                c.downcast_ref::<std::io::Error>()
-                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+                c.downcast_ref::<std::io::Error>().is_some_and(broken)
+                    || c.downcast_ref::<csv::Error>()
+                        .is_some_and(|e| matches!(e.kind(), csv::ErrorKind::Io(io) if broken(io)))
             });
             if closed_pipe {
                 return ExitCode::SUCCESS;
             }
-            eprintln!("error: {e:#}");
+            wearcoef::note!("error: {e:#}");
             let is_input = e.chain().any(|c| {
                 c.downcast_ref::<ConfigError>().is_some()
                     || c.downcast_ref::<SurfaceError>().is_some()

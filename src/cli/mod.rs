@@ -3,8 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
-
 use wearcoef::config::Pipeline;
 
 /// `println!` that returns the write's error instead of panicking: a reader that closes the
@@ -45,9 +43,15 @@ pub fn load(path: &Path) -> anyhow::Result<Pipeline> {
 }
 
 /// Check a command's output files before any work is done: each names a file (not a
-/// directory, a device or a pipe) in a directory that exists, and no two name the same
-/// file. `outputs` pairs each option with the user's path; errors name both (exit 2).
-pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<(), InputError> {
+/// directory, a device or a pipe) in a directory that exists and can be written, no two name
+/// the same file, none is one of the command's `inputs` (under any name: hard links and
+/// `./` count), and none lies inside a store's `cache/` or `failed/`, which only `wearcoef
+/// run` writes. `outputs` and `inputs` pair each option with the user's path; errors name
+/// both (exit 2).
+pub fn check_outputs(
+    outputs: &[(&str, &Path)],
+    inputs: &[(&str, &Path)],
+) -> Result<(), InputError> {
     let mut seen: Vec<(&str, PathBuf)> = Vec::new();
     for &(option, path) in outputs {
         let bad = |why: String| InputError(format!("{option} {}: {why}", path.display()));
@@ -68,6 +72,12 @@ pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<(), InputError> {
                 )))
             }
         };
+        if !writable(&dir) {
+            return Err(bad(format!(
+                "the directory {} cannot be written by this user; choose another",
+                dir.display()
+            )));
+        }
         if let Ok(meta) = std::fs::metadata(path) {
             if !meta.is_file() {
                 return Err(bad(format!(
@@ -80,7 +90,21 @@ pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<(), InputError> {
                 )));
             }
         }
+        for &(input, from) in inputs {
+            if same_file(path, from) {
+                return Err(bad(format!(
+                    "is the file {input} reads ({}); writing it would destroy the input: name another file",
+                    from.display()
+                )));
+            }
+        }
         let full = dir.join(name);
+        if let Some(store) = inside_store(&full) {
+            return Err(bad(format!(
+                "lies inside the store {} (its cache/ and failed/ are written only by `wearcoef run`); name a file outside it",
+                store.display()
+            )));
+        }
         if let Some((other, _)) = seen.iter().find(|(_, p)| *p == full) {
             return Err(bad(format!(
                 "is also the path of {other}; give each output its own file"
@@ -91,13 +115,85 @@ pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<(), InputError> {
     Ok(())
 }
 
+/// Whether two directory options name one directory (both existing, or the same path).
+pub fn same_dir(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => std::path::absolute(a).ok() == std::path::absolute(b).ok(),
+    }
+}
+
+/// Whether `a` and `b` are one file: the same device and inode when both exist, else the
+/// same canonical path.
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+/// Whether this user may create files in `dir` (`access(2)` with `W_OK`).
+fn writable(dir: &Path) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(c) = std::ffi::CString::new(dir.as_os_str().as_bytes()) else {
+        return false;
+    };
+    // SAFETY: `c` is a valid NUL-terminated path.
+    unsafe { libc::access(c.as_ptr(), libc::W_OK) == 0 }
+}
+
+/// The store whose `cache/` or `failed/` holds `path` (an absolute path whose parent
+/// exists), if any: an ancestor named `cache` or `failed` whose own parent has a `cache/`.
+/// Returned relative to the working directory when it lies below it, as the user wrote it.
+pub fn inside_store(path: &Path) -> Option<PathBuf> {
+    let mut at = path.parent();
+    while let Some(dir) = at {
+        let named = dir
+            .file_name()
+            .is_some_and(|n| n == "cache" || n == "failed");
+        if let Some(root) = dir.parent().filter(|_| named) {
+            if root.join("cache").is_dir() {
+                let here = std::env::current_dir().and_then(|d| d.canonicalize());
+                return Some(match here {
+                    Ok(here) if root.starts_with(&here) && root != here => {
+                        root.strip_prefix(&here).unwrap_or(root).to_path_buf()
+                    }
+                    _ => root.to_path_buf(),
+                });
+            }
+        }
+        at = dir.parent();
+    }
+    None
+}
+
 /// Check a directory option before any work: it is a directory, or does not exist yet and
 /// its nearest existing ancestor is a directory (so it can be created). Exit 2 otherwise.
 pub fn check_dir(option: &str, path: &Path) -> Result<(), InputError> {
     let mut at = path;
     loop {
         match std::fs::metadata(at) {
-            Ok(meta) if meta.is_dir() => return Ok(()),
+            Ok(meta) if meta.is_dir() => {
+                // The existing part made absolute, then what is still to be created.
+                let rest = path.strip_prefix(at).unwrap_or(path);
+                let full = at.canonicalize().unwrap_or(at.to_path_buf()).join(rest);
+                if !writable(at) {
+                    return Err(InputError(format!(
+                        "{option} {}: {} cannot be written by this user; choose another directory",
+                        path.display(),
+                        at.display()
+                    )));
+                }
+                if let Some(store) = inside_store(&full.join("x")) {
+                    return Err(InputError(format!(
+                        "{option} {}: lies inside the store {} (its cache/ and failed/ are written only by `wearcoef run`); name a directory outside it",
+                        path.display(),
+                        store.display()
+                    )));
+                }
+                return Ok(());
+            }
             Ok(_) => {
                 return Err(InputError(format!(
                     "{option} {}: {} exists and is not a directory; name a directory",
@@ -107,36 +203,30 @@ pub fn check_dir(option: &str, path: &Path) -> Result<(), InputError> {
             }
             Err(_) => match at.parent() {
                 Some(parent) if !parent.as_os_str().is_empty() => at = parent,
-                _ => return Ok(()),
+                Some(_) => at = Path::new("."),
+                None => return Ok(()),
             },
         }
     }
 }
 
-/// Write through a temporary sibling file and rename, so a failure leaves no partial file.
-/// An error names `path`, never the temporary (exit 1: the input was fine, the write failed).
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path.file_name().context("output path has no file name")?;
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = write(&tmp).and_then(|_| Ok(std::fs::rename(&tmp, path)?));
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        let cause = format!("{:#}", e).replace(&tmp.display().to_string(), "");
-        anyhow::bail!(wearcoef::io::cannot_write(
-            path,
-            cause.trim_start_matches([':', ' '])
-        ));
+pub use wearcoef::io::atomic::write_atomically;
+
+/// Check a run's threads before any start: `at_once` instances side by side, each on a pool
+/// of `threads`, at least one of each and together within what this machine allows this
+/// program ([`wearcoef::machine::max_threads`]). `what` names the options.
+pub fn check_threads(what: &str, at_once: usize, threads: usize) -> Result<(), InputError> {
+    let max = wearcoef::machine::max_threads();
+    if at_once == 0 || threads == 0 {
+        return Err(InputError(format!("{what}: must be ≥ 1")));
+    }
+    if at_once.saturating_mul(threads) > max {
+        return Err(InputError(format!(
+            "{what}: {at_once} instances at once on {threads} threads each would start {} threads, more than the {max} this machine allows this program (it has {} cores): choose at most {}",
+            at_once as u128 * threads as u128,
+            wearcoef::machine::cores(),
+            (max / threads).max(1)
+        )));
     }
     Ok(())
 }

@@ -261,7 +261,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let pipeline = load(&store.config)?;
     if let Some(path) = &out {
-        super::check_outputs(&[("--out", path)])?;
+        super::check_outputs(&[("--out", path)], &[("--config", &store.config)])?;
     }
     let origin = store.config.display().to_string();
     let (plan, model) = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
@@ -301,17 +301,10 @@ pub fn exec(args: ExecArgs) -> anyhow::Result<ExitCode> {
         at_once,
         quiet,
     } = args;
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let jobs = jobs.unwrap_or_else(wearcoef::machine::cores);
     let at_once = at_once.unwrap_or(jobs);
-    let done = exec_plan(
-        &plan,
-        &data,
-        level,
-        slice,
-        jobs.max(1),
-        at_once.max(1),
-        quiet,
-    )?;
+    super::check_threads(&format!("--jobs {jobs} --at-once {at_once}"), at_once, jobs)?;
+    let done = exec_plan(&plan, &data, level, slice, jobs, at_once, quiet)?;
     out!("{done}")?;
     Ok(ExitCode::SUCCESS)
 }

@@ -274,7 +274,7 @@ pub fn surface(args: SurfaceArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    check_outputs(&[("--output", &output)])?;
+    check_outputs(&[("--output", &output)], &[])?;
     let nodes = (n * n) as u64;
     check_memory(
         &format!("a {n}² surface"),
@@ -388,7 +388,13 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     if let Some(p) = &args.contact_out {
         outputs.push(("--contact-out", p));
     }
-    check_outputs(&outputs)?;
+    if outputs.is_empty() && !args.json {
+        return Err(InputError(
+            "nothing to write: give --pressure-out FILE, --contact-out FILE or --json (a solve that keeps nothing is not run)".into(),
+        )
+        .into());
+    }
+    check_outputs(&outputs, &[("--surface", &args.surface)])?;
     // The grid side from the header, checked against the file's size, before anything large
     // is read or allocated.
     let (_, shape) = wearcoef::io::npy_header(&args.surface)?;
@@ -450,10 +456,10 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         args.e_star,
         &args.loads,
         &cfg,
-        |_, solver, _| {
+        |_, pressure, _| {
             if keep_fields {
-                pressures.extend_from_slice(solver.pressure());
-                contacts.extend(solver.pressure().iter().map(|&p| u8::from(p > 0.0)));
+                pressures.extend_from_slice(pressure);
+                contacts.extend(pressure.iter().map(|&p| u8::from(p > 0.0)));
             }
             Ok(())
         },
@@ -463,16 +469,23 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     } else {
         vec![args.loads.len(), n, n]
     };
+    // Both outputs or neither: each is written to its temporary, then both are renamed.
+    let mut files: Vec<(&std::path::Path, wearcoef::io::atomic::FileWriter)> = Vec::new();
     if let Some(path) = &args.pressure_out {
-        write_atomically(path, |tmp| {
-            Ok(wearcoef::io::write_f64(tmp, &shape, pressures)?)
-        })?;
+        let shape = shape.clone();
+        files.push((
+            path,
+            Box::new(move |tmp| Ok(wearcoef::io::write_f64(tmp, &shape, pressures)?)),
+        ));
     }
     if let Some(path) = &args.contact_out {
-        write_atomically(path, |tmp| {
-            Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)
-        })?;
+        let shape = shape.clone();
+        files.push((
+            path,
+            Box::new(move |tmp| Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)),
+        ));
     }
+    wearcoef::io::atomic::write_all_atomically(files)?;
     if args.json {
         let rows: Vec<_> = results
             .iter()
@@ -487,21 +500,13 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
                     "error": r.report.error,
                     "converged": r.report.converged(),
                     "seconds": r.seconds,
-                    "peak_rss_bytes": peak_rss_bytes(),
+                    "peak_rss_bytes": wearcoef::machine::peak_rss_bytes(),
                 })
             })
             .collect();
         out!("{}", serde_json::to_string(&rows)?)?;
     }
     Ok(())
-}
-
-/// The process's peak resident memory (`VmHWM` of /proc/self/status, Linux), if known.
-fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }
 
 #[derive(clap::Args)]
@@ -578,8 +583,9 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
             }
             _ => {
                 return Err(InputError(format!(
-                    "--areas {}: row {i} of '{column}' is {v:?}; areas must be whole numbers of grid cells ≥ 1",
-                    areas.display()
+                    "--areas {}: row {i} of '{column}' is {}; areas must be whole numbers of grid cells ≥ 1",
+                    areas.display(),
+                    v.map_or("null".to_string(), |x| x.to_string())
                 ))
                 .into())
             }

@@ -38,6 +38,23 @@ pub enum FigureKind {
     LoadResolution,
 }
 
+impl FigureKind {
+    /// The kind's name in `pipeline.yaml`.
+    pub fn name(self) -> &'static str {
+        use FigureKind::*;
+        match self {
+            Fig6 => "fig6",
+            Fig2 => "fig2",
+            Fig3Fig4a => "fig3_fig4a",
+            Fig45 => "fig45",
+            AppendixB1 => "appendix_b1",
+            AppendixB2 => "appendix_b2",
+            Convergence => "convergence",
+            LoadResolution => "load_resolution",
+        }
+    }
+}
+
 /// One entry of the `figures:` block.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -173,14 +190,22 @@ impl FigureDecl {
                 return Err(invalid(
                     field,
                     "(given)".into(),
-                    format!("a figure of kind {:?} takes no {}", self.kind, &field[1..]),
+                    format!(
+                        "a figure of kind {} takes no {}",
+                        self.kind.name(),
+                        &field[1..]
+                    ),
                 ));
             }
             if required && !given {
                 return Err(invalid(
                     field,
                     "(missing)".into(),
-                    format!("a figure of kind {:?} needs {}", self.kind, &field[1..]),
+                    format!(
+                        "a figure of kind {} needs {}",
+                        self.kind.name(),
+                        &field[1..]
+                    ),
                 ));
             }
         }
@@ -197,8 +222,8 @@ impl FigureDecl {
                 ".loads",
                 format!("{:?}", self.loads),
                 format!(
-                    "a figure of kind {:?} draws its studies' own loads",
-                    self.kind
+                    "a figure of kind {} draws its studies' own loads",
+                    self.kind.name()
                 ),
             ));
         }
@@ -255,6 +280,31 @@ impl FigureDecl {
                 }
             }
         }
+        for (field, list) in [
+            (".studies", &self.studies),
+            (".ratios", &self.ratios),
+            (".hurst", &self.hurst),
+            (".profiles", &self.profiles),
+        ] {
+            if let Some((i, s)) = list
+                .iter()
+                .enumerate()
+                .find(|(i, s)| list[..*i].contains(s))
+            {
+                return Err(invalid(
+                    &format!("{field}[{i}]"),
+                    s.clone(),
+                    "is listed twice; list each once".into(),
+                ));
+            }
+        }
+        if self.chosen.is_some() && self.chosen == self.fine {
+            return Err(invalid(
+                ".fine",
+                self.fine.clone().unwrap_or_default(),
+                "is also the chosen sweep; compare two different studies".into(),
+            ));
+        }
         for (p, omitted) in &self.omit {
             for s in omitted {
                 if !self.studies_named().contains(&s.as_str()) {
@@ -286,5 +336,59 @@ impl FigureDecl {
             }
         }
         Ok(())
+    }
+}
+
+/// Figures of the kinds whose files have fixed names (fig2a.png, fig4b.csv, …) write the
+/// same files: a profile may hold one figure of each such kind.
+pub(super) fn check_file_names(
+    figures: &BTreeMap<String, FigureDecl>,
+    origin: &str,
+) -> Result<(), ConfigError> {
+    use FigureKind::*;
+    let mut seen: BTreeMap<(String, String), &str> = BTreeMap::new();
+    for (name, fig) in figures {
+        if !matches!(
+            fig.kind,
+            Fig6 | Fig2 | Fig3Fig4a | Fig45 | AppendixB1 | AppendixB2
+        ) {
+            continue;
+        }
+        for p in &fig.profiles {
+            let kind = fig.kind.name().to_string();
+            if let Some(other) = seen.insert((p.clone(), kind.clone()), name) {
+                return Err(ConfigError::Invalid {
+                    path: origin.to_string(),
+                    field: format!("figures.{name}.profiles"),
+                    value: p.clone(),
+                    allowed: format!(
+                        "figure '{other}' of profile '{p}' has the same kind ({kind}) and would write the same files; a profile holds one figure of each kind except appendix, convergence and load_resolution figures (named after the figure)"
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FigureKind::{self, *};
+
+    #[test]
+    fn each_kind_is_named_as_pipeline_yaml_spells_it() {
+        for kind in [
+            Fig6,
+            Fig2,
+            Fig3Fig4a,
+            Fig45,
+            AppendixB1,
+            AppendixB2,
+            Convergence,
+            LoadResolution,
+        ] {
+            let parsed: FigureKind = serde_saphyr::from_str(kind.name()).unwrap();
+            assert_eq!(parsed, kind);
+        }
     }
 }

@@ -15,17 +15,17 @@ use crate::surface::{Method, SurfaceParams};
 
 mod cluster;
 mod figures;
+mod limits;
 pub use cluster::ClusterConfig;
 pub use figures::{FigureDecl, FigureKind};
 
 /// A configuration error: a YAML syntax/schema problem or an invalid value.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("cannot read {path}: {source}")]
-    Read {
-        path: String,
-        source: std::io::Error,
-    },
+    #[error(
+        "--config {path}: cannot be read ({cause}); name a pipeline file (default: pipeline.yaml)"
+    )]
+    Read { path: String, cause: String },
     #[error("{path}: {message}")]
     Parse { path: String, message: String },
     #[error("{path}: {field} = {value}: {allowed}")]
@@ -202,10 +202,23 @@ pub const MAX_N: usize = 32768;
 impl Pipeline {
     /// Read, parse and validate a file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        // At most 16 MiB (a pipeline file is a few KiB; /dev/zero is not one).
+        const MAX_BYTES: u64 = 16 << 20;
+        let read = |cause: String| ConfigError::Read {
             path: path.display().to_string(),
-            source,
-        })?;
+            cause,
+        };
+        let mut text = String::new();
+        use std::io::Read as _;
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_BYTES + 1).read_to_string(&mut text))
+            .map_err(|e| read(e.to_string()))?;
+        if text.len() as u64 > MAX_BYTES {
+            return Err(read(format!(
+                "longer than {} MiB, which no pipeline file is",
+                MAX_BYTES >> 20
+            )));
+        }
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -213,7 +226,7 @@ impl Pipeline {
     pub fn parse(text: &str, origin: &str) -> Result<Self, ConfigError> {
         let pipeline: Pipeline = serde_saphyr::from_str(text).map_err(|e| ConfigError::Parse {
             path: origin.to_string(),
-            message: e.to_string(),
+            message: limits::plain_yaml_error(&e.to_string()),
         })?;
         pipeline.validate(origin)?;
         Ok(pipeline)
@@ -315,6 +328,7 @@ impl Pipeline {
         for (name, fig) in &self.figures {
             fig.validate(name, origin, &self.studies, &self.profiles)?;
         }
+        figures::check_file_names(&self.figures, origin)?;
         for (name, study) in &self.studies {
             for profile in study.profiles.keys() {
                 self.resolve_study(name, profile, origin)?;
@@ -442,6 +456,7 @@ impl Pipeline {
             ));
         }
         let (loads, sweep, keep_pressure) = self.resolve_study_loads(name, profile, origin)?;
+        limits::check_realizations(&pbase, sp.realizations, loads.len(), profile, origin)?;
         let lambda_s_px = res;
         let lambda_l_px = res * ratio;
         let surface = SurfaceParams {
@@ -568,7 +583,7 @@ fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, C
             if loads.spacing.is_some() {
                 return Err(invalid(
                     ".spacing",
-                    format!("{:?}", loads.spacing),
+                    loads.spacing.clone().unwrap_or_default(),
                     "only applies to min/max/count ranges",
                 ));
             }
@@ -596,6 +611,7 @@ fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, C
                     "a range needs at least 2 loads",
                 ));
             }
+            limits::check_load_count(count, field, origin)?;
             let spacing = loads.spacing.as_deref().unwrap_or("log");
             let m = (count - 1) as f64;
             match spacing {

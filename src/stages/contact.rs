@@ -60,15 +60,15 @@ impl Stage for Contact {
             job.e_star,
             &job.loads,
             &cfg,
-            |index, solver, _| {
-                let packed = pack_contact(solver.pressure(), n);
+            |index, pressure, _| {
+                let packed = pack_contact(pressure, n);
                 crate::io::write_u8(&dir.join(contact_file(index)), &[n, row_bytes], packed)
                     .map_err(|e| e.to_string())?;
                 if job.keep_pressure.contains(&index) {
                     crate::io::write_f64(
                         &dir.join(pressure_file(index)),
                         &[n, n],
-                        solver.pressure().to_vec(),
+                        pressure.to_vec(),
                     )
                     .map_err(|e| e.to_string())?;
                 }

@@ -297,7 +297,7 @@ fn solve_command_rejects_bad_surfaces_with_exit_2() {
     wearcoef::io::write_f64(&dir.path().join("nan.npy"), &[16, 16], h).unwrap();
     let out = run_in(
         dir.path(),
-        &["solve", "--surface", "nan.npy", "--loads", "0.01"],
+        &["solve", "--json", "--surface", "nan.npy", "--loads", "0.01"],
     );
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("row 1, column 1"));
@@ -305,7 +305,14 @@ fn solve_command_rejects_bad_surfaces_with_exit_2() {
     wearcoef::io::write_f64(&dir.path().join("rect.npy"), &[16, 8], vec![0.0; 128]).unwrap();
     let out = run_in(
         dir.path(),
-        &["solve", "--surface", "rect.npy", "--loads", "0.01"],
+        &[
+            "solve",
+            "--json",
+            "--surface",
+            "rect.npy",
+            "--loads",
+            "0.01",
+        ],
     );
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("square"));
@@ -313,14 +320,21 @@ fn solve_command_rejects_bad_surfaces_with_exit_2() {
     std::fs::write(dir.path().join("junk.npy"), b"not numpy").unwrap();
     let out = run_in(
         dir.path(),
-        &["solve", "--surface", "junk.npy", "--loads", "0.01"],
+        &[
+            "solve",
+            "--json",
+            "--surface",
+            "junk.npy",
+            "--loads",
+            "0.01",
+        ],
     );
     assert_eq!(out.status.code(), Some(2));
     // Negative load.
     write_surface(dir.path(), 32);
     let out = run_in(
         dir.path(),
-        &["solve", "--surface", "h.npy", "--loads", "-0.01"],
+        &["solve", "--json", "--surface", "h.npy", "--loads", "-0.01"],
     );
     assert_eq!(out.status.code(), Some(2));
 }
@@ -608,4 +622,35 @@ fn a_run_into_a_log_prints_one_line_per_instance() {
     let out = run_in(&quiet, &["run", "--profile", "t", "--quiet"]);
     assert!(out.status.success());
     assert!(!String::from_utf8_lossy(&out.stderr).contains("done "));
+}
+
+/// `catalog | head -1`, also with `2>&1`: a reader that closes the pipe, on standard output
+/// and standard error alike, ends the command with exit 0 and no panic.
+#[test]
+fn catalog_into_a_closed_pipe_exits_0() {
+    let (_t, dir) = workdir(&crate::small_pipeline(0.8, "x"));
+    assert!(run_in(&dir, &["run", "--profile", "t", "--quiet"])
+        .status
+        .success());
+    for close_stderr in [false, true] {
+        let mut child = crate::bin()
+            .current_dir(&dir)
+            .args(["catalog", "--profile", "t"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        if close_stderr {
+            drop(child.stderr.take());
+        }
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "stderr closed: {close_stderr}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
 }

@@ -198,10 +198,99 @@ fn loads_outside_a_study_range_are_errors_naming_the_field() {
     for loads in ["-0.01", "nan", "0.01,inf"] {
         let out = run_in(
             &dir,
-            &["solve", "--surface", "missing.npy", "--loads", loads],
+            &[
+                "solve",
+                "--json",
+                "--surface",
+                "missing.npy",
+                "--loads",
+                loads,
+            ],
         );
         assert!(!out.status.success(), "{loads}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("--loads"), "{loads}: {err}");
+    }
+}
+
+/// Units do not change the answer: the default and the plain solver agree, and converge,
+/// at loads down to W/W0 = 1e-300, moduli of 1e±40 and heights scaled by 1e±40 (every value
+/// the CLI accepts); the contact set is that of the unit problem and the mean pressure is
+/// the imposed one.
+#[test]
+fn the_answer_does_not_depend_on_units_or_on_the_solver() {
+    use wearcoef::contact::solver::SolverConfig;
+    use wearcoef::contact::sweep::sweep_heights;
+    use wearcoef::spectral::Fft2;
+    use wearcoef::surface::{self, Method, SurfaceParams};
+    let n = 64;
+    let params = SurfaceParams {
+        n,
+        hurst: 0.8,
+        lambda_l_px: 32.0,
+        lambda_s_px: 4.0,
+        rolloff_lambda_px: None,
+        method: Method::Filter,
+        seed: 5,
+    };
+    let fft = Fft2::new(n);
+    let heights = surface::generate(&params, &fft, &mut fft.make_scratch())
+        .unwrap()
+        .heights;
+    let solve = |scale: f64, e_star: f64, w: f64, preconditioned: bool| {
+        let h: Vec<f64> = heights.iter().map(|v| v * scale).collect();
+        let cfg = SolverConfig {
+            tolerance: 1e-9,
+            preconditioned,
+            ..SolverConfig::default()
+        };
+        let mut map = Vec::new();
+        let mut total = 0.0;
+        let (slope, results) = sweep_heights(&h, n, e_star, &[w], &cfg, |_, p, _| {
+            map = p.iter().map(|&v| v > 0.0).collect::<Vec<bool>>();
+            total = p.iter().sum::<f64>();
+            Ok(())
+        })
+        .unwrap_or_else(|e| {
+            panic!(
+                "scale {scale:e}, E* {e_star:e}, W/W0 {w:e}, preconditioned {preconditioned}: {e}"
+            )
+        });
+        let imposed = w * (e_star * slope);
+        let mean = total / (n * n) as f64;
+        assert!(
+            (mean / imposed - 1.0).abs() < 1e-12,
+            "scale {scale:e}, E* {e_star:e}, W/W0 {w:e}: mean pressure {mean:e} against {imposed:e}"
+        );
+        assert!(results[0].report.converged());
+        map
+    };
+    for w in [1e-300, 1e-25, 1e-3, 0.05] {
+        let unit = solve(1.0, 1.0, w, true);
+        for (scale, e_star) in [
+            (1.0, 1.0),
+            (1e40, 1.0),
+            (1e-40, 1.0),
+            (1.0, 1e40),
+            (1.0, 1e-40),
+            (1e40, 1e-40),
+        ] {
+            if w * (scale * e_star) < f64::MIN_POSITIVE * 1024.0 {
+                // Pressures below the doubles' full precision: refused, naming the fix.
+                let h: Vec<f64> = heights.iter().map(|v| v * scale).collect();
+                let cfg = SolverConfig::default();
+                let e = sweep_heights(&h, n, e_star, &[w], &cfg, |_, _, _| Ok(())).unwrap_err();
+                assert!(e.to_string().contains("nearer 1"), "{e}");
+                continue;
+            }
+            for preconditioned in [true, false] {
+                let map = solve(scale, e_star, w, preconditioned);
+                let differ = map.iter().zip(&unit).filter(|(a, b)| a != b).count();
+                assert!(
+                    differ <= 1,
+                    "scale {scale:e}, E* {e_star:e}, W/W0 {w:e}, preconditioned {preconditioned}: {differ} nodes differ from the unit problem's contact set"
+                );
+            }
+        }
     }
 }

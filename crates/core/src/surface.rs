@@ -144,7 +144,35 @@ impl SurfaceParams {
                 ));
             }
         }
+        if !self.band_has_a_mode() {
+            return Err(bad(
+                "lambda_s_px",
+                self.lambda_s_px,
+                format!(
+                    "the band from λ_l = {} to λ_s = {} grid spacings (wavenumbers {:.4} to {:.4} in units of 2π/L) holds no Fourier mode of the {n}² grid: widen the band (a smaller λ_s or a larger λ_l)",
+                    self.rolloff_lambda_px.unwrap_or(self.lambda_l_px),
+                    self.lambda_s_px,
+                    self.k_r(),
+                    self.k_s()
+                ),
+            ));
+        }
         Ok(())
+    }
+
+    /// Whether some wavevector of the grid (|k_x|, |k_y| ≤ n/2, k ≠ 0) has a non-zero PSD:
+    /// for each k_x, the smallest k_y at or above the band's lower edge is tested with
+    /// [`SurfaceParams::psd_shape`] itself (and its neighbours, against rounding).
+    pub fn band_has_a_mode(&self) -> bool {
+        let (lo, hi) = (self.k_r(), self.k_s());
+        let half = (self.n / 2) as i64;
+        let top = (hi.ceil() as i64).min(half);
+        (0..=top).any(|a| {
+            let a2 = (a * a) as f64;
+            let b0 = (lo * lo - a2).max(0.0).sqrt().floor() as i64;
+            ((b0 - 1).max(0)..=(b0 + 2).min(half))
+                .any(|b| self.psd_shape(((a * a + b * b) as f64).sqrt()) > 0.0)
+        })
     }
 
     /// Integer wavenumber of λ_l, in units of 2π/L.

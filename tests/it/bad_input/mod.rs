@@ -13,27 +13,53 @@ use std::process::{Command, Output};
 
 use crate::{bin, small_pipeline};
 
+mod counts;
+mod messages;
+mod paths;
+
 /// One row: what to set up, the command, and what must come back.
 struct Case {
     name: &'static str,
     /// pipeline.yaml's text (None: the small two-study pipeline).
     pipeline: Option<String>,
+    /// Commands run first (each must succeed), e.g. a run that makes a store.
+    before: Vec<&'static str>,
+    /// Files to make first (in the working directory), after `before`.
+    prepare: Option<fn(&Path)>,
     args: Vec<String>,
     env: Vec<(&'static str, &'static str)>,
     code: i32,
     /// Every one must appear in stderr.
     says: Vec<&'static str>,
+    /// None may appear in stderr (library internals, temporaries' names).
+    never: Vec<&'static str>,
 }
 
 fn case(name: &'static str, args: &str, code: i32, says: &[&'static str]) -> Case {
     Case {
         name,
         pipeline: None,
+        before: Vec::new(),
+        prepare: None,
         args: args.split_whitespace().map(String::from).collect(),
         env: Vec::new(),
         code,
         says: says.to_vec(),
+        never: Vec::new(),
     }
+}
+
+/// Every file under `dir` with a hash of its bytes (directories with none).
+fn contents(dir: &Path) -> std::collections::BTreeMap<PathBuf, u64> {
+    use std::hash::{Hash, Hasher};
+    tree(dir)
+        .into_iter()
+        .map(|p| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            std::fs::read(dir.join(&p)).ok().hash(&mut h);
+            (p, h.finish())
+        })
+        .collect()
 }
 
 /// Every file and directory under `dir`, relative.
@@ -111,7 +137,23 @@ fn check(c: &Case) {
         .unwrap_or_else(|| small_pipeline(0.8, "x"));
     std::fs::write(dir.join("pipeline.yaml"), text).unwrap();
     write_inputs(&dir);
-    let before = tree(root.path());
+    for command in &c.before {
+        let out = bin()
+            .current_dir(&dir)
+            .args(command.split_whitespace())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "case {}: setup `{command}`: {}",
+            c.name,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    if let Some(prepare) = c.prepare {
+        prepare(&dir);
+    }
+    let before = contents(root.path());
     let mut cmd = bin();
     cmd.current_dir(&dir).args(&c.args);
     for (k, v) in &c.env {
@@ -132,9 +174,20 @@ fn check(c: &Case) {
             "{who}: stderr lacks {needle:?}: {stderr}"
         );
     }
-    let after = tree(root.path());
-    let added: Vec<_> = after.difference(&before).collect();
-    assert!(added.is_empty(), "{who}: wrote {added:?}");
+    for needle in &c.never {
+        assert!(!stderr.contains(needle), "{who}: says {needle:?}: {stderr}");
+    }
+    // Nothing added, removed or changed (a dry run and a refusal alike).
+    let after = contents(root.path());
+    if c.code != 0 || c.args.iter().any(|a| a == "--dry-run") {
+        assert_eq!(
+            after.keys().collect::<Vec<_>>(),
+            before.keys().collect::<Vec<_>>(),
+            "{who}: the files changed"
+        );
+        let changed: Vec<_> = after.iter().filter(|(p, h)| before[*p] != **h).collect();
+        assert!(changed.is_empty(), "{who}: changed {changed:?}");
+    }
 }
 
 /// Names become directories (data/<profile>/, figures/<profile>/, campaigns) and file
@@ -229,49 +282,49 @@ fn degenerate_surfaces_are_refused() {
     let cases = [
         case(
             "flat",
-            "solve --surface flat.npy --loads 0.01",
+            "solve --json --surface flat.npy --loads 0.01",
             2,
             &["rms slope", "zero", "flat or constant"],
         ),
         case(
             "constant",
-            "solve --surface constant.npy --loads 0.01",
+            "solve --json --surface constant.npy --loads 0.01",
             2,
             &["rms slope", "zero"],
         ),
         case(
             "underflowing heights",
-            "solve --surface underflow.npy --loads 0.01",
+            "solve --json --surface underflow.npy --loads 0.01",
             2,
             &["rms slope", "rescale the heights"],
         ),
         case(
             "overflowing heights",
-            "solve --surface overflow.npy --loads 0.01",
+            "solve --json --surface overflow.npy --loads 0.01",
             2,
             &["rms slope", "not finite"],
         ),
         case(
             "NaN height",
-            "solve --surface nan.npy --loads 0.01",
+            "solve --json --surface nan.npy --loads 0.01",
             2,
             &["nan.npy", "row 3, column 4", "finite"],
         ),
         case(
             "infinite height",
-            "solve --surface inf.npy --loads 0.01",
+            "solve --json --surface inf.npy --loads 0.01",
             2,
             &["inf.npy", "row 0, column 5"],
         ),
         case(
             "not a .npy",
-            "solve --surface junk.npy --loads 0.01",
+            "solve --json --surface junk.npy --loads 0.01",
             2,
             &["junk.npy", "not a .npy file"],
         ),
         case(
             "missing surface",
-            "solve --surface nosuch.npy --loads 0.01",
+            "solve --json --surface nosuch.npy --loads 0.01",
             2,
             &["nosuch.npy"],
         ),
@@ -284,7 +337,7 @@ fn degenerate_surfaces_are_refused() {
 /// Every tool holds its parameters to their domain as strictly as pipeline.yaml does.
 #[test]
 fn parameters_outside_their_domain_are_refused_on_every_tool() {
-    let s = "solve --surface ok.npy --loads 0.01";
+    let s = "solve --json --surface ok.npy --loads 0.01";
     let surf = "surface --n 16 --lambda-l-px 8 --lambda-s-px 2 --hurst 0.8 -o h.npy";
     let model = "model --a-s 1 --a-m 100";
     let big_load = small_pipeline(0.8, "x").replace("values: [0.01, 0.02]", "values: [0.01, 500]");
@@ -324,19 +377,19 @@ fn parameters_outside_their_domain_are_refused_on_every_tool() {
         ),
         case(
             "negative load",
-            "solve --surface ok.npy --loads=-0.1",
+            "solve --json --surface ok.npy --loads=-0.1",
             2,
             &["load 1 is -0.1"],
         ),
         case(
             "NaN load",
-            "solve --surface ok.npy --loads NaN",
+            "solve --json --surface ok.npy --loads NaN",
             2,
             &["load 1 is NaN"],
         ),
         case(
             "load past complete contact",
-            "solve --surface ok.npy --loads 0.01,1e300",
+            "solve --json --surface ok.npy --loads 0.01,1e300",
             2,
             &["load 2 is 1e300", "≤ 100"],
         ),
@@ -470,7 +523,7 @@ fn sizes_that_cannot_fit_are_refused_before_allocating() {
         },
         case(
             "forged header",
-            "solve --surface forged.npy --loads 0.01",
+            "solve --json --surface forged.npy --loads 0.01",
             2,
             &["forged.npy", "promises shape (200000, 200000)"],
         ),
@@ -489,7 +542,7 @@ fn sizes_that_cannot_fit_are_refused_before_allocating() {
     write_inputs(dir.path());
     let out = bin()
         .current_dir(dir.path())
-        .args(["solve", "--surface", "ok.npy", "--loads", "0.01"])
+        .args(["solve", "--json", "--surface", "ok.npy", "--loads", "0.01"])
         .env("WEARCOEF_MEMORY_BYTES", "1000000000")
         .output()
         .unwrap();
@@ -650,7 +703,7 @@ echo "surface exit $?"
 echo "left: $(ls -A "$1")"
 "$WEARCOEF" run --profile t --data "$1/data" --figures "$1/figures" --quiet --jobs 1
 echo "run exit $?"
-echo "temporaries: $(find "$1" -name '.*' | wc -l)"
+echo "temporaries: $(find "$1" -name '.*' ! -name .checked | wc -l)"
 echo "failure records: $(find "$1" -path '*failed*' -name '*.json' | wc -l)"
 "#;
     let Some(out) = with_small_disk(&mount, "100k", script) else {
@@ -671,6 +724,7 @@ echo "failure records: $(find "$1" -path '*failed*' -name '*.json' | wc -l)"
         "a partial surface is left: {all}"
     );
     assert!(stdout.contains("run exit 1"), "{all}");
+    assert!(!stderr.contains(".tmp-"), "names a temporary: {all}");
     assert!(stderr.contains("bytes free: make room"), "{all}");
     assert!(stdout.contains("temporaries: 0"), "{all}");
     assert!(stdout.contains("failure records: 0"), "{all}");

@@ -27,7 +27,7 @@ pub struct LoadResult {
 pub enum SweepError {
     #[error(transparent)]
     Input(#[from] ContactError),
-    #[error("load {index} (W/W0 = {w_over_w0}) did not converge: {status:?} after {iterations} iterations, error {error:e} > tolerance {tolerance:e}")]
+    #[error("load {index} (W/W0 = {}) did not converge: {status:?} after {iterations} iterations, error {error:e} > tolerance {tolerance:e}", Num(*w_over_w0))]
     NotConverged {
         index: usize,
         w_over_w0: f64,
@@ -36,7 +36,7 @@ pub enum SweepError {
         error: f64,
         tolerance: f64,
     },
-    #[error("load {index}: W/W0 = {value} must be finite and in [0, {MAX_W_OVER_W0}] (past W/W0 ≈ 10 the contact is complete; larger loads only lose digits to rounding)")]
+    #[error("load {index}: W/W0 = {} must be finite and in [0, {MAX_W_OVER_W0}] (past W/W0 ≈ 10 the contact is complete; larger loads only lose digits to rounding)", Num(*value))]
     BadLoad { index: usize, value: f64 },
     #[error("the surface's rms slope is {rms_slope:e}, so the reference load W0 = E*·rms slope·L² is {}: a flat or constant surface has no W/W0 scale, and heights whose squares under- or overflow (rms slope outside [{MIN_RMS_SLOPE:e}, {MAX_RMS_SLOPE:e}]) cannot be solved accurately; rescale the heights (the pipeline normalises them to unit rms slope)", if *rms_slope == 0.0 { "zero" } else if rms_slope.is_finite() { "out of the solvable range" } else { "not finite" })]
     DegenerateSurface { rms_slope: f64 },
@@ -55,7 +55,7 @@ pub fn sweep_heights(
     e_star: f64,
     loads: &[f64],
     cfg: &SolverConfig,
-    on_load: impl FnMut(usize, &Solver, &LoadResult) -> Result<(), String>,
+    mut on_load: impl FnMut(usize, &[f64], &LoadResult) -> Result<(), String>,
 ) -> Result<(f64, Vec<LoadResult>), SweepError> {
     if heights.len() != n * n {
         return Err(ContactError::BadLength {
@@ -67,8 +67,77 @@ pub fn sweep_heights(
     let grid = Grid::unit(n)?;
     let slope = crate::surface::rms_slope(&grid, heights);
     check_rms_slope(slope)?;
-    let op = ElasticOperator::new(grid, e_star);
-    Ok((slope, sweep(&op, heights, slope, loads, cfg, on_load)?))
+    let largest = loads.iter().fold(0.0f64, |a, &w| a.max(w));
+    if !(e_star.is_finite() && e_star > 0.0 && (largest * (e_star * slope)).is_finite()) {
+        return Err(ContactError::BadConfig(format!(
+            "E* = {e_star:e} with an rms slope of {slope:e}: the mean pressure W/W0·E*·rms slope must be a finite number; choose the units of E* and of the heights so that both are nearer 1"
+        ))
+        .into());
+    }
+    // The pressures are written in the user's units: the smallest mean pressure must be a
+    // number with all its digits (not subnormal).
+    let smallest = loads
+        .iter()
+        .filter(|&&w| w > 0.0)
+        .fold(f64::INFINITY, |a, &w| a.min(w));
+    if smallest.is_finite() && smallest * (e_star * slope) < f64::MIN_POSITIVE * 1024.0 {
+        return Err(ContactError::BadConfig(format!(
+            "W/W0 = {} with E* = {e_star:e} and an rms slope of {slope:e}: the mean pressure W/W0·E*·rms slope = {:e} is below the smallest double with all its digits; choose the units of E* and of the heights so that both are nearer 1",
+            Num(smallest),
+            smallest * (e_star * slope)
+        ))
+        .into());
+    }
+    // Solved in units where the rms slope and E* lie within a factor √2 of 1: dividing by
+    // powers of two is exact, so the pipeline's surfaces (unit slope, E* = 1) are solved
+    // exactly as given, and any other scale as if it were theirs.
+    let (to_h, to_e) = (nearest_power_of_two(slope), nearest_power_of_two(e_star));
+    let to_p = to_h * to_e;
+    let scaled: std::borrow::Cow<[f64]> = if to_h == 1.0 {
+        std::borrow::Cow::Borrowed(heights)
+    } else {
+        heights.iter().map(|h| h / to_h).collect()
+    };
+    let op = ElasticOperator::new(grid, e_star / to_e);
+    let mut pressure = Vec::new();
+    let mut results = sweep(&op, &scaled, slope / to_h, loads, cfg, |i, solver, r| {
+        let r = LoadResult {
+            mean_pressure: r.mean_pressure * to_p,
+            ..r.clone()
+        };
+        if to_p == 1.0 {
+            on_load(i, solver.pressure(), &r)
+        } else {
+            pressure.clear();
+            pressure.extend(solver.pressure().iter().map(|p| p * to_p));
+            on_load(i, &pressure, &r)
+        }
+    })?;
+    for r in &mut results {
+        r.mean_pressure *= to_p;
+        r.report.mean_pressure *= to_p;
+    }
+    Ok((slope, results))
+}
+
+/// `2^k` with `k` the integer nearest `log2 x` (x finite and > 0).
+fn nearest_power_of_two(x: f64) -> f64 {
+    2f64.powi(x.log2().round() as i32)
+}
+
+/// A number for a message: plain when of moderate size, else in scientific notation (never
+/// hundreds of digits of 1e-300).
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || !a.is_finite() || (1e-4..1e6).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
 }
 
 /// Largest load W/W0 a sweep accepts. Contact is complete well before W/W0 = 10 on a surface

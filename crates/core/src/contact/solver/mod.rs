@@ -403,7 +403,7 @@ impl<'a> Solver<'a> {
             status: Status::Converged,
             iterations: 0,
             error: 0.0,
-            error_history: Vec::with_capacity(cfg.max_iterations + 2),
+            error_history: Vec::with_capacity(cfg.max_iterations.min(4096) + 2),
             convolutions: 0,
             mean_pressure,
         };
@@ -575,14 +575,18 @@ impl<'a> Solver<'a> {
                 continue;
             }
             let load = target * len as f64;
-            stats = if cfg.preconditioned
+            // The load restored by a uniform offset where the step changed many nodes. When
+            // the load is below the rounding of the largest pressures (W/W0 ≈ 1e-20), the
+            // offset's sum cancels to zero: the rescaling below restores it instead.
+            let offset = (cfg.preconditioned
                 && cfg.offset_to_load
                 && totals.changed > MAX_SPARSE
-                && total > load
-            {
-                // The load restored by a uniform offset, then `u = K p` recomputed: one
-                // convolution, as a correction of this many changes would take.
-                let (offset, shifted) = self.load_offset(load, total, totals.contact_nodes);
+                && total > load)
+                .then(|| self.load_offset(load, total, totals.contact_nodes))
+                .filter(|&(_, shifted)| shifted > 0.0);
+            stats = if let Some((offset, shifted)) = offset {
+                // `u = K p` recomputed: one convolution, as a correction of this many
+                // changes would take.
                 report.convolutions += 1;
                 linear_steps = 0;
                 self.offset_deflection(offset, load / shifted, shift)
