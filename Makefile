@@ -92,5 +92,7 @@ speed-accuracy:
 bench-peers:
 	bash benches/peers/run.sh 256 512 1024
 
-clean:
-	$(BIN) clean || rm -rf data
+# Removes the store data/ only if it holds nothing but a store (wearcoef clean refuses
+# anything else and says what it would remove with --dry-run).
+clean: build
+	if [ -d data ]; then $(BIN) clean --data data; fi
