@@ -58,6 +58,12 @@ pub fn check_outputs(
         let Some(name) = path.file_name() else {
             return Err(bad("names no file".into()));
         };
+        if name.len() > 255 {
+            return Err(bad(format!(
+                "the file name has {} bytes, more than the 255 a file system allows; choose a shorter one",
+                name.len()
+            )));
+        }
         let dir = path
             .parent()
             .filter(|p| !p.as_os_str().is_empty())

@@ -88,8 +88,9 @@ pub fn run(
             inst.cached = false;
         }
     }
+    let mut at_once = opts.at_once.unwrap_or(opts.jobs);
     if let Some(memory) = machine_memory_bytes() {
-        Plan {
+        let missing = Plan {
             profile: plan.profile.clone(),
             instances: plan
                 .instances
@@ -97,19 +98,33 @@ pub fn run(
                 .filter(|i| !i.cached)
                 .cloned()
                 .collect(),
+        };
+        missing.check_memory(memory)?;
+        // As many instances side by side as the largest fits in memory that many times.
+        if let Some(largest) = missing.largest().map(|i| i.estimate.peak_bytes.max(1)) {
+            let fit = (memory / largest).max(1) as usize;
+            if at_once > fit {
+                if !opts.quiet {
+                    crate::note!(
+                        "at most {fit} instance(s) at once instead of {at_once}: the largest needs about {:.1} GiB of this machine's {:.1} GiB",
+                        largest as f64 / (1u64 << 30) as f64,
+                        memory as f64 / (1u64 << 30) as f64
+                    );
+                }
+                at_once = fit;
+            }
         }
-        .check_memory(memory)?;
     }
     store.remove_stale_temporaries()?;
     let reused = plan.instances.iter().filter(|i| i.cached).count();
-    // Up to `jobs` instances at once, each on a pool of at most one thread per core.
+    // Up to `at_once` instances at once, each on a pool of at most one thread per core.
     let outcome = execute_forcing(
         store,
         &plan.instances,
         &forced,
         opts.retry_failed,
         opts.jobs.min(crate::machine::cores()),
-        opts.at_once.unwrap_or(opts.jobs),
+        at_once,
         opts.quiet,
     )?;
     let computed = outcome.computed;

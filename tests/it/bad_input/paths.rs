@@ -178,6 +178,15 @@ fn outputs_never_overwrite_inputs_or_the_store() {
             &["--figures data", "is the data directory"],
         ),
         case(
+            "a file name longer than a file system allows",
+            &format!(
+                "surface --n 16 --lambda-l-px 8 --lambda-s-px 2 --hurst 0.8 -o {}.npy",
+                "a".repeat(300)
+            ),
+            2,
+            &["more than the 255 a file system allows"],
+        ),
+        case(
             "a solve that writes nothing",
             "solve --surface ok.npy --loads 0.01",
             2,
