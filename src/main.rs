@@ -82,7 +82,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match dispatch(cli) {
+    match check_environment()
+        .map_err(anyhow::Error::from)
+        .and_then(|_| dispatch(cli))
+    {
         Ok(code) => code,
         Err(e) => {
             // The reader closed the pipe (`wearcoef status | head -1`): it has what it wanted.
@@ -111,6 +114,22 @@ fn main() -> ExitCode {
             });
             ExitCode::from(if is_input { 2 } else { 1 })
         }
+    }
+}
+
+/// The environment's counts are bounded like the command line's: `RAYON_NUM_THREADS` (the
+/// threads of `solve`, `surface`, `clusters`) is a whole number, 0 meaning one per core, and
+/// at most what this machine allows the program.
+fn check_environment() -> Result<(), InputError> {
+    let Ok(value) = std::env::var("RAYON_NUM_THREADS") else {
+        return Ok(());
+    };
+    let max = wearcoef::machine::max_threads();
+    match value.trim().parse::<usize>() {
+        Ok(n) if n <= max => Ok(()),
+        _ => Err(InputError(format!(
+            "RAYON_NUM_THREADS={value:?}: a whole number of threads from 1 to {max} (0 or unset: one per core)"
+        ))),
     }
 }
 

@@ -187,6 +187,20 @@ pub fn exec_plan(
             plan_path.display()
         ))
     })?;
+    let levels = plan
+        .instances
+        .iter()
+        .map(|i| i.level + 1)
+        .max()
+        .unwrap_or(0);
+    if let Some(l) = level.filter(|&l| l >= levels) {
+        return Err(UsageError(format!(
+            "--level {l}: the plan {} has levels 0 to {} (`wearcoef plan` lists them)",
+            plan_path.display(),
+            levels.saturating_sub(1)
+        ))
+        .into());
+    }
     let mut chosen: Vec<Instance> = plan
         .instances
         .into_iter()

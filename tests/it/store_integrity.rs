@@ -274,3 +274,33 @@ fn one_instance_at_a_time_records_its_peak_memory() {
     assert!(out.status.success());
     assert!(peaks(&together).iter().any(Option::is_none));
 }
+
+/// A forged manifest listing an output outside its entry (`../x`) is a damaged entry: it is
+/// never read or copied anywhere.
+#[test]
+fn a_manifest_naming_a_file_outside_its_entry_is_damaged() {
+    let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
+    assert!(run_in(&dir, &RUN).status.success());
+    let fig = entries(&dir, "figures")[0].clone();
+    let path = fig.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let outputs = m["outputs"].as_object_mut().unwrap();
+    let (_, first) = outputs
+        .iter()
+        .next()
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .unwrap();
+    outputs.insert("../../../../escaped.png".into(), first);
+    std::fs::write(&path, serde_json::to_string_pretty(&m).unwrap()).unwrap();
+    let out = run_in(&dir, &RUN);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("not a plain file name"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!dir.join("escaped.png").exists() && !dir.join("figures/escaped.png").exists());
+    let verify = run_in(&dir, &["verify"]);
+    assert!(String::from_utf8_lossy(&verify.stdout).contains("not a plain file name"));
+}

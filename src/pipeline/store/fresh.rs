@@ -55,6 +55,20 @@ pub(super) fn check_identity(stage: &str, key: &str, manifest: &Manifest) -> Res
             manifest.stage, manifest.key
         ));
     }
+    // Outputs are plain file names in the entry (a forged "../x" would be read, or copied
+    // into a gallery, outside the store).
+    if let Some(name) = manifest.outputs.keys().find(|n| {
+        n.is_empty()
+            || n.starts_with('.')
+            || n.len() > 255
+            || !n
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+    }) {
+        return Err(format!(
+            "manifest lists an output {name:?}, which is not a plain file name of the entry"
+        ));
+    }
     let recomputed = instance_key(stage, manifest.version, &manifest.params, &manifest.inputs);
     if recomputed != key {
         return Err(format!(

@@ -19,6 +19,15 @@ fn counts_beyond_the_machine_are_refused_before_any_work() {
             2,
             &["--jobs 1000000", "threads", "choose at most"],
         ),
+        Case {
+            before: vec!["plan --profile t --out p.json"],
+            ..case(
+                "a level the plan does not have",
+                "exec --plan p.json --level 99",
+                2,
+                &["--level 99", "levels 0 to 4"],
+            )
+        },
         case(
             "exec on a million threads",
             "exec --plan p.json --jobs 100000 --at-once 100000",
@@ -56,6 +65,24 @@ fn counts_beyond_the_machine_are_refused_before_any_work() {
                 "plan --profile t",
                 0,
                 &[],
+            )
+        },
+        Case {
+            env: vec![("RAYON_NUM_THREADS", "20000")],
+            ..case(
+                "twenty thousand solver threads",
+                "solve --json --surface ok.npy --loads 0.01",
+                2,
+                &["RAYON_NUM_THREADS=\"20000\"", "from 1 to"],
+            )
+        },
+        Case {
+            env: vec![("RAYON_NUM_THREADS", "two")],
+            ..case(
+                "threads that are not a number",
+                "solve --json --surface ok.npy --loads 0.01",
+                2,
+                &["RAYON_NUM_THREADS=\"two\""],
             )
         },
         case(
