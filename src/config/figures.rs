@@ -339,32 +339,50 @@ impl FigureDecl {
     }
 }
 
-/// Figures of the kinds whose files have fixed names (fig2a.png, fig4b.csv, …) write the
-/// same files: a profile may hold one figure of each such kind.
+/// The stems of the files a figure writes (`<stem>.png`, `.svg`, `.csv`, …): fixed by its
+/// kind, or its own name for the kinds named after the figure.
+pub fn file_stems(name: &str, kind: FigureKind) -> Vec<String> {
+    use FigureKind::*;
+    let fixed: &[&str] = match kind {
+        Fig6 => &["fig6"],
+        Fig2 => &[
+            "fig2a",
+            "fig2b",
+            "fig2c",
+            "fig2d",
+            "fig2e",
+            "fig2f",
+            "fig2_convergence",
+        ],
+        Fig3Fig4a => &["fig3", "fig4a"],
+        Fig45 => &["fig4b", "fig5a", "fig5b"],
+        AppendixB1 | AppendixB2 | Convergence | LoadResolution => {
+            return vec![name.to_string(), format!("{name}_convergence")]
+        }
+    };
+    fixed.iter().map(|s| s.to_string()).collect()
+}
+
+/// No two figures of a profile write a file of the same name (two fig6 figures, or a
+/// convergence figure called `fig4b` beside a fig45 figure).
 pub(super) fn check_file_names(
     figures: &BTreeMap<String, FigureDecl>,
     origin: &str,
 ) -> Result<(), ConfigError> {
-    use FigureKind::*;
     let mut seen: BTreeMap<(String, String), &str> = BTreeMap::new();
     for (name, fig) in figures {
-        if !matches!(
-            fig.kind,
-            Fig6 | Fig2 | Fig3Fig4a | Fig45 | AppendixB1 | AppendixB2
-        ) {
-            continue;
-        }
         for p in &fig.profiles {
-            let kind = fig.kind.name().to_string();
-            if let Some(other) = seen.insert((p.clone(), kind.clone()), name) {
-                return Err(ConfigError::Invalid {
-                    path: origin.to_string(),
-                    field: format!("figures.{name}.profiles"),
-                    value: p.clone(),
-                    allowed: format!(
-                        "figure '{other}' of profile '{p}' has the same kind ({kind}) and would write the same files; a profile holds one figure of each kind except appendix, convergence and load_resolution figures (named after the figure)"
-                    ),
-                });
+            for stem in file_stems(name, fig.kind) {
+                if let Some(other) = seen.insert((p.clone(), stem.clone()), name) {
+                    return Err(ConfigError::Invalid {
+                        path: origin.to_string(),
+                        field: format!("figures.{name}"),
+                        value: fig.kind.name().to_string(),
+                        allowed: format!(
+                            "figure '{other}' of profile '{p}' also writes {stem}.*: the same files; a profile holds one figure of each of the kinds fig2, fig3_fig4a, fig45, fig6, and other figures are named so that their files differ"
+                        ),
+                    });
+                }
             }
         }
     }

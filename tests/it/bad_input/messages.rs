@@ -55,6 +55,10 @@ fn silent_accepts_are_refused() {
         "  fig6: {kind: fig6, profiles: [t]}",
         "  fig6: {kind: fig6, profiles: [t]}\n  again: {kind: fig6, profiles: [t]}",
     );
+    let named_like_fig4b = with(
+        "  fig6: {kind: fig6, profiles: [t]}",
+        "  fig6: {kind: fig6, profiles: [t]}\n  k: {kind: fig45, study: a, profiles: [t]}\n  fig4b: {kind: convergence, studies: [a, b], profiles: [t]}",
+    );
     let empty_profile = with(
         "profiles: {t: \"test\"}",
         "profiles: {t: \"test\", e: \"empty\"}",
@@ -86,7 +90,16 @@ fn silent_accepts_are_refused() {
                 "two figures writing the same files",
                 "run --profile t",
                 2,
-                &["figures.fig6", "again", "same files"],
+                &["figures.fig6", "'again'", "also writes fig6.*"],
+            )
+        },
+        Case {
+            pipeline: named_like_fig4b,
+            ..case(
+                "a convergence figure named like another figure's files",
+                "plan --profile t",
+                2,
+                &["figures.k", "'fig4b'", "also writes fig4b.*"],
             )
         },
         Case {
