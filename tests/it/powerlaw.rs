@@ -5,7 +5,7 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use wearcoef::powerlaw::{
     bootstrap_discrete, fit_continuous, fit_discrete, fit_discrete_tail, fit_plateau_power_law,
-    FitError,
+    plateau_alpha_interval, FitError,
 };
 
 fn rng(seed: u64) -> ChaCha8Rng {
@@ -251,6 +251,49 @@ fn plateau_power_law_joint_fit_recovers_alpha_and_plateau() {
     }
     let mean = alphas.iter().sum::<f64>() / alphas.len() as f64;
     assert!((mean - 1.5).abs() < 0.015, "mean α̂ = {mean}");
+}
+
+/// The 95 % profile-likelihood interval of the plateau fit covers the true α at its nominal
+/// rate on samples of the paper's p_PL (α = 1.5, plateau to 10 px, cut-off 10⁴ px, 1000
+/// clusters, the cut-off estimated by the largest): 200 samples, so the coverage of a
+/// correct interval lies in [0.90, 0.99] with probability 0.998 (binomial, ±3σ).
+#[test]
+#[ignore = "about a minute in a debug build; make test runs it in the release run (--ignored)"]
+fn plateau_interval_covers_the_true_alpha_at_its_nominal_rate() {
+    let mut r = rng(11);
+    let trials = 200;
+    let mut covered = 0;
+    let (mut widths, mut alphas) = (Vec::new(), Vec::new());
+    for _ in 0..trials {
+        let s = plateau_sample(&mut r, 1000, 1.5, 10.0, 10_000);
+        let f = fit_plateau_power_law(&s).unwrap();
+        let i = plateau_alpha_interval(&s, &f).unwrap();
+        assert!(
+            i.low < f.alpha && f.alpha < i.high,
+            "{i:?} around {}",
+            f.alpha
+        );
+        assert!(!i.low_at_edge && !i.high_at_edge, "{i:?}");
+        covered += usize::from(i.low <= 1.5 && 1.5 <= i.high);
+        widths.push(i.high - i.low);
+        alphas.push(f.alpha);
+    }
+    let coverage = covered as f64 / trials as f64;
+    assert!((0.90..=0.99).contains(&coverage), "coverage {coverage}");
+    // Its width is that of a Gaussian interval of the estimates' own scatter, 2 × 1.96 σ(α̂)
+    // (σ from 200 samples: ±10 %; the likelihood's curvature varies from sample to sample).
+    let mean = alphas.iter().sum::<f64>() / trials as f64;
+    let sd = (alphas.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (trials - 1) as f64).sqrt();
+    widths.sort_by(f64::total_cmp);
+    let median = widths[trials / 2];
+    eprintln!(
+        "coverage {coverage}, median width {median}, 3.92 σ(α̂) = {}",
+        3.92 * sd
+    );
+    assert!(
+        (median / (3.92 * sd) - 1.0).abs() < 0.3,
+        "median width {median}, σ(α̂) {sd}"
+    );
 }
 
 #[test]

@@ -406,103 +406,11 @@ pub fn fit_continuous(
     })
 }
 
-// ---------------------------------------------------------------------------------------
-// The paper's p_PL: plateau, power law, cut-off (discrete).
-
-/// Joint fit of the discrete `p_PL`: `P(k) ∝ 1` for `1 ≤ k ≤ k_s`, `∝ (k/k_s)^(−α)` for
-/// `k_s < k ≤ k_m`, with `k_m = max k`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct PlateauFit {
-    pub estimator: Estimator,
-    pub alpha: f64,
-    /// Plateau end `k_s` (pixels; continuous parameter).
-    pub k_s: f64,
-    /// Cut-off `k_m = max k` (pixels).
-    pub k_m: u64,
-    pub n: usize,
-    pub log_likelihood: f64,
-}
-
-/// Log-likelihood of the discrete `p_PL` for sorted data (all in `[1, k_m]`).
-fn plateau_log_likelihood(
-    sorted: &[u64],
-    log_sum_above: &[f64],
-    alpha: f64,
-    k_s: f64,
-    k_m: u64,
-) -> f64 {
-    // Z = ⌊k_s⌋ + Σ_{k=⌊k_s⌋+1}^{k_m} (k/k_s)^(−α)
-    let flat = (k_s.floor() as u64).min(k_m);
-    let mut z = flat as f64;
-    if flat < k_m {
-        z += moments(alpha, flat + 1, k_m, k_s)[0];
-    }
-    // Σ over k_i > k_s of ln(k_i/k_s) = (Σ ln k_i over that suffix) − count · ln k_s
-    let first = sorted.partition_point(|&k| (k as f64) <= k_s);
-    let count = (sorted.len() - first) as f64;
-    let sum_ln = log_sum_above[first];
-    -(sorted.len() as f64) * z.ln() - alpha * (sum_ln - count * k_s.ln())
-}
-
-/// Maximise the `p_PL` likelihood over `α ∈ [−5, 10]` and `k_s ∈ [1, k_m/2]` (profile
-/// likelihood: a scan in `ln k_s`, then golden-section refinement in both).
-pub fn fit_plateau_power_law(data: &[u64]) -> Result<PlateauFit, FitError> {
-    let sorted = checked_counts(data)?;
-    let n = sorted.len();
-    if n < MIN_TAIL {
-        return Err(FitError::TooFew {
-            n,
-            needed: MIN_TAIL,
-        });
-    }
-    let k_m = *sorted.last().expect("non-empty");
-    if sorted[0] == k_m {
-        return Err(FitError::TooFewDistinct { distinct: 1 });
-    }
-    if k_m < 4 {
-        return Err(FitError::TooFewDistinct {
-            distinct: k_m as usize,
-        });
-    }
-    // Suffix sums of ln k.
-    let mut log_sum_above = vec![0.0; n + 1];
-    for i in (0..n).rev() {
-        log_sum_above[i] = log_sum_above[i + 1] + (sorted[i] as f64).ln();
-    }
-    let ll = |a: f64, ks: f64| plateau_log_likelihood(&sorted, &log_sum_above, a, ks, k_m);
-    let best_alpha = |ks: f64| golden_max(|a| ll(a, ks), -5.0, 10.0, 1e-10);
-    let (ln_lo, ln_hi) = (0.0f64, (k_m as f64 / 2.0).ln());
-    let steps = 60;
-    let mut best = (f64::NEG_INFINITY, 0.0, 0.0);
-    for i in 0..=steps {
-        let ks = (ln_lo + (ln_hi - ln_lo) * i as f64 / steps as f64).exp();
-        let a = best_alpha(ks);
-        let v = ll(a, ks);
-        if v > best.0 {
-            best = (v, a, ks.ln());
-        }
-    }
-    let h = (ln_hi - ln_lo) / steps as f64;
-    let ln_ks = golden_max(
-        |lk| ll(best_alpha(lk.exp()), lk.exp()),
-        (best.2 - h).max(ln_lo),
-        (best.2 + h).min(ln_hi),
-        1e-9,
-    );
-    let k_s = ln_ks.exp();
-    let alpha = best_alpha(k_s);
-    Ok(PlateauFit {
-        estimator: Estimator::DiscretePlateauPowerLaw,
-        alpha,
-        k_s,
-        k_m,
-        n,
-        log_likelihood: ll(alpha, k_s),
-    })
-}
+mod plateau;
+pub use plateau::{fit_plateau_power_law, plateau_alpha_interval, PlateauFit, PlateauInterval};
 
 /// Golden-section search for the maximum of a unimodal `f` on `[lo, hi]`.
-fn golden_max(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
+pub(super) fn golden_max(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let mut x1 = hi - g * (hi - lo);
     let mut x2 = lo + g * (hi - lo);
