@@ -91,3 +91,24 @@ pub fn workdir(text: &str) -> (tempfile::TempDir, PathBuf) {
     let path = dir.path().to_path_buf();
     (dir, path)
 }
+
+/// Every file under `dir`'s subdirectories `tops` (path relative to `dir` → bytes),
+/// manifests excluded (they hold wall times).
+pub fn files_under(dir: &Path, tops: &[&str]) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut out = std::collections::BTreeMap::new();
+    for top in tops {
+        let mut stack = vec![dir.join(top)];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if p.file_name().unwrap() != "manifest.json" {
+                    let rel = p.strip_prefix(dir).unwrap().display().to_string();
+                    out.insert(rel, std::fs::read(&p).unwrap());
+                }
+            }
+        }
+    }
+    out
+}

@@ -19,26 +19,12 @@ fn run_json(dir: &Path, extra: &[&str]) -> serde_json::Value {
     stdout_json(&out)
 }
 
-/// Every file under data/cache (relative path → bytes), manifests excluded (they hold
-/// wall times).
+/// Every file under data/cache (relative to it), manifests excluded (they hold wall times).
 fn artifacts(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let root = dir.join("data/cache");
-    let mut stack = vec![root.clone()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.file_name().unwrap() != "manifest.json" {
-                out.insert(
-                    p.strip_prefix(&root).unwrap().display().to_string(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    out
+    crate::files_under(&dir.join("data"), &["cache"])
+        .into_iter()
+        .map(|(k, v)| (k.trim_start_matches("cache/").to_string(), v))
+        .collect()
 }
 
 #[test]

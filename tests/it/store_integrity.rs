@@ -10,26 +10,9 @@ use crate::{run_in, small_pipeline, workdir};
 
 const RUN: [&str; 4] = ["run", "--profile", "t", "--quiet"];
 
-/// Every file under data/cache and figures/ (relative path → bytes), manifests excluded
-/// (they hold wall times).
+/// Every file under data/cache and figures/, manifests excluded.
 fn artifacts(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    for top in ["data/cache", "figures"] {
-        let root = dir.join(top);
-        let mut stack = vec![root.clone()];
-        while let Some(d) = stack.pop() {
-            for e in std::fs::read_dir(&d).unwrap() {
-                let p = e.unwrap().path();
-                if p.is_dir() {
-                    stack.push(p);
-                } else if p.file_name().unwrap() != "manifest.json" {
-                    let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                    out.insert(rel, std::fs::read(&p).unwrap());
-                }
-            }
-        }
-    }
-    out
+    crate::files_under(dir, &["data/cache", "figures"])
 }
 
 fn entries(dir: &Path, stage: &str) -> Vec<PathBuf> {

@@ -3,26 +3,13 @@
 
 use std::path::Path;
 
-use super::{case, check, Case};
+use super::{case, check, write_npy, Case};
 use crate::small_pipeline;
 
 fn with(from: &str, to: &str) -> Option<String> {
     let base = small_pipeline(0.8, "x");
     assert!(base.contains(from), "{from}");
     Some(base.replace(from, to))
-}
-
-fn write_npy(path: &Path, descr: &str, shape: &str, payload: &[u8]) {
-    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend((header.len() as u16).to_le_bytes());
-    bytes.extend(header.as_bytes());
-    bytes.extend(payload);
-    std::fs::write(path, bytes).unwrap();
 }
 
 fn odd_files(dir: &Path) {

@@ -114,6 +114,11 @@ fn write_inputs(dir: &Path) {
 }
 
 fn write_forged_npy(path: &Path, descr: &str, shape: &str) {
+    write_npy(path, descr, shape, &[0u8; 64]);
+}
+
+/// A `.npy` file with the given header fields and payload, whatever they promise.
+fn write_npy(path: &Path, descr: &str, shape: &str, payload: &[u8]) {
     let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
@@ -122,7 +127,7 @@ fn write_forged_npy(path: &Path, descr: &str, shape: &str) {
     let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
     bytes.extend((header.len() as u16).to_le_bytes());
     bytes.extend(header.as_bytes());
-    bytes.extend([0u8; 64]);
+    bytes.extend(payload);
     std::fs::write(path, bytes).unwrap();
 }
 
