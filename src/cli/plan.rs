@@ -152,6 +152,62 @@ pub fn print_plan(
     Ok(())
 }
 
+/// `plan --against`: a saved plan's estimates beside what the store's manifests measured.
+fn print_against(
+    saved: &std::path::Path,
+    data: &std::path::Path,
+    json_out: bool,
+) -> anyhow::Result<ExitCode> {
+    let text = std::fs::read_to_string(saved)
+        .map_err(|e| UsageError(format!("--against {}: {e}", saved.display())))?;
+    let plan: Plan = serde_json::from_str(&text).map_err(|e| {
+        UsageError(format!(
+            "--against {}: not a plan made by `wearcoef plan --out`: {e}",
+            saved.display()
+        ))
+    })?;
+    let store = super::store::require_store(data)?;
+    let rows = wearcoef::pipeline::measured::compare(&plan.instances, &store);
+    if json_out {
+        out!("{}", serde_json::to_string(&rows)?)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    let ratio = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.2}"));
+    out!(
+        "{:<11} {:>8} {:>8} {:>12} {:>12} {:>6} {:>10} {:>10} {:>6}",
+        "stage",
+        "planned",
+        "measured",
+        "est. core-h",
+        "meas. core-h",
+        "ratio",
+        "est. GiB",
+        "meas. GiB",
+        "ratio"
+    )?;
+    for r in &rows {
+        out!(
+            "{:<11} {:>8} {:>8} {:>12.3} {:>12.3} {:>6} {:>10.2} {:>10.2} {:>6}",
+            r.stage,
+            r.planned,
+            r.measured,
+            r.estimated_cpu_seconds / 3600.0,
+            r.measured_cpu_seconds / 3600.0,
+            ratio(r.cpu_ratio()),
+            gib(r.estimated_peak_bytes),
+            gib(r.measured_peak_bytes),
+            ratio(r.peak_ratio())
+        )?;
+    }
+    out!(
+        "plan {} against the store {}: CPU over the instances measured; peak memory over those computed one at a time (run --at-once 1)",
+        saved.display(),
+        data.display()
+    )?;
+    Ok(ExitCode::SUCCESS)
+}
+
 /// `I/K`: the I-th (0-based) of K contiguous slices.
 pub fn parse_slice(s: &str) -> Result<(usize, usize), String> {
     let (i, k) = s
@@ -263,6 +319,11 @@ pub struct PlanArgs {
     /// Also write the plan (JSON) to this file, for `wearcoef exec`.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Instead of planning: for the instances of this saved plan (`--out`, made before a
+    /// campaign) that the store holds, their estimated against their measured CPU time and
+    /// peak memory, per stage.
+    #[arg(long, value_name = "PLAN")]
+    pub against: Option<PathBuf>,
 }
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
@@ -272,7 +333,11 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         profile,
         json,
         out,
+        against,
     } = args;
+    if let Some(saved) = against {
+        return print_against(&saved, &store.data, json);
+    }
     let pipeline = load(&store.config)?;
     if let Some(path) = &out {
         super::check_outputs(&[("--out", path)], &[("--config", &store.config)])?;

@@ -10,6 +10,7 @@ pub mod cost;
 pub mod gallery;
 pub mod hash;
 pub mod inputs;
+pub mod measured;
 pub mod plan;
 pub mod registry;
 pub mod report;

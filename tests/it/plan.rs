@@ -143,3 +143,74 @@ fn exec_runs_a_plan_in_slices_to_the_same_store_as_run() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("does not match its parameters"), "{err}");
 }
+
+/// `plan --against` sets a saved plan's estimates beside what the manifests measured: per
+/// stage, the CPU seconds summed over the stored instances (checked against the manifests
+/// read here) and, for a run of one instance at a time, the largest peak memory.
+#[test]
+fn a_saved_plan_is_compared_with_what_the_store_measured() {
+    let (_t, dir) = crate::workdir(&crate::small_pipeline(0.8, "x"));
+    let out = crate::run_in(&dir, &["plan", "--profile", "t", "--out", "before.json"]);
+    assert!(out.status.success());
+    let out = crate::run_in(
+        &dir,
+        &[
+            "run",
+            "--profile",
+            "t",
+            "--quiet",
+            "--jobs",
+            "2",
+            "--at-once",
+            "1",
+        ],
+    );
+    assert!(out.status.success());
+    let out = crate::run_in(&dir, &["plan", "--against", "before.json", "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows = crate::stdout_json(&out);
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("before.json")).unwrap()).unwrap();
+    for row in rows.as_array().unwrap() {
+        let stage = row["stage"].as_str().unwrap();
+        let (mut cpu, mut est, mut peak, mut n) = (0.0, 0.0, 0u64, 0);
+        for inst in plan["instances"].as_array().unwrap() {
+            if inst["stage"] != stage {
+                continue;
+            }
+            let path = dir
+                .join("data/cache")
+                .join(stage)
+                .join(inst["key"].as_str().unwrap());
+            let m: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(path.join("manifest.json")).unwrap())
+                    .unwrap();
+            cpu += m["cpu_seconds"].as_f64().unwrap();
+            est += inst["estimate"]["seconds"].as_f64().unwrap();
+            peak = peak.max(m["peak_rss_bytes"].as_u64().unwrap());
+            n += 1;
+        }
+        assert_eq!(row["planned"], n, "{stage}");
+        assert_eq!(row["measured"], n, "{stage}");
+        assert_eq!(row["peak_measured"], n, "{stage}");
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-12);
+        assert!(
+            close(row["measured_cpu_seconds"].as_f64().unwrap(), cpu),
+            "{stage}: {row}"
+        );
+        assert!(
+            close(row["estimated_cpu_seconds"].as_f64().unwrap(), est),
+            "{stage}: {row}"
+        );
+        assert_eq!(row["measured_peak_bytes"], peak, "{stage}");
+    }
+    // Not a plan: exit 2 naming the option.
+    std::fs::write(dir.join("junk.json"), "{}").unwrap();
+    let out = crate::run_in(&dir, &["plan", "--against", "junk.json"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--against junk.json"));
+}
