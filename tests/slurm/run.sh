@@ -41,8 +41,8 @@ wait_idle() {
     done
 }
 
-# Byte-identical stores and figures, manifests equal but for their timings (`*_seconds`, and
-# `results_sha256`, which covers `wall_seconds`).
+# Byte-identical stores and figures, manifests equal but for their measurements (`*_seconds`,
+# `peak_rss_bytes`, and `results_sha256`, which covers `wall_seconds`).
 compare() { # reference dir, other dir
     local a=$1 b=$2
     (cd "$a/data/cache" && find . -path '*/.tmp-*' -prune -o -type f -print | sort) > "$work/files_a"
@@ -53,9 +53,10 @@ compare() { # reference dir, other dir
         if [[ $f == */manifest.json ]]; then
             python3 - "$a/data/cache/$f" "$b/data/cache/$f" <<'PY' || fail "manifest $f differs"
 import json, sys
-def untimed(v):  # every timing is named *_seconds; results_sha256 hashes wall_seconds too
+def untimed(v):  # timings (*_seconds), memory (peak_rss_bytes); results_sha256 hashes wall_seconds
     if isinstance(v, dict):
-        return {k: untimed(x) for k, x in v.items() if not k.endswith("_seconds") and k != "results_sha256"}
+        skip = lambda k: k.endswith("_seconds") or k in ("results_sha256", "peak_rss_bytes")
+        return {k: untimed(x) for k, x in v.items() if not skip(k)}
     return [untimed(x) for x in v] if isinstance(v, list) else v
 a, b = (untimed(json.load(open(p))) for p in sys.argv[1:])
 if a != b:
