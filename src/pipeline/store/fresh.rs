@@ -38,10 +38,22 @@ fn seen(path: &Path) -> std::io::Result<Seen> {
 }
 
 impl Manifest {
-    /// The digest of what the entry holds (its outputs' hashes and its results), which the
-    /// entries computed from it record.
+    /// The digest of what the entry holds (its outputs' hashes and its results but for
+    /// their timings, every one named `*_seconds`), which the entries computed from it
+    /// record: the same for every computation of the same instance.
     pub fn content_digest(&self) -> String {
-        let v = serde_json::json!({"outputs": self.outputs, "results": self.results});
+        fn untimed(v: &serde_json::Value) -> serde_json::Value {
+            match v {
+                serde_json::Value::Object(m) => m
+                    .iter()
+                    .filter(|(k, _)| !k.ends_with("_seconds"))
+                    .map(|(k, x)| (k.clone(), untimed(x)))
+                    .collect(),
+                serde_json::Value::Array(a) => a.iter().map(untimed).collect(),
+                other => other.clone(),
+            }
+        }
+        let v = serde_json::json!({"outputs": self.outputs, "results": untimed(&self.results)});
         sha256_hex(canonical_json(&v).as_bytes())
     }
 }
