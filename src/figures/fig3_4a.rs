@@ -9,8 +9,6 @@ use super::{pick_loads, rows_at, CcdfTable, Drawn};
 use crate::pipeline::inputs::Inputs;
 use crate::pipeline::table::{f64_column, loads_of, str_column, u64_column};
 
-/// Fits of Fig. 3 are drawn only over at least this many decades of area.
-pub const MIN_FIT_DECADES: f64 = 1.0;
 /// Tints of the loads of one family, lightest for the smallest load.
 const LOAD_TINTS: [f64; 3] = [0.6, 0.3, 0.0];
 
@@ -33,46 +31,54 @@ fn pdf_points(pdf: &DataFrame, load_index: u32) -> anyhow::Result<(Vec<(f64, f64
 /// Points of a fitted curve and its legend text.
 type FittedLine = (Vec<(f64, f64)>, String);
 
-/// The fitted discrete truncated power law at one load, drawn over its fitted range in the
-/// units of the PDF (per λ_s², weighted by the fraction of clusters in the range), and its
-/// legend text. `None` when there is no fit or when the fitted range spans less than
-/// [`MIN_FIT_DECADES`] (the KS choice of `k_min` then sits in the cut-off, e.g. λ_l/λ_s = 8,
-/// and its exponent is not that of the power-law interval).
-fn fitted_power_law(
+/// The paper's plateau + power law fitted at one load (`p_PL`: flat to `k_s`, `(k/k_s)^(−α)`
+/// to the largest area `k_m`), drawn over `[1, k_m]` in the units of the PDF (per λ_s²), and
+/// its legend: α̂ with its 95 % profile-likelihood interval, and the truncated power law's
+/// α̂ beside it (the other estimator, docs/VALIDATION.md). `None` without a fit.
+fn fitted_plateau(
     alpha_table: &DataFrame,
     load_index: u32,
-    clusters: u64,
     lambda_s_px: f64,
 ) -> anyhow::Result<Option<FittedLine>> {
+    use crate::powerlaw::Estimator;
     let est = str_column(alpha_table, "estimator")?;
     let alpha = f64_column(alpha_table, "alpha")?;
-    let lo = f64_column(alpha_table, "bootstrap_ci95_low")?;
-    let hi = f64_column(alpha_table, "bootstrap_ci95_high")?;
-    let k_min = f64_column(alpha_table, "k_min_px")?;
+    let lo = f64_column(alpha_table, "ci95_low")?;
+    let hi = f64_column(alpha_table, "ci95_high")?;
+    let k_s = f64_column(alpha_table, "k_s_px")?;
     let k_max = f64_column(alpha_table, "k_max_px")?;
-    let n_fit = u64_column(alpha_table, "n_fitted")?;
-    let Some(i) = rows_at(alpha_table, load_index)?
-        .into_iter()
-        .find(|&i| est[i] == crate::powerlaw::Estimator::DiscreteTruncated.name())
-    else {
+    let rows = rows_at(alpha_table, load_index)?;
+    let row = |e: Estimator| rows.iter().copied().find(|&i| est[i] == e.name());
+    let Some(i) = row(Estimator::DiscretePlateauPowerLaw) else {
         return Ok(None);
     };
-    let (a, k0, k1) = (alpha[i], k_min[i], k_max[i]);
-    if !(a.is_finite() && k0 >= 1.0 && k1 >= k0 * 10f64.powf(MIN_FIT_DECADES)) || clusters == 0 {
+    let (a, ks, km) = (alpha[i], k_s[i], k_max[i]);
+    if !(a.is_finite() && ks >= 1.0 && km > ks) {
         return Ok(None);
     }
-    let (k0, k1) = (k0 as u64, k1 as u64);
-    let z = crate::powerlaw::discrete_normalisation(a, k0, k1);
-    let weight = n_fit[i] as f64 / clusters as f64;
+    // Z = ⌊k_s⌋ + k_s^α Σ_{⌊k_s⌋ < k ≤ k_m} k^(−α)
+    let flat = ks.floor();
+    let z =
+        flat + ks.powf(a) * crate::powerlaw::discrete_normalisation(a, flat as u64 + 1, km as u64);
     let ls2 = lambda_s_px * lambda_s_px;
-    let steps = 40;
+    let steps = 60;
     let points = (0..=steps)
         .map(|j| {
-            let k = k0 as f64 * (k1 as f64 / k0 as f64).powf(j as f64 / steps as f64);
-            (k / ls2, weight * k.powf(-a) / z * ls2)
+            let k = km.powf(j as f64 / steps as f64);
+            let w = if k <= ks { 1.0 } else { (k / ks).powf(-a) };
+            (k / ls2, w / z * ls2)
         })
         .collect();
-    let text = format!("α = {a:.2}, 95 % CI [{:.2}, {:.2}]", lo[i], hi[i]);
+    let truncated = row(Estimator::DiscreteTruncated)
+        .map(|j| alpha[j])
+        .filter(|a| a.is_finite())
+        .map_or(String::new(), |t| {
+            format!("; truncated power law: α = {t:.2}")
+        });
+    let text = format!(
+        "plateau + power law, α = {a:.2}, 95 % CI [{:.2}, {:.2}]{truncated}",
+        lo[i], hi[i]
+    );
     Ok(Some((points, text)))
 }
 
@@ -123,7 +129,7 @@ pub fn fig34a(
                 ..Series::default()
             };
             let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
-            let (points, clusters) = pdf_points(&pdf, load_index)?;
+            let (points, _) = pdf_points(&pdf, load_index)?;
             let label = if last {
                 format!("{} (W/W_0 = {load_list}, light → dark)", study.label)
             } else {
@@ -146,9 +152,7 @@ pub fn fig34a(
                 ..about.clone()
             });
             if last {
-                if let Some((fit, text)) =
-                    fitted_power_law(&alpha, load_index, clusters, study.lambda_s_px)?
-                {
+                if let Some((fit, text)) = fitted_plateau(&alpha, load_index, study.lambda_s_px)? {
                     main.series.push(Series {
                         dash: fit_dashes[c % fit_dashes.len()],
                         width: 3,

@@ -58,8 +58,8 @@ fn alpha_rows(store: &Store, key: &str, study: &str, out: &mut String) -> anyhow
         f64_column(&df, "w_over_w0")?,
         str_column(&df, "estimator")?,
         f64_column(&df, "alpha")?,
-        f64_column(&df, "bootstrap_ci95_low")?,
-        f64_column(&df, "bootstrap_ci95_high")?,
+        f64_column(&df, "ci95_low")?,
+        f64_column(&df, "ci95_high")?,
     );
     for i in 0..w.len() {
         let ci = if lo[i].is_finite() && hi[i].is_finite() {

@@ -102,10 +102,9 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
         // Where a row comes from.
         "realization" | "load_index" | "bin" | "cluster_id" | "count_peak_load_index" => "index",
         "stage" | "study" | "studies" | "profile" | "file" | "path" | "key" | "estimator"
-        | "note" | "kind" | "curve" | "alpha_estimator" | "panel" | "series" | "x_quantity"
-        | "y_quantity" | "status" | "error_message" | "state" | "failure" | "solver_status" => {
-            "text"
-        }
+        | "ci95_method" | "note" | "kind" | "curve" | "alpha_estimator" | "panel" | "series"
+        | "x_quantity" | "y_quantity" | "status" | "error_message" | "state" | "failure"
+        | "solver_status" => "text",
         "last_error" => "1 (relative complementarity error)",
         "converged" | "percolating" | "at_transition" | "within_rule" | "cached" => "boolean",
         // Loads and pressures.
@@ -133,26 +132,10 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
             "L² (worn volume per sliding distance, ω = 1/3)"
         }
         // Dimensionless ratios and fractions.
-        "alpha"
-        | "alpha_reference"
-        | "alpha_difference"
-        | "std_error"
-        | "bootstrap_ci95_low"
-        | "bootstrap_ci95_high"
-        | "ks_distance"
-        | "ks_critical_95"
-        | "ccdf"
-        | "ccdf_mean"
-        | "ccdf_ci95"
-        | "error"
-        | "area_fraction"
-        | "area_fraction_mean"
-        | "area_fraction_ci95"
-        | "k_pl"
-        | "k_upscaled_pl"
-        | "k_pl_plateau"
-        | "k_pl_at_load"
-        | "a_star_over_a_s"
+        "alpha" | "alpha_reference" | "alpha_difference" | "std_error" | "ci95_low"
+        | "ci95_high" | "ks_distance" | "ks_critical_95" | "ccdf" | "ccdf_mean" | "ccdf_ci95"
+        | "error" | "area_fraction" | "area_fraction_mean" | "area_fraction_ci95" | "k_pl"
+        | "k_upscaled_pl" | "k_pl_plateau" | "k_pl_at_load" | "a_star_over_a_s"
         | "a_m_over_a_s" => "1",
         "area_max_rel_deviation"
         | "area_max_rel_ci95"

@@ -70,7 +70,7 @@ impl StatisticsJob {
 
 impl Stage for Statistics {
     const NAME: &'static str = "statistics";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
     type Job = StatisticsJob;
 
     fn compute(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
@@ -458,6 +458,7 @@ fn write_alpha(
     let mut se: Vec<Option<f64>> = Vec::new();
     let mut ci_lo: Vec<Option<f64>> = Vec::new();
     let mut ci_hi: Vec<Option<f64>> = Vec::new();
+    let mut ci_method: Vec<Option<String>> = Vec::new();
     let mut k_min: Vec<Option<f64>> = Vec::new();
     let mut k_max: Vec<Option<f64>> = Vec::new();
     let mut k_s: Vec<Option<f64>> = Vec::new();
@@ -490,6 +491,7 @@ fn write_alpha(
                 se.push(Some(f.std_error));
                 ci_lo.push(ci.map(|c| c.0));
                 ci_hi.push(ci.map(|c| c.1));
+                ci_method.push(ci.map(|_| "bootstrap".to_string()));
                 k_min.push(Some(f.lower));
                 k_max.push(Some(f.upper));
                 n_fit.push(Some(f.n as u64));
@@ -503,6 +505,7 @@ fn write_alpha(
                 ] {
                     v.push(None);
                 }
+                ci_method.push(None);
                 n_fit.push(None);
                 note.push(format!("no fit: {e}"));
             }
@@ -514,19 +517,33 @@ fn write_alpha(
         li.push(l as u32);
         w.push(job.loads[l]);
         est.push(Estimator::DiscretePlateauPowerLaw.name().to_string());
-        for v in [&mut se, &mut ci_lo, &mut ci_hi, &mut k_min, &mut ks] {
+        for v in [&mut se, &mut k_min, &mut ks] {
             v.push(None);
         }
         match powerlaw::fit_plateau_power_law(areas) {
             Ok(f) => {
+                // The 95 % profile-likelihood interval (the fit succeeded, so this does).
+                let ci = powerlaw::plateau_alpha_interval(areas, &f).ok();
                 alpha.push(Some(f.alpha));
+                ci_lo.push(ci.map(|c| c.low));
+                ci_hi.push(ci.map(|c| c.high));
+                ci_method.push(ci.map(|_| "profile_likelihood".to_string()));
                 k_max.push(Some(f.k_m as f64));
                 k_s.push(Some(f.k_s));
                 k_s_ls2.push(Some(f.k_s / ls2));
                 n_fit.push(Some(f.n as u64));
-                note.push(String::new());
+                note.push(match ci {
+                    Some(c) if c.low_at_edge || c.high_at_edge => format!(
+                        "the interval reaches the searched range of α ({} side): the data bound α on one side only",
+                        if c.low_at_edge { "low" } else { "high" }
+                    ),
+                    _ => String::new(),
+                });
             }
             Err(e) => {
+                ci_lo.push(None);
+                ci_hi.push(None);
+                ci_method.push(None);
                 alpha.push(None);
                 k_max.push(None);
                 k_s.push(None);
@@ -548,8 +565,9 @@ fn write_alpha(
                 col("estimator", est),
                 Column::new("alpha".into(), alpha),
                 Column::new("std_error".into(), se),
-                Column::new("bootstrap_ci95_low".into(), ci_lo),
-                Column::new("bootstrap_ci95_high".into(), ci_hi),
+                Column::new("ci95_low".into(), ci_lo),
+                Column::new("ci95_high".into(), ci_hi),
+                Column::new("ci95_method".into(), ci_method),
                 Column::new("k_min_px".into(), k_min),
                 Column::new("k_max_px".into(), k_max),
                 Column::new("k_s_px".into(), k_s),

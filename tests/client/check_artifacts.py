@@ -51,7 +51,7 @@ SCHEMAS = {
         ("wear_rate_over_l2_mean", F64), ("wear_rate_over_l2_ci95", F64)],
     ("statistics", "alpha.parquet"): [
         ("load_index", U32), ("w_over_w0", F64), ("estimator", STR), ("alpha", F64),
-        ("std_error", F64), ("bootstrap_ci95_low", F64), ("bootstrap_ci95_high", F64),
+        ("std_error", F64), ("ci95_low", F64), ("ci95_high", F64), ("ci95_method", STR),
         ("k_min_px", F64), ("k_max_px", F64), ("k_s_px", F64), ("k_s_over_ls2", F64),
         ("n_fitted", U64), ("ks_distance", F64), ("note", STR)],
     ("analytic", "model.parquet"): [
