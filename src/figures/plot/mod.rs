@@ -42,10 +42,10 @@ pub const DATA_COLUMNS: [&str; 9] = [
 ];
 
 /// The embedded text font's bytes.
-static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+pub(super) static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 /// The embedded math font (DejaVu Math TeX Gyre, same licence), for the few mathematical
 /// letters the text font lacks (𝒦).
-static MATH_FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuMathTeXGyre.ttf");
+pub(super) static MATH_FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuMathTeXGyre.ttf");
 /// Size of a single plot: 6.4 × 4.8 in at 150 dpi.
 pub const SIZE_PX: (u32, u32) = (960, 720);
 /// Size of a raster figure (map with its colour bar or legend): 6.4 × 5.6 in at 150 dpi.
@@ -329,6 +329,7 @@ fn write_scene(dir: &Path, stem: &str, size: (u32, u32), scene: &impl Scene) -> 
     ensure_font()?;
     let png = dir.join(format!("{stem}.png"));
     {
+        let _raster = text::Glyphwise::on();
         let root = BitMapBackend::new(&png, size).into_drawing_area();
         root.fill(&WHITE).map_err(plot_err)?;
         scene.draw(&root)?;

@@ -226,11 +226,77 @@ fn style(family: &'static str, size: f64, look: &TextLook) -> TextStyle<'static>
     st
 }
 
+/// The embedded font of `family`.
+fn font_of(family: &str) -> ab_glyph::FontRef<'static> {
+    let bytes = if family == MATH_FAMILY {
+        super::MATH_FONT
+    } else {
+        super::FONT
+    };
+    ab_glyph::FontRef::try_from_slice(bytes).expect("the embedded fonts parse")
+}
+
+/// Where each glyph of `text` (one font, `size` pixels) starts, relative to the run's start:
+/// its pen position (advances and kerning) plus its left side bearing, which plotters leaves
+/// out when it draws a glyph (so drawn as one string, "128" reads "12 8"); and the run's
+/// advance.
+fn glyph_starts(family: &str, text: &str, size: f64) -> (Vec<(char, i32)>, f32) {
+    use ab_glyph::{Font, ScaleFont};
+    let font = font_of(family);
+    let scaled = font.as_scaled(size as f32);
+    let (mut pen, mut prev) = (0f32, None);
+    let mut out = Vec::with_capacity(text.len());
+    for c in text.chars() {
+        let id = scaled.glyph_id(c);
+        if let Some(p) = prev {
+            pen += scaled.kern(p, id);
+        }
+        let bearing = scaled
+            .outline_glyph(scaled.scaled_glyph(c))
+            .map_or(0.0, |g| g.px_bounds().min.x);
+        out.push((c, (pen + bearing).round() as i32));
+        pen += scaled.h_advance(id);
+        prev = Some(id);
+    }
+    (out, pen)
+}
+
+thread_local! {
+    static GLYPHWISE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// While alive, text is drawn glyph by glyph ([`glyph_starts`]): for raster images, which
+/// plotters rasterises itself. An SVG keeps whole strings, laid out by the reader's renderer.
+pub struct Glyphwise(bool);
+
+impl Glyphwise {
+    pub fn on() -> Self {
+        Glyphwise(GLYPHWISE.with(|g| g.replace(true)))
+    }
+}
+
+impl Drop for Glyphwise {
+    fn drop(&mut self) {
+        GLYPHWISE.with(|g| g.set(self.0));
+    }
+}
+
+fn glyphwise() -> bool {
+    GLYPHWISE.with(|g| g.get())
+}
+
 /// Width in pixels of `markup` drawn at `size`.
 pub fn width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, markup: &str, size: f64) -> i32 {
+    let runs = layout(markup, size);
+    if glyphwise() {
+        return runs
+            .iter()
+            .map(|(family, text, s, _)| glyph_starts(family, text, *s).1)
+            .sum::<f32>()
+            .round() as i32;
+    }
     let look = TextLook::new(size);
-    layout(markup, size)
-        .iter()
+    runs.iter()
         .map(|(family, text, s, _)| {
             area.estimate_text_size(text, &style(family, *s, &look))
                 .map_or(0, |(w, _)| w as i32)
@@ -249,25 +315,39 @@ pub fn draw<DB: DrawingBackend>(
     look: TextLook,
 ) -> anyhow::Result<()> {
     let total = width(area, markup, look.size);
-    let mut along = match align {
+    let along = match align {
         Align::Start => 0,
         Align::Middle => -total / 2,
         Align::End => -total,
     };
-    for (family, text, s, top) in layout(markup, look.size) {
-        let st = style(family, s, &look);
-        let normal = top.round() as i32;
-        // Reading frame (along, normal) to pixels: as written, or turned a quarter upwards.
-        let pos = if look.upwards {
+    // Reading frame (along, normal) to pixels: as written, or turned a quarter upwards.
+    let at = |along: i32, normal: i32| {
+        if look.upwards {
             (anchor.0 + normal, anchor.1 - along)
         } else {
             (anchor.0 + along, anchor.1 + normal)
+        }
+    };
+    let mut pen = along as f32;
+    for (family, text, s, top) in layout(markup, look.size) {
+        let st = style(family, s, &look);
+        let normal = top.round() as i32;
+        let start = pen.round() as i32;
+        let pieces = if glyphwise() {
+            let (glyphs, advance) = glyph_starts(family, &text, s);
+            pen += advance;
+            glyphs
+                .into_iter()
+                .map(|(c, x)| (c.to_string(), x))
+                .collect()
+        } else {
+            pen += area.estimate_text_size(&text, &st).map_or(0, |(w, _)| w) as f32;
+            vec![(text.clone(), 0)]
         };
-        area.draw_text(&text, &st, pos)
-            .map_err(|e| anyhow::anyhow!("drawing text '{text}': {e:?}"))?;
-        along += area
-            .estimate_text_size(&text, &st)
-            .map_or(0, |(w, _)| w as i32);
+        for (piece, offset) in pieces {
+            area.draw_text(&piece, &st, at(start + offset, normal))
+                .map_err(|e| anyhow::anyhow!("drawing text '{text}': {e:?}"))?;
+        }
     }
     Ok(())
 }
@@ -322,5 +402,52 @@ mod tests {
         let r = runs("𝒦_PL");
         assert_eq!(r[0], (MATH_FAMILY, "𝒦".to_string()));
         assert_eq!(r[1], (TEXT_FAMILY, "_PL".to_string()));
+    }
+}
+
+#[cfg(test)]
+mod glyph_tests {
+    use super::*;
+
+    /// Drawn as one label, each digit's ink starts where ab_glyph's own layout of the whole
+    /// string puts it (glyphs positioned at their pen, outlines rasterised in place), within
+    /// a pixel: no "12 8" for 128.
+    #[test]
+    fn each_glyph_of_a_label_starts_where_the_fonts_layout_puts_it() {
+        use ab_glyph::{Font, ScaleFont};
+        super::super::ensure_font().unwrap();
+        let (w, h, size) = (900u32, 80u32, 40.0);
+        let text = "0123456789";
+        let mut buf = vec![255u8; (w * h * 3) as usize];
+        {
+            let _raster = Glyphwise::on();
+            let area = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+            draw(&area, text, (10, 10), Align::Start, TextLook::new(size)).unwrap();
+            area.present().unwrap();
+        }
+        // Ink columns, grouped into runs separated by blank columns: one run a digit.
+        let inked: Vec<bool> = (0..w as usize)
+            .map(|x| (0..h as usize).any(|y| buf[(y * w as usize + x) * 3] < 128))
+            .collect();
+        let starts: Vec<i32> = (0..inked.len())
+            .filter(|&x| inked[x] && (x == 0 || !inked[x - 1]))
+            .map(|x| x as i32)
+            .collect();
+        assert_eq!(starts.len(), text.len(), "{starts:?}");
+        // The font's own layout.
+        let font = font_of(TEXT_FAMILY);
+        let scaled = font.as_scaled(size as f32);
+        let mut pen = 0f32;
+        for (c, &start) in text.chars().zip(&starts) {
+            let mut g = scaled.scaled_glyph(c);
+            g.position = ab_glyph::point(pen, 0.0);
+            let ink = scaled.outline_glyph(g).unwrap().px_bounds().min.x;
+            assert!(
+                ((10.0 + ink) - start as f32).abs() <= 1.0,
+                "{c}: drawn at {start}, the font's layout at {}",
+                10.0 + ink
+            );
+            pen += scaled.h_advance(scaled.glyph_id(c));
+        }
     }
 }
