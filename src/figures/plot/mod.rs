@@ -239,10 +239,19 @@ pub struct Panels {
 /// How [`Panels`] are arranged.
 #[derive(Clone, Copy, Debug)]
 pub enum Layout {
-    /// Side by side in `columns` columns (rows as needed), each panel 640 × 560 px.
+    /// Side by side in at most `columns` columns, each panel 640 × 560 px: as few rows as
+    /// that allows, then as few columns as fill them (4 panels in 2 × 2, not 3 + 1).
     Grid { columns: usize },
     /// The second plot inset in the first, at fractions of the first one's axes.
     Inset { rect: Fractions },
+}
+
+/// (rows, columns) of `n` panels in at most `columns` columns: the fewest rows, then the
+/// fewest columns that hold `n` in them, so that no row is left mostly empty.
+pub fn grid(n: usize, columns: usize) -> (usize, usize) {
+    let n = n.max(1);
+    let rows = n.div_ceil(columns.clamp(1, n));
+    (rows, n.div_ceil(rows))
 }
 
 impl Panels {
@@ -250,8 +259,7 @@ impl Panels {
     pub fn size(&self) -> (u32, u32) {
         match self.layout {
             Layout::Grid { columns } => {
-                let cols = columns.clamp(1, self.plots.len().max(1));
-                let rows = self.plots.len().div_ceil(cols).max(1);
+                let (rows, cols) = grid(self.plots.len(), columns);
                 (640 * cols as u32, 560 * rows as u32)
             }
             Layout::Inset { .. } => SIZE_PX,
@@ -266,9 +274,7 @@ impl Panels {
     fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
         match self.layout {
             Layout::Grid { columns } => {
-                let cols = columns.clamp(1, self.plots.len().max(1));
-                let rows = self.plots.len().div_ceil(cols).max(1);
-                let areas = root.split_evenly((rows, cols));
+                let areas = root.split_evenly(grid(self.plots.len(), columns));
                 for (plot, area) in self.plots.iter().zip(&areas) {
                     plot.draw_on(area, 0.8, &[])?;
                 }

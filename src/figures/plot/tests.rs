@@ -126,3 +126,25 @@ fn raster_resampling_keeps_every_pixel_when_enlarging() {
         }
     }
 }
+
+#[test]
+fn panels_fill_their_rows() {
+    // (panels, at most columns) → (rows, columns): the fewest rows, then no row mostly empty.
+    for (n, max, want) in [
+        (1, 3, (1, 1)),
+        (2, 3, (1, 2)),
+        (3, 3, (1, 3)),
+        (4, 3, (2, 2)),
+        (5, 3, (2, 3)),
+        (6, 3, (2, 3)),
+        (7, 3, (3, 3)),
+        (4, 1, (4, 1)),
+    ] {
+        let (rows, cols) = grid(n, max);
+        assert_eq!((rows, cols), want, "{n} panels, at most {max} columns");
+        assert!(
+            rows * cols >= n && rows * cols - n < cols,
+            "{n}: a row left empty"
+        );
+    }
+}
