@@ -130,10 +130,15 @@ pub fn fig34a(
             };
             let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
             let (points, _) = pdf_points(&pdf, load_index)?;
-            let label = if last {
-                format!("{} (W/W_0 = {load_list}, light → dark)", study.label)
+            // Fig. 3 names the loads in each study's entry; Fig. 4a gives each load's shade an
+            // entry of its own (below), where the curves of one study are told apart by it.
+            let (label, ccdf_label) = if last {
+                (
+                    format!("{} (W/W_0 = {load_list}, light → dark)", study.label),
+                    study.label.clone(),
+                )
             } else {
-                String::new()
+                (String::new(), String::new())
             };
             main.series.push(Series {
                 tint,
@@ -146,7 +151,7 @@ pub fn fig34a(
             });
             ccdf_plot.series.push(Series {
                 tint,
-                label,
+                label: ccdf_label,
                 points: ccdf.curve(load_index, None, false),
                 color: c,
                 ..about.clone()
@@ -164,6 +169,22 @@ pub fn fig34a(
                 }
             }
         }
+    }
+    // Fig. 4a: the loads told apart by shade (each study draws its sweep's nearest loads), one
+    // legend entry each, in grey, lightest for the smallest.
+    let mut asked = loads.to_vec();
+    asked.sort_by(f64::total_cmp);
+    asked.dedup();
+    for (j, w) in asked.iter().enumerate().take(LOAD_TINTS.len()) {
+        let shade = Series {
+            label: format!("W/W_0 ≈ {w}"),
+            rgb: Some((60, 60, 60)),
+            tint: LOAD_TINTS[LOAD_TINTS.len() - asked.len().min(LOAD_TINTS.len()) + j],
+            width: 3,
+            name: "load shade".into(),
+            ..Series::default()
+        };
+        ccdf_plot.series.push(shade);
     }
     let mut out = Vec::new();
     if hurst.is_empty() {
