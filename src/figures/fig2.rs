@@ -1,7 +1,9 @@
 //! Fig. 2: the surface and contact maps of one realization (2a–d), contact area, largest
 //! cluster and dN/dA_c over the sweep (2e–f), and the realization audit of 2e–f.
 
-use super::plot::{viridis, ColorBar, Dash, LinePlot, Marker, RasterPlot, Series, YAxis};
+use super::plot::{
+    viridis, ColorBar, Dash, Layout, LinePlot, Marker, Panels, RasterPlot, Series, YAxis,
+};
 use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label, Connectivity};
 use crate::pipeline::inputs::Inputs;
@@ -10,8 +12,9 @@ use crate::stages::analytic::AreaLoadSlopeRecord;
 use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
 use crate::stages::contact::contact_file;
 
-/// Fig. 2e (A_c and the largest cluster) and 2f (dN/dA_c) against W/W0; the loads of the
-/// contact maps (Fig. 2b–d) marked by dashed lines.
+/// Fig. 2e (A_c and the largest cluster, one panel each, with their 95 % bands) and 2f
+/// (dN/dA_c) against W/W0; the loads of the contact maps (Fig. 2b–d) marked by dashed lines
+/// lettered b, c, d.
 /// With the small-load law `A_c/L² = κ W/W₀` fitted by the analytic stage drawn dashed over
 /// its fitted range.
 /// Input 0: the study's statistics; input 1: its realization audit; input 2: its analytic fit.
@@ -19,36 +22,47 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     let df = inputs.table(0, "statistics", "loads.parquet")?;
     let df = &df;
     let w = f64_column(df, "w_over_w0")?;
-    let ac = f64_column(df, "area_fraction_mean")?;
-    let largest = f64_column(df, "largest_area_over_ls2_mean")?;
     let dn = f64_column(df, "dn_dac_per_ls2")?;
-    let mut e = LinePlot::new(
-        "Fig. 2e: contact area and largest cluster",
-        "W/W_0",
-        "A_c/L^2  and  largest A/λ_s^2",
-        true,
-        YAxis::Log,
-    );
-    e.x_marks = marked_loads.to_vec();
-    e.series = vec![
-        Series::line(
-            "A_c/L^2 (ensemble mean)",
-            w.iter().copied().zip(ac).collect(),
-            0,
-        ),
-        Series::line(
-            "largest cluster A/λ_s^2 (ensemble mean)",
-            w.iter().copied().zip(largest).collect(),
-            1,
-        ),
-    ];
+    let realizations = inputs.of(0, "statistics")?.results["realizations"]
+        .as_u64()
+        .ok_or_else(|| anyhow::anyhow!("statistics results lack 'realizations'"))?;
+    let ensemble = format!("mean of {realizations} realizations, shaded: 95 % band");
+    // One panel per quantity (they differ by three decades and have different units).
+    let panel = |title: &str, y_label: &str, column: &str, color: usize| {
+        let mean = f64_column(df, &format!("{column}_mean"))?;
+        let half = f64_column(df, &format!("{column}_ci95"))?;
+        let mut p = LinePlot::new(title, "W/W_0", y_label, true, YAxis::Log);
+        p.x_marks = marked_loads.to_vec();
+        p.x_mark_labels = ["b", "c", "d"].iter().map(|s| s.to_string()).collect();
+        p.series = vec![
+            Series {
+                band: (0..w.len())
+                    .filter(|&i| half[i].is_finite())
+                    .map(|i| (w[i], mean[i] - half[i], mean[i] + half[i]))
+                    .collect(),
+                ..Series::line(
+                    format!("{y_label} ({ensemble})"),
+                    w.iter().copied().zip(mean).collect(),
+                    color,
+                )
+            },
+            Series {
+                dash: Dash::Dashed,
+                rgb: Some((150, 150, 150)),
+                width: 1,
+                ..Series::line("loads of the maps of Fig. 2b, c, d", Vec::new(), 0)
+            },
+        ];
+        anyhow::Ok(p)
+    };
+    let mut area = panel("Fig. 2e: contact area", "A_c/L^2", "area_fraction", 0)?;
     if let Some(fit) = AreaLoadSlopeRecord::of(&inputs.of(2, "analytic")?.results)? {
         let ([lo, hi], kappa) = (fit.w_over_w0_range, fit.kappa);
         anyhow::ensure!(
             kappa.is_finite() && lo.is_finite() && hi.is_finite(),
             "analytic area_load_slope is not finite: {fit:?}"
         );
-        e.series.push(Series {
+        area.series.push(Series {
             dash: Dash::Dashed,
             rgb: Some((0, 0, 0)),
             width: 1,
@@ -62,6 +76,16 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
             )
         });
     }
+    let largest = panel(
+        "Fig. 2e: largest cluster",
+        "largest cluster A/λ_s^2",
+        "largest_area_over_ls2",
+        1,
+    )?;
+    let e = Panels {
+        plots: vec![area, largest],
+        layout: Layout::Grid { columns: 1 },
+    };
     let mut f = LinePlot::new(
         "Fig. 2f: growth of the cluster count",
         "W/W_0",
@@ -70,6 +94,7 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
         YAxis::Linear,
     );
     f.x_marks = marked_loads.to_vec();
+    f.x_mark_labels = ["b", "c", "d"].iter().map(|s| s.to_string()).collect();
     f.series = vec![
         Series::line(
             "dN/dA_c (central differences of ensemble means)",
@@ -84,7 +109,7 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
         },
     ];
     let mut out = vec![
-        ("fig2e".into(), Drawn::Line(e)),
+        ("fig2e".into(), Drawn::Panels(e)),
         ("fig2f".into(), Drawn::Line(f)),
     ];
     out.extend(fig2_convergence(inputs)?);

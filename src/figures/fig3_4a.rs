@@ -190,7 +190,13 @@ pub fn fig34a(
     if hurst.is_empty() {
         out.push(("fig3".to_string(), Drawn::Line(main)));
     } else {
-        let mut inset = LinePlot::new("λ_l/λ_s = 128", "A/λ_s^2", "p(A/λ_s^2)", true, YAxis::Log);
+        let mut inset = LinePlot::new(
+            format!("λ_l/λ_s = 128, W/W_0 ≈ {inset_load}"),
+            "A/λ_s^2",
+            "p(A/λ_s^2)",
+            true,
+            YAxis::Log,
+        );
         for (c, study) in hurst.iter().enumerate() {
             let pdf = stats(ratios.len() + c, "pdf.parquet")?;
             if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[inset_load]).first() {
@@ -200,7 +206,7 @@ pub fn fig34a(
                     width: 1,
                     study: Some(study.study.clone()),
                     w_over_w0: Some(w),
-                    ..Series::line(format!("{} (W/W_0 = {w:.3})", study.label), points, c + 3)
+                    ..Series::line(study.label.clone(), points, c + 3)
                 });
             }
         }
@@ -210,7 +216,7 @@ pub fn fig34a(
                 plots: vec![main, inset],
                 // Lower left of the axes, where the PDFs (decreasing) leave room.
                 layout: Layout::Inset {
-                    rect: Fractions(0.0, 0.5, 0.46, 0.5),
+                    rect: Fractions(0.0, 0.42, 0.5, 0.58),
                 },
             }),
         ));

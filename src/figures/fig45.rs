@@ -53,8 +53,9 @@ const FIG4B_LINEAR_UP_TO: f64 = 1e-5;
 
 /// One series per threshold of `value` against W/W0 from a table with columns
 /// `a_star_over_ls2` and `w_over_w0`: simulated values as markers joined by a thin line (a
-/// marker shape per threshold), the fitted model as dashed lines in the same colours under one
-/// legend entry.
+/// marker shape per threshold) with the 95 % band of the realizations' mean (columns
+/// `<quantity>_mean` and `<quantity>_ci95`), the fitted model as dashed lines in the same
+/// colours under one legend entry.
 fn per_threshold(
     df: &DataFrame,
     value: &str,
@@ -64,6 +65,17 @@ fn per_threshold(
     let a = f64_column(df, "a_star_over_ls2")?;
     let w = f64_column(df, "w_over_w0")?;
     let v = f64_column(df, value)?;
+    let band = if fitted {
+        None
+    } else {
+        let quantity = value
+            .trim_end_matches("_pooled")
+            .trim_end_matches("_mean");
+        Some((
+            f64_column(df, &format!("{quantity}_mean"))?,
+            f64_column(df, &format!("{quantity}_ci95"))?,
+        ))
+    };
     let mut out: Vec<Series> = FIG45_A_STAR
         .iter()
         .enumerate()
@@ -80,10 +92,20 @@ fn per_threshold(
                     ..Series::line(String::new(), points, c)
                 }
             } else {
+                let band = band
+                    .as_ref()
+                    .map(|(mean, half)| {
+                        (0..a.len())
+                            .filter(|&i| a[i] == t && half[i].is_finite())
+                            .map(|i| (w[i], mean[i] - half[i], mean[i] + half[i]))
+                            .collect()
+                    })
+                    .unwrap_or_default();
                 Series {
                     marker: Some(Marker::ALL[c % Marker::ALL.len()]),
                     width: 1,
                     a_star_over_ls2: Some(t),
+                    band,
                     ..Series::line(format!("{label}, A* = {t} λ_s^2"), points, c)
                 }
             }
@@ -111,7 +133,18 @@ pub fn fig45(inputs: &Inputs, lambda_l_over_lambda_s: f64) -> anyhow::Result<Vec
     k.extend(per_threshold(model, "k_pl", "K_{PL} fit", true)?);
     let mut kk = per_threshold(wear, "k_upscaled_pooled", "𝒦", false)?;
     kk.extend(per_threshold(model, "k_upscaled_pl", "𝒦_{PL} fit", true)?);
-    let rate = per_threshold(wear, "wear_rate_over_l2_mean", "R/L^2", false)?;
+    let mut rate = per_threshold(wear, "wear_rate_over_l2_mean", "R/L^2", false)?;
+    let realizations = inputs.of(0, "statistics")?.results["realizations"]
+        .as_u64()
+        .ok_or_else(|| anyhow::anyhow!("statistics results lack 'realizations'"))?;
+    let key = |what: &str| {
+        Series::band_key(format!(
+            "{what} {realizations} realizations; shaded: 95 % band of their mean"
+        ))
+    };
+    k.push(key("markers: pooled over"));
+    kk.push(key("markers: pooled over"));
+    rate.push(key("markers: mean of"));
     let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
         let mut p = LinePlot::new(title, "W/W_0", y, true, y_axis);
         p.series = series;

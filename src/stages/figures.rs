@@ -61,7 +61,7 @@ pub enum FigureJob {
 
 impl Stage for Figures {
     const NAME: &'static str = "figures";
-    const VERSION: u32 = 8;
+    const VERSION: u32 = 10;
     type Job = FigureJob;
 
     fn compute(job: &FigureJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

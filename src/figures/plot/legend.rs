@@ -78,6 +78,14 @@ impl LegendBox {
             let x = x0 + self.padding + col * (self.entry.0 + gap);
             let yc = y0 + self.padding + row * self.entry.1 + self.entry.1 / 2;
             let color = s.rgb_color();
+            if !s.band.is_empty() {
+                let half = (0.35 * self.text_px).round() as i32;
+                area.draw(&Rectangle::new(
+                    [(x, yc - half), (x + self.sample, yc + half)],
+                    color.mix(super::line::BAND_OPACITY).filled(),
+                ))
+                .map_err(plot_err)?;
+            }
             if s.width > 0 {
                 let style = color.stroke_width(s.width);
                 draw_path(area, vec![(x, yc), (x + self.sample, yc)], s.dash, style)?;

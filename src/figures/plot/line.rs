@@ -17,13 +17,22 @@ use super::{
     DATA_COLUMNS, LEGEND_PX, SIZE_PX, TICK_PX, TITLE_PX,
 };
 
+/// Opacity of a 95 % band's fill.
+pub(super) const BAND_OPACITY: f64 = 0.2;
+
 impl LinePlot {
     /// Finite points (positive on logarithmic axes) of every series, as drawn.
     fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         let keep = finite_on(self.x_log, self.y_axis);
         self.series
             .iter()
-            .flat_map(|s| s.points.iter().map(|&p| self.drawn_at(p)))
+            .flat_map(|s| {
+                s.points.iter().map(|&p| self.drawn_at(p)).chain(
+                    s.band
+                        .iter()
+                        .flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]),
+                )
+            })
             .filter(move |p| keep(p))
             .chain(self.y_floor.map(|f| (f64::NAN, f)))
     }
@@ -200,6 +209,33 @@ impl LinePlot {
                         .collect()
                 })
                 .collect();
+            // Each band as a polygon: its upper edge forward, its lower edge back; a low
+            // end off a logarithmic axis is drawn at the axis' bottom.
+            let bands: Vec<Vec<(i32, i32)>> = self
+                .series
+                .iter()
+                .map(|s| {
+                    let on_axis = |(x, y): (f64, f64)| {
+                        if keep(&(x, y)) {
+                            Some((x, y))
+                        } else if x.is_finite() && y.is_finite() && (!self.x_log || x > 0.0) {
+                            Some((x, y_span.0))
+                        } else {
+                            None
+                        }
+                    };
+                    let upper = s.band.iter().filter_map(|&(x, _, hi)| on_axis((x, hi)));
+                    let lower: Vec<(f64, f64)> = s
+                        .band
+                        .iter()
+                        .filter_map(|&(x, lo, _)| on_axis((x, lo)))
+                        .collect();
+                    upper
+                        .chain(lower.into_iter().rev())
+                        .map(|p| to_px(&p))
+                        .collect()
+                })
+                .collect();
             let xs = x().range();
             let marks: Vec<Vec<(i32, i32)>> = self
                 .x_marks
@@ -212,15 +248,15 @@ impl LinePlot {
                         .map(|&ym| vec![to_px(&(xs.start, ym)), to_px(&(xs.end, ym))]),
                 )
                 .collect();
-            (curves, marks)
+            (curves, marks, bands)
         };
         // The legend inside the axes where it covers nothing, else below them.
         let spot = if entries.is_empty() || self.legend == LegendAt::Below {
             None
         } else {
             let probe = build(&body)?;
-            let (curves, marks) = curves_of(&probe);
-            let all: Vec<Vec<(i32, i32)>> = curves.into_iter().chain(marks).collect();
+            let (curves, marks, bands) = curves_of(&probe);
+            let all: Vec<Vec<(i32, i32)>> = curves.into_iter().chain(marks).chain(bands).collect();
             let pixels = covered_pixels(&all, 2.0);
             let (pw, ph) = probe.plotting_area().dim_in_pixel();
             let blocked: Vec<Rect> = avoid.iter().map(|f| f.within(pw, ph)).collect();
@@ -276,7 +312,29 @@ impl LinePlot {
             BLACK.stroke_width(1),
         ))
         .map_err(plot_err)?;
-        let (curves, marks) = curves_of(&chart);
+        let (curves, marks, bands) = curves_of(&chart);
+        for (s, band) in self.series.iter().zip(bands) {
+            if band.len() > 3 {
+                plot.draw(&Polygon::new(band, s.rgb_color().mix(BAND_OPACITY).filled()))
+                    .map_err(plot_err)?;
+            }
+        }
+        if !self.x_mark_labels.is_empty() {
+            let grey = RGBColor(110, 110, 110);
+            for (m, name) in marks.iter().zip(&self.x_mark_labels) {
+                let top = m.iter().map(|p| p.1).min().unwrap_or(0).max(0);
+                text::draw(
+                    &plot,
+                    name,
+                    (m[0].0 + px(4.0), top + px(3.0)),
+                    Align::Start,
+                    TextLook {
+                        color: grey,
+                        ..TextLook::new(LEGEND_PX * scale)
+                    },
+                )?;
+            }
+        }
         let floor_mark = marks.len() - usize::from(self.y_floor.is_some());
         for (i, m) in marks.into_iter().enumerate() {
             let dash = if i < floor_mark {
@@ -385,6 +443,7 @@ impl LinePlot {
             let study = s.study.clone().unwrap_or_default();
             let (load, a_star) = (opt(s.w_over_w0), opt(s.a_star_over_ls2));
             for (x, y) in &s.points {
+                let band = s.band_at(*x);
                 out.write_record([
                     panel,
                     &series,
@@ -395,6 +454,8 @@ impl LinePlot {
                     &x.to_string(),
                     &yq,
                     &y.to_string(),
+                    &opt(band.map(|b| b.0)),
+                    &opt(band.map(|b| b.1)),
                 ])?;
             }
         }

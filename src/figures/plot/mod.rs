@@ -27,9 +27,10 @@ pub use ticks::{number, power_of_ten, snap_zero};
 
 /// Columns of a figure's data file: one row per drawn point, with what a reader filters on
 /// (the panel's title, the curve, its study, load W/W₀ and threshold A*/λₛ² where it has
-/// them) and the point with its axes' quantities, as plain Unicode. Every quantity of the
-/// figures is dimensionless (normalised as its axis label says).
-pub const DATA_COLUMNS: [&str; 9] = [
+/// them) and the point with its axes' quantities, as plain Unicode, and the 95 % band drawn
+/// around it where there is one (empty otherwise). Every quantity of the figures is
+/// dimensionless (normalised as its axis label says).
+pub const DATA_COLUMNS: [&str; 11] = [
     "panel",
     "series",
     "study",
@@ -39,6 +40,8 @@ pub const DATA_COLUMNS: [&str; 9] = [
     "x",
     "y_quantity",
     "y",
+    "y_ci95_low",
+    "y_ci95_high",
 ];
 
 /// The embedded text font's bytes.
@@ -48,6 +51,11 @@ pub(super) static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans
 pub(super) static MATH_FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuMathTeXGyre.ttf");
 /// Size of a single plot: 6.4 × 4.8 in at 150 dpi.
 pub const SIZE_PX: (u32, u32) = (960, 720);
+/// Size of a figure with an inset: 7.5 × 6 in at 150 dpi, so that the inset's text is read
+/// at [`INSET_SCALE`] of the plot's.
+pub const INSET_SIZE_PX: (u32, u32) = (1125, 900);
+/// Text scale of an inset: its tick labels 14 px high.
+pub const INSET_SCALE: f64 = 0.8;
 /// Size of a raster figure (map with its colour bar or legend): 6.4 × 5.6 in at 150 dpi.
 pub const RASTER_SIZE_PX: (u32, u32) = (960, 840);
 
@@ -87,6 +95,8 @@ pub struct Series {
     pub study: Option<String>,
     pub w_over_w0: Option<f64>,
     pub a_star_over_ls2: Option<f64>,
+    /// A 95 % band shaded around the curve in its colour: (x, low, high) per abscissa.
+    pub band: Vec<(f64, f64, f64)>,
 }
 
 impl Default for Series {
@@ -104,6 +114,7 @@ impl Default for Series {
             study: None,
             w_over_w0: None,
             a_star_over_ls2: None,
+            band: Vec::new(),
         }
     }
 }
@@ -117,6 +128,21 @@ impl Series {
             color,
             ..Series::default()
         }
+    }
+
+    /// A legend entry alone, its sample a grey shade: says what the bands of the plot are.
+    pub fn band_key(label: impl Into<String>) -> Self {
+        Series {
+            rgb: Some((90, 90, 90)),
+            width: 0,
+            band: vec![(f64::NAN, f64::NAN, f64::NAN)],
+            ..Series::line(label, Vec::new(), 0)
+        }
+    }
+
+    /// The band's (low, high) at abscissa `x`, if the band has that abscissa.
+    fn band_at(&self, x: f64) -> Option<(f64, f64)> {
+        self.band.iter().find(|b| b.0 == x).map(|b| (b.1, b.2))
     }
 
     fn rgb_color(&self) -> RGBColor {
@@ -162,6 +188,8 @@ pub struct LinePlot {
     /// On a logarithmic y axis, where values of exactly 0 are drawn: the tick there reads
     /// "exact" and a dotted line marks it (errors that vanish stay visible).
     pub y_floor: Option<f64>,
+    /// Letters written at the top of the `x_marks` lines, in their order (e.g. "b", "c", "d").
+    pub x_mark_labels: Vec<String>,
     /// Ordinates marked by horizontal dashed grey lines (e.g. a tolerance).
     pub y_marks: Vec<f64>,
     /// Short texts (label markup) written beside points (x, y), e.g. the setting of a point.
@@ -185,6 +213,7 @@ impl LinePlot {
             y_axis,
             series: Vec::new(),
             x_marks: Vec::new(),
+            x_mark_labels: Vec::new(),
             legend: LegendAt::Auto,
             y_bounds: None,
             x_integer: false,
@@ -242,7 +271,8 @@ pub enum Layout {
     /// Side by side in at most `columns` columns, each panel 640 × 560 px: as few rows as
     /// that allows, then as few columns as fill them (4 panels in 2 × 2, not 3 + 1).
     Grid { columns: usize },
-    /// The second plot inset in the first, at fractions of the first one's axes.
+    /// The second plot inset in the first, at fractions of the first one's axes, its text at
+    /// [`INSET_SCALE`] of the first's, on a figure of [`INSET_SIZE_PX`].
     Inset { rect: Fractions },
 }
 
@@ -262,7 +292,7 @@ impl Panels {
                 let (rows, cols) = grid(self.plots.len(), columns);
                 (640 * cols as u32, 560 * rows as u32)
             }
-            Layout::Inset { .. } => SIZE_PX,
+            Layout::Inset { .. } => INSET_SIZE_PX,
         }
     }
 
@@ -290,7 +320,7 @@ impl Panels {
                     ((r.2 - r.0) as u32, (r.3 - r.1) as u32),
                 );
                 inset.fill(&WHITE).map_err(plot_err)?;
-                self.plots[1].draw_on(&inset, 0.6, &[]).map(|_| ())
+                self.plots[1].draw_on(&inset, INSET_SCALE, &[]).map(|_| ())
             }
         }
     }
