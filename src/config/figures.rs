@@ -355,7 +355,7 @@ pub fn file_stems(name: &str, kind: FigureKind) -> Vec<String> {
             "fig2_convergence",
         ],
         Fig3Fig4a => &["fig3", "fig4a"],
-        Fig45 => &["fig4b", "fig5a", "fig5b"],
+        Fig45 => &["fig4b", "fig5a", "fig5b", "fig45_dn_dac"],
         AppendixB1 | AppendixB2 | Convergence | LoadResolution => {
             return vec![name.to_string(), format!("{name}_convergence")]
         }

@@ -68,9 +68,7 @@ fn per_threshold(
     let band = if fitted {
         None
     } else {
-        let quantity = value
-            .trim_end_matches("_pooled")
-            .trim_end_matches("_mean");
+        let quantity = value.trim_end_matches("_pooled").trim_end_matches("_mean");
         Some((
             f64_column(df, &format!("{quantity}_mean"))?,
             f64_column(df, &format!("{quantity}_ci95"))?,
@@ -184,7 +182,45 @@ pub fn fig45(inputs: &Inputs, lambda_l_over_lambda_s: f64) -> anyhow::Result<Vec
                 rate,
             ),
         ),
+        (
+            "fig45_dn_dac".into(),
+            Drawn::Line(regime(inputs, &spectrum)?),
+        ),
     ])
+}
+
+/// The regime of Figs. 4b–5b: dN/dA_c over the study's sweep (positive: the contact area
+/// grows by new clusters, the paper's mild-wear regime; negative: by merging), with the
+/// cluster count N it is the slope of (input 0: the study's statistics).
+fn regime(inputs: &Inputs, spectrum: &str) -> anyhow::Result<LinePlot> {
+    let loads = inputs.table(0, "statistics", "loads.parquet")?;
+    let w = f64_column(&loads, "w_over_w0")?;
+    let dn = f64_column(&loads, "dn_dac_per_ls2")?;
+    let mut p = LinePlot::new(
+        format!("Regime of Figs. 4b–5b: growth of the cluster count, {spectrum}"),
+        "W/W_0",
+        "dN/d(A_c/λ_s^2)",
+        true,
+        YAxis::Linear,
+    );
+    let (first, last) = (w[0], w[w.len() - 1]);
+    p.series = vec![
+        Series {
+            marker: Some(Marker::Circle),
+            ..Series::line(
+                "dN/dA_c (central differences of ensemble means; > 0: nucleation)",
+                w.iter().copied().zip(dn).collect(),
+                0,
+            )
+        },
+        Series {
+            rgb: Some((0, 0, 0)),
+            width: 1,
+            name: "zero".into(),
+            ..Series::line("", vec![(first, 0.0), (last, 0.0)], 0)
+        },
+    ];
+    Ok(p)
 }
 
 /// The load-resolution audit of Figs. 4b and 5 drawn: per curve and load of the finer sweep,

@@ -27,11 +27,10 @@ impl LinePlot {
         self.series
             .iter()
             .flat_map(|s| {
-                s.points.iter().map(|&p| self.drawn_at(p)).chain(
-                    s.band
-                        .iter()
-                        .flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]),
-                )
+                s.points
+                    .iter()
+                    .map(|&p| self.drawn_at(p))
+                    .chain(s.band.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]))
             })
             .filter(move |p| keep(p))
             .chain(self.y_floor.map(|f| (f64::NAN, f)))
@@ -315,8 +314,11 @@ impl LinePlot {
         let (curves, marks, bands) = curves_of(&chart);
         for (s, band) in self.series.iter().zip(bands) {
             if band.len() > 3 {
-                plot.draw(&Polygon::new(band, s.rgb_color().mix(BAND_OPACITY).filled()))
-                    .map_err(plot_err)?;
+                plot.draw(&Polygon::new(
+                    band,
+                    s.rgb_color().mix(BAND_OPACITY).filled(),
+                ))
+                .map_err(plot_err)?;
             }
         }
         if !self.x_mark_labels.is_empty() {
