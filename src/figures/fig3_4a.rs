@@ -28,6 +28,20 @@ fn pdf_points(pdf: &DataFrame, load_index: u32) -> anyhow::Result<(Vec<(f64, f64
     ))
 }
 
+/// The 95 % band of the realizations' mean PDF of one study at one load, where its lower
+/// edge is positive (the logarithmic axis cannot draw the rest).
+fn pdf_band(pdf: &DataFrame, load_index: u32) -> anyhow::Result<Vec<(f64, f64, f64)>> {
+    let rows = rows_at(pdf, load_index)?;
+    let x = f64_column(pdf, "centre_over_ls2")?;
+    let mean = f64_column(pdf, "pdf_mean")?;
+    let half = f64_column(pdf, "pdf_ci95")?;
+    Ok(rows
+        .iter()
+        .map(|&i| (x[i], mean[i] - half[i], mean[i] + half[i]))
+        .filter(|b| b.1 > 0.0 && b.2.is_finite())
+        .collect())
+}
+
 /// Points of a fitted curve and its legend text.
 type FittedLine = (Vec<(f64, f64)>, String);
 
@@ -140,6 +154,13 @@ pub fn fig34a(
             } else {
                 (String::new(), String::new())
             };
+            // The largest load of each study carries its 95 % band (one band per spectrum
+            // keeps the curves readable).
+            let (pdf_shade, ccdf_shade) = if last {
+                (pdf_band(&pdf, load_index)?, ccdf.band(load_index))
+            } else {
+                (Vec::new(), Vec::new())
+            };
             main.series.push(Series {
                 tint,
                 marker: Some(Marker::ALL[c % Marker::ALL.len()]),
@@ -147,6 +168,7 @@ pub fn fig34a(
                 label: label.clone(),
                 points,
                 color: c,
+                band: pdf_shade,
                 ..about.clone()
             });
             ccdf_plot.series.push(Series {
@@ -154,6 +176,7 @@ pub fn fig34a(
                 label: ccdf_label,
                 points: ccdf.curve(load_index, None, false),
                 color: c,
+                band: ccdf_shade,
                 ..about.clone()
             });
             if last {
@@ -186,6 +209,11 @@ pub fn fig34a(
         };
         ccdf_plot.series.push(shade);
     }
+    let key = Series::band_key(
+        "shaded: 95 % band of the realizations' mean at the largest load (where > 0)",
+    );
+    main.series.push(key.clone());
+    ccdf_plot.series.push(key);
     let mut out = Vec::new();
     if hurst.is_empty() {
         out.push(("fig3".to_string(), Drawn::Line(main)));

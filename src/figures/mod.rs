@@ -64,6 +64,7 @@ pub struct CcdfTable {
     area_over_ls2: Vec<f64>,
     ccdf: Vec<f64>,
     ccdf_mean: Vec<f64>,
+    ccdf_ci95: Vec<f64>,
 }
 
 impl CcdfTable {
@@ -77,6 +78,7 @@ impl CcdfTable {
             area_over_ls2: f64_column(&df, "area_over_ls2")?,
             ccdf: f64_column(&df, "ccdf")?,
             ccdf_mean: f64_column(&df, "ccdf_mean")?,
+            ccdf_ci95: f64_column(&df, "ccdf_ci95")?,
         })
     }
 
@@ -89,6 +91,19 @@ impl CcdfTable {
                 self.load_index[i] == Some(load_index) && self.realization[i] == realization
             })
             .map(|i| (self.area_over_ls2[i], v[i]))
+            .collect()
+    }
+
+    /// The 95 % band `(A/λ_s², low, high)` of the realizations' mean CCDF at load
+    /// `load_index`, where its lower edge is positive.
+    pub fn band(&self, load_index: u32) -> Vec<(f64, f64, f64)> {
+        (0..self.ccdf_mean.len())
+            .filter(|&i| self.load_index[i] == Some(load_index) && self.realization[i].is_none())
+            .map(|i| {
+                let (m, h) = (self.ccdf_mean[i], self.ccdf_ci95[i]);
+                (self.area_over_ls2[i], m - h, m + h)
+            })
+            .filter(|b| b.1 > 0.0 && b.2.is_finite())
             .collect()
     }
 

@@ -1,17 +1,108 @@
 //! A gallery's report: `figures/<profile>/index.html`, one self-contained page (images beside
-//! it, no network) with every figure, a caption saying what it shows and where it departs from
-//! the paper, the numbers behind it (exponents with their intervals, audit verdicts) and the
-//! store instances it was drawn from.
+//! it, no network) with one section per figure: its parameters beside the paper's, each image
+//! with a caption saying what it shows, the numbers behind it (exponents at the loads it draws
+//! with their intervals, fits, audit verdicts in words) and the store instances it was drawn
+//! from.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
+use serde_json::Value;
+
 use super::gallery::{FigureRecord, Provenance};
 use super::store::Store;
 use super::table::{f64_column, str_column};
+use crate::config::{FigureKind, Pipeline, StudyPlan};
 use crate::figures::plot::number;
 use crate::stages::analytic::AreaLoadSlopeRecord;
+
+/// A study's sizes as the report's parameter table shows them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sizes {
+    pub hurst: f64,
+    pub lambda_l_over_lambda_s: f64,
+    pub l_over_lambda_l: f64,
+    pub lambda_s_over_dl: f64,
+    pub n: usize,
+    pub realizations: u32,
+    /// W/W₀ of the sweep, increasing.
+    pub loads: Vec<f64>,
+    pub tolerance: f64,
+    /// Loads whose pressure field is kept (the maps of Fig. 2b–d), as W/W₀.
+    pub kept_loads: Vec<f64>,
+}
+
+impl Sizes {
+    pub fn of(p: &StudyPlan) -> Self {
+        let s = &p.surface;
+        Sizes {
+            hurst: s.hurst,
+            lambda_l_over_lambda_s: s.lambda_l_px / s.lambda_s_px,
+            l_over_lambda_l: s.n as f64 / s.lambda_l_px,
+            lambda_s_over_dl: s.lambda_s_px,
+            n: s.n,
+            realizations: p.realizations,
+            loads: p.loads.clone(),
+            tolerance: p.tolerance,
+            kept_loads: p.keep_pressure.iter().map(|&i| p.loads[i]).collect(),
+        }
+    }
+
+    fn loads_text(&self) -> String {
+        match (self.loads.first(), self.loads.last()) {
+            (Some(a), Some(b)) if self.loads.len() > 3 => {
+                format!("{} in {}–{}", self.loads.len(), number(*a), number(*b))
+            }
+            _ => self
+                .loads
+                .iter()
+                .map(|w| number(*w))
+                .collect::<Vec<_>>()
+                .join(", "),
+        }
+    }
+}
+
+/// What the report knows of the pipeline beside the store: each figure's description, kind
+/// and declared loads, and the sizes of every study in this profile and in the paper's.
+#[derive(Debug, Default)]
+pub struct Context {
+    pub descriptions: BTreeMap<String, String>,
+    pub kinds: BTreeMap<String, FigureKind>,
+    /// The loads a figure declares it draws (with its inset's), empty for all of a sweep.
+    pub figure_loads: BTreeMap<String, Vec<f64>>,
+    pub sizes: BTreeMap<String, Sizes>,
+    /// The same studies in profile `paper` (the paper's own parameters), where they are.
+    pub paper: BTreeMap<String, Sizes>,
+}
+
+impl Context {
+    /// The context of `profile` in `pipeline` (`origin` names the file in errors).
+    pub fn of(pipeline: &Pipeline, origin: &str, profile: &str) -> anyhow::Result<Self> {
+        let mut c = Context::default();
+        for (name, decl) in pipeline.figures_of(profile) {
+            c.descriptions
+                .insert(name.to_string(), decl.description.clone());
+            c.kinds.insert(name.to_string(), decl.kind);
+            let mut loads = decl.loads.clone();
+            loads.extend(decl.inset_load);
+            c.figure_loads.insert(name.to_string(), loads);
+        }
+        let sizes = |p: &str| -> anyhow::Result<BTreeMap<String, Sizes>> {
+            Ok(pipeline
+                .plan(p, origin)?
+                .iter()
+                .map(|s| (s.name.clone(), Sizes::of(s)))
+                .collect())
+        };
+        c.sizes = sizes(profile)?;
+        if pipeline.profiles.contains_key("paper") {
+            c.paper = sizes("paper")?;
+        }
+        Ok(c)
+    }
+}
 
 /// Text with `&`, `<`, `>` and `"` escaped for HTML.
 pub fn escape(s: &str) -> String {
@@ -26,27 +117,38 @@ pub fn escape(s: &str) -> String {
 pub fn caption(stem: &str) -> &'static str {
     match stem {
         "fig2a" => "One realization of the Fig. 2 surface (H = 0.8, λ<sub>l</sub>/λ<sub>s</sub> = 8), heights in units of L scaled to unit rms slope. As in the paper.",
-        "fig2b" | "fig2c" | "fig2d" => "Contact clusters of that realization at one load: yellow A ≤ A*, red A > A*, black out of contact (A* = 2 λ<sub>s</sub>², as in the paper). The load is the sweep's nearest to the paper's marked loads.",
-        "fig2e" => "Contact area A<sub>c</sub>/L² and the largest cluster against load, ensemble means; dashed vertical lines mark the loads of Figs. 2b–d. Not in the paper: the small-load law A<sub>c</sub>/L² = κ W/W₀ fitted up to W/W₀ = 0.06 (black dashes; κ below). The paper uses 40 realizations and 50 loads; this profile's counts are in the table below.",
+        "fig2b" => "Contact clusters of that realization at the lowest of the three marked loads (dashed line b in Fig. 2e): yellow A ≤ A*, red A > A*, black out of contact (A* = 2 λ<sub>s</sub>², as in the paper). Few, small clusters.",
+        "fig2c" => "The same realization at the middle marked load (line c in Fig. 2e): more clusters, and the first larger than A*.",
+        "fig2d" => "The same realization at the highest marked load (line d in Fig. 2e), past the peak of the cluster count (Fig. 2f): clusters merge.",
+        "fig2e" => "Contact area A<sub>c</sub>/L² (top) and the largest cluster (bottom) against load: ensemble means with their 95 % bands; dashed vertical lines b, c, d mark the loads of Figs. 2b–d. Not in the paper: the small-load law A<sub>c</sub>/L² = κ W/W₀ fitted up to W/W₀ = 0.06 (black dashes; κ below). The paper draws both on one plot.",
         "fig2f" => "dN/dA<sub>c</sub> by central differences of the ensemble means: positive where contact grows by new clusters, negative where clusters merge.",
         "fig2_convergence" => "Not in the paper: how far the first r realizations' means of Figs. 2e–f are from all of them (the realization audit), against its 5 % tolerance.",
-        "fig3" => "Pooled PDF of cluster areas for λ<sub>l</sub>/λ<sub>s</sub> = 8, 32, 128 (H = 0.8) at three loads, with the discrete truncated power law fitted by maximum likelihood at the largest load (dashes, one per spectrum; drawn only over at least a decade). Inset: H = 0.6, 0.7, 0.8. The paper draws L/λ<sub>l</sub> = λ<sub>s</sub>/Δl = 8 with 20 realizations; this profile's sizes are those its convergence audits accept (below).",
+        "fig3" => "Pooled PDF of cluster areas for λ<sub>l</sub>/λ<sub>s</sub> = 8, 32, 128 (H = 0.8) at three loads, with the paper's plateau + power-law model fitted by maximum likelihood at the largest load (dashes, one per spectrum) and its 95 % interval; the discrete truncated power law's α̂ is named beside it. Inset: H = 0.6, 0.7, 0.8 on equal boxes at one load.",
         "fig4a" => "K(A*) = P(A > A*), the pooled complementary distribution, for the studies and loads of Fig. 3.",
-        "fig4b" => "Archard's wear coefficient K against load for five A*: simulated (markers), and the plateau + power-law model fitted to the same distributions (dashes, same colours). The y axis is linear below 10⁻⁵, as in the paper.",
-        "fig5a" => "The up-scaled coefficient 𝒦 = A<sub>c</sub>*/A<sub>c</sub> against load, simulated and fitted, for the A* of Fig. 4b. Bounded by 1.",
-        "fig5b" => "Wear rate R/L² (ω = 1/3) against load for the A* of Fig. 4b.",
+        "fig4b" => "Archard's wear coefficient K against load for five A*: simulated (markers, pooled over realizations; shaded: the 95 % band of the realizations' mean), and the plateau + power-law model fitted to the same distributions (dashes, same colours). The y axis is linear below 10⁻⁵, as in the paper.",
+        "fig5a" => "The up-scaled coefficient 𝒦 = A<sub>c</sub>*/A<sub>c</sub> against load, simulated (with 95 % bands) and fitted, for the A* of Fig. 4b. Bounded by 1.",
+        "fig5b" => "Wear rate R/L² (ω = 1/3) against load for the A* of Fig. 4b: realizations' mean with its 95 % band.",
+        "fig45_dn_dac" => "Not in the paper: dN/dA<sub>c</sub> on the spectrum of Figs. 4b–5b, the regime they are drawn in (positive: contact grows by new clusters, the mild-wear regime the paper assumes; negative: by merging).",
         "fig6" => "The power-law model alone (no simulation): K<sub>PL</sub> and 𝒦<sub>PL</sub> against A<sub>m</sub>/A<sub>s</sub> for α = 1.5, as in the paper.",
         "figB1" => "CCDF of cluster areas as the box grows (L/λ<sub>l</sub>), each realization in grey and the ensemble means per load. The paper goes to L/λ<sub>l</sub> = 16 with 20 realizations; this profile's largest box and counts are in the table below.",
         "figB2" => "Ensemble-mean CCDF as the discretisation λ<sub>s</sub>/Δl is refined, per load.",
         "figB1_convergence" | "figB2_convergence" => "Not in the paper: KS distance and exponent difference of each setting to the finest, and of the first r realizations to all, against the 0.05 tolerance that decides the sizes used elsewhere.",
+        "fig128_discretisation" => "Not in the paper: the λ<sub>l</sub>/λ<sub>s</sub> = 128 study of Figs. 3–5 against one discretisation finer (λ<sub>s</sub>/Δl = 16): KS distance of the pooled areas with its 95 % critical value, exponent difference, ensemble CCDFs, realizations.",
         s if s.starts_with("fig128_convergence") => "Not in the paper: the λ<sub>l</sub>/λ<sub>s</sub> = 128 sizes against the convergence rule's reference (KS distance of the pooled areas, exponent difference, ensemble CCDFs, realizations).",
         s if s.contains("load_resolution") => "Not in the paper: Figs. 4b and 5 from fewer loads, interpolated, against a finer sweep of the same realizations, in units of the 95 % band.",
         _ => "",
     }
 }
 
-/// Rows (study, W/W₀, estimator, α, 95 % interval) of a statistics instance's exponents.
-fn alpha_rows(store: &Store, key: &str, study: &str, out: &mut String) -> anyhow::Result<()> {
+/// One row per load of a statistics instance's exponents, the two estimators side by side
+/// (α̂ and its 95 % interval), at the loads of the sweep nearest to `loads` (all when empty).
+fn alpha_rows(
+    store: &Store,
+    key: &str,
+    study: &str,
+    loads: &[f64],
+    out: &mut String,
+) -> anyhow::Result<()> {
     let Some(manifest) = store.lookup("statistics", key)? else {
         return Ok(());
     };
@@ -61,19 +163,41 @@ fn alpha_rows(store: &Store, key: &str, study: &str, out: &mut String) -> anyhow
         f64_column(&df, "ci95_low")?,
         f64_column(&df, "ci95_high")?,
     );
-    for i in 0..w.len() {
-        let ci = if lo[i].is_finite() && hi[i].is_finite() {
-            format!("[{:.3}, {:.3}]", lo[i], hi[i])
-        } else {
-            "–".into()
-        };
+    let mut sweep: Vec<f64> = w.clone();
+    sweep.sort_by(f64::total_cmp);
+    sweep.dedup();
+    let shown: Vec<f64> = if loads.is_empty() {
+        sweep.clone()
+    } else {
+        let mut v: Vec<f64> = loads
+            .iter()
+            .filter_map(|&t| crate::statistics::nearest_in_log(&sweep, t).map(|i| sweep[i]))
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    };
+    let cell = |load: f64, estimator: &str| -> String {
+        match (0..w.len()).find(|&i| w[i] == load && est[i] == estimator) {
+            Some(i) if a[i].is_finite() => {
+                let ci = if lo[i].is_finite() && hi[i].is_finite() {
+                    format!(" [{:.2}, {:.2}]", lo[i], hi[i])
+                } else {
+                    String::new()
+                };
+                format!("{:.2}{ci}", a[i])
+            }
+            _ => "–".into(),
+        }
+    };
+    for load in shown {
         writeln!(
             out,
-            "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{:.3}</td><td>{ci}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             escape(study),
-            w[i],
-            escape(&est[i]),
-            a[i]
+            number(load),
+            cell(load, "discrete_plateau_power_law_mle"),
+            cell(load, "discrete_truncated_mle"),
         )?;
     }
     Ok(())
@@ -139,33 +263,212 @@ fn analytic_lines(
     Ok(())
 }
 
-/// The audit verdicts among a figure's inputs, as `name: value` lines.
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+/// A settings (convergence) audit's verdict in words.
+fn settings_sentences(r: &Value) -> String {
+    let tolerance = f(&r["tolerance"]);
+    let mut out = format!(
+        "Reference: {} (KS tolerance {}).",
+        escape(r["reference"].as_str().unwrap_or("?")),
+        number(tolerance)
+    );
+    for s in r["settings"].as_array().into_iter().flatten() {
+        let by_load: Vec<String> = s["ks_by_load"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .zip(s["ks_critical_95_by_load"].as_array().into_iter().flatten())
+            .map(|(k, c)| {
+                format!(
+                    "{:.3} at W/W₀ = {} (critical {:.3})",
+                    f(&k[1]),
+                    number(f(&k[0])),
+                    f(&c[1])
+                )
+            })
+            .collect();
+        let within = s["within_tolerance"].as_bool().unwrap_or(false);
+        let _ = write!(
+            out,
+            " {}: KS {}; {} the tolerance at every load{}.",
+            escape(s["setting"].as_str().unwrap_or("?")),
+            by_load.join(", "),
+            if within { "within" } else { "not within" },
+            if s["below_critical_at_every_load"].as_bool() == Some(true) {
+                ", and not distinguishable from the reference by its realizations"
+            } else {
+                ""
+            }
+        );
+    }
+    if let Some(v) = r["smallest_converged_setting"].as_f64() {
+        let _ = write!(
+            out,
+            " The rule's choice (smallest setting within the tolerance from there on): {}.",
+            number(v)
+        );
+    }
+    if let Some(m) = r["smallest_converged_realizations_by_setting"].as_object() {
+        let mut by_setting: Vec<(f64, &str, u64)> = m
+            .iter()
+            .map(|(k, v)| {
+                (
+                    k.parse().unwrap_or(f64::NAN),
+                    k.as_str(),
+                    v.as_u64().unwrap_or(0),
+                )
+            })
+            .collect();
+        by_setting.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let parts: Vec<String> = by_setting
+            .iter()
+            .map(|(_, k, v)| format!("{k}: {v}"))
+            .collect();
+        let _ = write!(
+            out,
+            " Realizations from which the first r stay within the tolerance of all: {}.",
+            escape(&parts.join("; "))
+        );
+    }
+    out
+}
+
+/// A realization audit's verdict (Fig. 2e–f) in words.
+fn realization_sentences(r: &Value) -> String {
+    let ci = &r["max_rel_ci95_at_all_realizations"];
+    format!(
+        "The means of the first r of {} realizations stay within {} % of all of them at every \
+         load, and the load of N's peak within {} load step(s), from r = {}. At all {}, the \
+         95 % half-widths reach ±{:.0} % for A<sub>c</sub>, ±{:.0} % for N and ±{:.0} % for the \
+         largest cluster. N peaks at W/W₀ = {}.",
+        r["realizations"].as_u64().unwrap_or(0),
+        number(100.0 * f(&r["tolerance_rel_deviation"])),
+        r["tolerance_peak_load_steps"].as_u64().unwrap_or(0),
+        r["smallest_converged_realizations"]
+            .as_u64()
+            .map_or("none".to_string(), |v| v.to_string()),
+        r["realizations"].as_u64().unwrap_or(0),
+        100.0 * f(&ci["area"]),
+        100.0 * f(&ci["count"]),
+        100.0 * f(&ci["largest"]),
+        number(f(&r["count_peak_w_over_w0"]))
+    )
+}
+
+/// A load-resolution audit's verdict in words.
+fn load_resolution_sentences(r: &Value) -> String {
+    let e = &r["max_error_over_ci95"];
+    let mut out = format!(
+        "The {} loads interpolated against {} loads of the same realizations: {} of {} \
+         points within the 95 % band ({} at transitions not judged); largest error in bands: \
+         K {:.2}, 𝒦 {:.2}, wear rate {:.2}. Rule {}.",
+        r["chosen_loads"].as_u64().unwrap_or(0),
+        r["fine_loads"].as_u64().unwrap_or(0),
+        r["points_judged"].as_u64().unwrap_or(0)
+            - r["points_beyond_band"]
+                .as_array()
+                .map_or(0, |a| a.len() as u64),
+        r["points_judged"].as_u64().unwrap_or(0),
+        r["points_at_transition"].as_u64().unwrap_or(0),
+        f(&e["k_archard"]),
+        f(&e["k_upscaled"]),
+        f(&e["wear_rate_over_l2"]),
+        if r["rule_met"].as_bool() == Some(true) {
+            "met"
+        } else {
+            "not met at every point"
+        }
+    );
+    for p in r["points_beyond_band"].as_array().into_iter().flatten() {
+        let _ = write!(
+            out,
+            " Beyond: {} at A* = {} λ<sub>s</sub>², W/W₀ = {} ({:.2} bands; the finer sweep's \
+             neighbouring loads miss it by {:.2}).",
+            escape(p["curve"].as_str().unwrap_or("?")),
+            number(f(&p["a_star_over_ls2"])),
+            number(f(&p["w_over_w0"])),
+            f(&p["error_over_ci95"]),
+            f(&p["neighbour_error_over_ci95"])
+        );
+    }
+    out
+}
+
+/// The audit verdicts among a figure's inputs, as paragraphs of sentences.
 fn audit_lines(store: &Store, fig: &FigureRecord, out: &mut String) -> anyhow::Result<()> {
     for d in fig.drawn_from.iter().filter(|d| d.stage == "audits") {
         let Some(m) = store.lookup("audits", &d.key)? else {
             continue;
         };
-        if let Some(obj) = m.results.as_object() {
-            for (k, v) in obj {
-                writeln!(
-                    out,
-                    "<tr><td>audit {}</td><td>{}</td><td><code>{}</code></td></tr>",
-                    escape(&d.key[..12.min(d.key.len())]),
-                    escape(k),
-                    escape(&v.to_string())
-                )?;
-            }
-        }
+        let r = &m.results;
+        let text = match m.params["audit"].as_str() {
+            Some("settings") => settings_sentences(r),
+            Some("realizations") => realization_sentences(r),
+            Some("load_resolution") => load_resolution_sentences(r),
+            _ => escape(&r.to_string()),
+        };
+        writeln!(out, "<p>{text}</p>")?;
     }
     Ok(())
 }
 
+/// The parameter table of a figure's studies: this profile's sizes beside the paper's.
+fn parameter_table(context: &Context, studies: &[String]) -> String {
+    let mut rows = String::new();
+    for study in studies {
+        let Some(s) = context.sizes.get(study) else {
+            continue;
+        };
+        let paper = context.paper.get(study);
+        let cell = |ours: String, theirs: Option<String>| match theirs {
+            Some(t) if t != ours => format!("<b>{ours}</b> (paper {t})"),
+            Some(_) => ours,
+            None => ours,
+        };
+        let _ = writeln!(
+            rows,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
+             <td>{}</td><td>{}</td></tr>",
+            escape(study),
+            number(s.hurst),
+            number(s.lambda_l_over_lambda_s),
+            cell(
+                number(s.l_over_lambda_l),
+                paper.map(|p| number(p.l_over_lambda_l))
+            ),
+            cell(
+                number(s.lambda_s_over_dl),
+                paper.map(|p| number(p.lambda_s_over_dl))
+            ),
+            cell(s.n.to_string(), paper.map(|p| p.n.to_string())),
+            cell(
+                s.realizations.to_string(),
+                paper.map(|p| p.realizations.to_string())
+            ),
+            cell(s.loads_text(), paper.map(Sizes::loads_text)),
+            cell(
+                format!("{:e}", s.tolerance),
+                paper.map(|p| format!("{:e}", p.tolerance))
+            ),
+        );
+    }
+    if rows.is_empty() {
+        return rows;
+    }
+    format!(
+        "<table>\n<tr><th>study</th><th>H</th><th>λ<sub>l</sub>/λ<sub>s</sub></th>\
+         <th>L/λ<sub>l</sub></th><th>λ<sub>s</sub>/Δl</th><th>n</th><th>realizations</th>\
+         <th>loads W/W₀</th><th>solver tolerance</th></tr>\n{rows}</table>\n\
+         <p>Bold: departs from the paper's value (in parentheses; profile <code>paper</code>). \
+         Studies without one are not in the paper.</p>"
+    )
+}
+
 /// The page of a gallery.
-pub fn render(
-    store: &Store,
-    provenance: &Provenance,
-    descriptions: &BTreeMap<String, String>,
-) -> anyhow::Result<String> {
+pub fn render(store: &Store, provenance: &Provenance, context: &Context) -> anyhow::Result<String> {
     let mut h = String::new();
     let profile = escape(&provenance.profile);
     writeln!(
@@ -176,28 +479,81 @@ pub fn render(
          img{{max-width:100%;border:1px solid #ddd}}\n\
          table{{border-collapse:collapse;font-size:90%;margin:0.5em 0}}\n\
          td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}\n\
-         figcaption{{margin:0.3em 0 1em}}\n</style>\n</head>\n<body>\n\
+         figcaption{{margin:0.3em 0 1em}}\nh2 code{{font-size:70%;color:#555}}\n</style>\n\
+         </head>\n<body>\n\
          <h1>Figures of profile <code>{profile}</code></h1>\n\
          <p>Frérot, Aghababaei &amp; Molinari, “A mechanistic understanding of the wear \
          coefficient” (JMPS 2018), rebuilt by wearcoef. Each figure names the store instances it \
          was drawn from (<code>provenance.json</code> beside this page; the catalog maps keys to \
-         files).</p>"
+         files). How each number compares with the paper's: docs/FIDELITY.md.</p>"
     )?;
-    // The paper's figures first (by name: 2, 3–4a, 4b–5, 6, B.1, B.2), then the audits' own.
-    let mut figures: Vec<&FigureRecord> = provenance.figures.iter().collect();
-    figures.sort_by_key(|f| {
-        let audit = f.figure.contains("convergence") || f.figure.contains("load_resolution");
-        (audit, f.figure.clone())
+    // One section per declared figure (a figure may have several instances, e.g. Fig. 2's
+    // maps and curves): the paper's figures first, then the audits' own.
+    let mut names: Vec<&str> = provenance
+        .figures
+        .iter()
+        .map(|f| f.figure.as_str())
+        .collect();
+    names.dedup();
+    names.sort_by_key(|n| {
+        let audit = matches!(
+            context.kinds.get(*n),
+            Some(FigureKind::Convergence | FigureKind::LoadResolution)
+        );
+        (audit, n.to_string())
     });
-    for fig in figures {
-        let desc = descriptions.get(&fig.figure).cloned().unwrap_or_default();
-        writeln!(
-            h,
-            "<section id=\"f{2}\">\n<h2>{0}</h2>\n<p>{1}</p>",
-            escape(&fig.figure),
-            escape(&desc),
-            escape(&fig.key[..12.min(fig.key.len())])
-        )?;
+    names.dedup();
+    for name in names {
+        let records: Vec<&FigureRecord> = provenance
+            .figures
+            .iter()
+            .filter(|f| f.figure == name)
+            .collect();
+        section(&mut h, store, name, &records, context)?;
+    }
+    writeln!(h, "</body>\n</html>")?;
+    Ok(h)
+}
+
+/// The studies a figure was drawn from, in order of first appearance.
+fn studies_of(records: &[&FigureRecord]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for d in records.iter().flat_map(|r| &r.drawn_from) {
+        for s in &d.studies {
+            if !out.contains(s) {
+                out.push(s.clone());
+            }
+        }
+    }
+    out
+}
+
+/// One figure's section: heading, parameters, images with captions, exponents, fits, audit
+/// verdicts and the instances it was drawn from.
+fn section(
+    h: &mut String,
+    store: &Store,
+    name: &str,
+    records: &[&FigureRecord],
+    context: &Context,
+) -> anyhow::Result<()> {
+    let desc = context.descriptions.get(name).cloned().unwrap_or_default();
+    let heading = if desc.is_empty() { name } else { desc.as_str() };
+    writeln!(
+        h,
+        "<section id=\"{0}\">\n<h2>{1} <code>{0}</code></h2>",
+        escape(name),
+        escape(heading)
+    )?;
+    let studies = studies_of(records);
+    h.push_str(&parameter_table(context, &studies));
+    // The maps of Fig. 2b–d at the study's kept loads.
+    let kept: Vec<f64> = studies
+        .iter()
+        .filter_map(|s| context.sizes.get(s))
+        .flat_map(|s| s.kept_loads.clone())
+        .collect();
+    for fig in records {
         for file in fig.files.iter().filter(|f| f.ends_with(".png")) {
             let stem = file.trim_end_matches(".png");
             // Links to the files beside the image that exist: its data, its vector version.
@@ -207,9 +563,15 @@ pub fn render(
                 .filter(|(f, _)| fig.files.contains(f))
                 .map(|(f, what)| format!("{what}: <a href=\"{0}\">{0}</a>", escape(&f)))
                 .collect();
+            let load = ["fig2b", "fig2c", "fig2d"]
+                .iter()
+                .position(|m| *m == stem)
+                .and_then(|i| kept.get(i))
+                .map(|w| format!(" W/W₀ = {}.", number(*w)))
+                .unwrap_or_default();
             writeln!(
                 h,
-                "<figure>\n<img src=\"{0}\" alt=\"{1}\">\n<figcaption><b>{1}.</b> {2} {3}.\
+                "<figure>\n<img src=\"{0}\" alt=\"{1}\">\n<figcaption><b>{1}.</b> {2}{load} {3}.\
                  </figcaption>\n</figure>",
                 escape(file),
                 escape(stem),
@@ -217,64 +579,96 @@ pub fn render(
                 links.join("; ")
             )?;
         }
-        let mut alphas = String::new();
-        for d in fig.drawn_from.iter().filter(|d| d.stage == "statistics") {
-            alpha_rows(store, &d.key, &d.studies.join(", "), &mut alphas)?;
+    }
+    let draws_exponents = !matches!(
+        context.kinds.get(name),
+        Some(FigureKind::Fig2 | FigureKind::Fig6) | None
+    );
+    let mut loads = context.figure_loads.get(name).cloned().unwrap_or_default();
+    if loads.is_empty() && context.kinds.get(name) == Some(&FigureKind::Convergence) {
+        // A convergence figure compares its settings at the loads they share: the fewest.
+        loads = studies
+            .iter()
+            .filter_map(|s| context.sizes.get(s))
+            .map(|s| s.loads.clone())
+            .min_by_key(|l| l.len())
+            .unwrap_or_default();
+    }
+    let mut alphas = String::new();
+    let mut seen: Vec<&str> = Vec::new();
+    for d in records
+        .iter()
+        .flat_map(|r| &r.drawn_from)
+        .filter(|d| d.stage == "statistics" && draws_exponents)
+    {
+        // A study drawn twice (Fig. 3's λ_l/λ_s = 128 is also its inset's H = 0.8) once.
+        if seen.contains(&d.key.as_str()) {
+            continue;
         }
-        if !alphas.is_empty() {
-            writeln!(
-                h,
-                "<details><summary>Exponents α̂ behind it</summary>\n<table>\n\
-                 <tr><th>study</th><th>W/W₀</th><th>estimator</th><th>α̂</th>\
-                 <th>bootstrap 95 % CI</th></tr>\n{alphas}</table>\n</details>"
-            )?;
-        }
-        let (mut plateau, mut slopes) = (String::new(), String::new());
-        for d in fig.drawn_from.iter().filter(|d| d.stage == "analytic") {
-            analytic_lines(
-                store,
-                &d.key,
-                &d.studies.join(", "),
-                &mut plateau,
-                &mut slopes,
-            )?;
-        }
-        let max = number(crate::stages::analytic::MILD_WEAR_MAX_LOAD);
-        if !slopes.is_empty() {
-            writeln!(
-                h,
-                "<p>Area–load slope: the small-load law A<sub>c</sub>/L² = κ W/W₀ \
-                 (W₀ = E* h′<sub>rms</sub> L²) \
-                 fitted to the ensemble means up to W/W₀ = {max}. The ± is the 95 % band if \
-                 every load's mean moved together (a bound).</p>\n<ul>\n{slopes}</ul>"
-            )?;
-        }
-        if !plateau.is_empty() {
-            writeln!(
-                h,
-                "<details open><summary>Plateau of K</summary>\n\
-                 <p>K<sub>PL</sub>(A*) in the limit A<sub>m</sub> → ∞ from the power-law fit \
-                 (α̂, A<sub>s</sub>) at the largest load up to W/W₀ = {max}, beside the model at \
-                 that load's cut-off A<sub>m</sub> \
-                 and the simulated K (ensemble mean ± 95 % band) there.</p>\n<table>\n\
-                 <tr><th>study</th><th>A*/λₛ²</th><th>W/W₀</th><th>α̂</th>\
-                 <th>K<sub>PL</sub> plateau</th><th>K<sub>PL</sub> at W</th><th>simulated K at W</th></tr>\n\
-                 {plateau}</table>\n</details>"
-            )?;
-        }
-        let mut audits = String::new();
-        audit_lines(store, fig, &mut audits)?;
-        if !audits.is_empty() {
-            writeln!(
-                h,
-                "<details><summary>Audit verdicts</summary>\n<table>\n{audits}</table>\n</details>"
-            )?;
-        }
+        seen.push(&d.key);
+        alpha_rows(store, &d.key, &d.studies.join(", "), &loads, &mut alphas)?;
+    }
+    if !alphas.is_empty() {
         writeln!(
             h,
-            "<details><summary>Drawn from</summary>\n<table>\n\
-             <tr><th>stage</th><th>key</th><th>studies</th></tr>\n\
-             <tr><td>figures</td><td><code>{}</code></td><td></td></tr>",
+            "<details><summary>Exponents α̂ at the loads drawn</summary>\n<table>\n\
+             <tr><th>study</th><th>W/W₀</th><th>plateau + power law (the paper's) α̂ [95 %]</th>\
+             <th>truncated power law α̂ [95 %]</th></tr>\n{alphas}</table>\n</details>"
+        )?;
+    }
+    let (mut plateau, mut slopes) = (String::new(), String::new());
+    for d in records
+        .iter()
+        .flat_map(|r| &r.drawn_from)
+        .filter(|d| d.stage == "analytic")
+    {
+        analytic_lines(
+            store,
+            &d.key,
+            &d.studies.join(", "),
+            &mut plateau,
+            &mut slopes,
+        )?;
+    }
+    let max = number(crate::stages::analytic::MILD_WEAR_MAX_LOAD);
+    if !slopes.is_empty() {
+        writeln!(
+            h,
+            "<p>Area–load slope: the small-load law A<sub>c</sub>/L² = κ W/W₀ \
+             (W₀ = E* h′<sub>rms</sub> L²) \
+             fitted to the ensemble means up to W/W₀ = {max}. The ± is the 95 % band if \
+             every load's mean moved together (a bound).</p>\n<ul>\n{slopes}</ul>"
+        )?;
+    }
+    if !plateau.is_empty() {
+        writeln!(
+            h,
+            "<details><summary>Plateau of K</summary>\n\
+             <p>K<sub>PL</sub>(A*) in the limit A<sub>m</sub> → ∞ from the power-law fit \
+             (α̂, A<sub>s</sub>) at the largest load up to W/W₀ = {max}, beside the model at \
+             that load's cut-off A<sub>m</sub> \
+             and the simulated K (ensemble mean ± 95 % band) there.</p>\n<table>\n\
+             <tr><th>study</th><th>A*/λₛ²</th><th>W/W₀</th><th>α̂</th>\
+             <th>K<sub>PL</sub> plateau</th><th>K<sub>PL</sub> at W</th><th>simulated K at W</th></tr>\n\
+             {plateau}</table>\n</details>"
+        )?;
+    }
+    let mut audits = String::new();
+    for fig in records {
+        audit_lines(store, fig, &mut audits)?;
+    }
+    if !audits.is_empty() {
+        writeln!(h, "<h3>Audit verdicts</h3>\n{audits}")?;
+    }
+    writeln!(
+        h,
+        "<details><summary>Drawn from</summary>\n<table>\n\
+         <tr><th>stage</th><th>key</th><th>studies</th></tr>"
+    )?;
+    for fig in records {
+        writeln!(
+            h,
+            "<tr><td>figures</td><td><code>{}</code></td><td></td></tr>",
             escape(&fig.key)
         )?;
         for d in &fig.drawn_from {
@@ -286,10 +680,9 @@ pub fn render(
                 escape(&d.studies.join(", "))
             )?;
         }
-        writeln!(h, "</table>\n</details>\n</section>")?;
     }
-    writeln!(h, "</body>\n</html>")?;
-    Ok(h)
+    writeln!(h, "</table>\n</details>\n</section>")?;
+    Ok(())
 }
 
 /// Write the page as `index.html` in `dir`, through a temporary file.
@@ -297,9 +690,9 @@ pub fn write(
     store: &Store,
     dir: &Path,
     provenance: &Provenance,
-    descriptions: &BTreeMap<String, String>,
+    context: &Context,
 ) -> anyhow::Result<()> {
-    let page = render(store, provenance, descriptions)?;
+    let page = render(store, provenance, context)?;
     crate::io::atomic::write_atomically(&dir.join("index.html"), |tmp| {
         Ok(std::fs::write(tmp, page)?)
     })

@@ -141,13 +141,9 @@ pub fn run(
         None
     };
     if let Some(provenance) = provenance {
-        let descriptions: std::collections::BTreeMap<String, String> = pipeline
-            .figures_of(&opts.profile)
-            .into_iter()
-            .map(|(name, decl)| (name.to_string(), decl.description.clone()))
-            .collect();
+        let context = super::report::Context::of(pipeline, origin, &opts.profile)?;
         let dir = gallery::dir(&opts.figures, &opts.profile);
-        super::report::write(store, &dir, &provenance, &descriptions)?;
+        super::report::write(store, &dir, &provenance, &context)?;
     }
     // The catalog describes every stored instance of the whole profile: a targeted run adds
     // rows, never drops the other studies'.
