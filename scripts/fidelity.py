@@ -1,0 +1,237 @@
+#!/usr/bin/env python3
+"""The numbers of docs/FIDELITY.md, measured from a store: one line per quantitative statement
+of the paper, with a 95 % interval where the store has one.
+
+    python3 scripts/fidelity.py DATA PROFILE [--json OUT]
+
+DATA is a store a `wearcoef run --profile PROFILE` filled (the default gallery's, or the paper
+campaign's); nothing is computed beyond reading its tables and manifests. Needs pandas and
+pyarrow (the client venv of `make test` has them). Statements whose studies the profile lacks
+are printed as "absent".
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+import pandas as pd
+
+A_STARS = [2.0, 8.0, 32.0, 128.0, 512.0]
+FIG3_LOADS = [0.005, 0.02, 0.06]
+
+
+class Store:
+    def __init__(self, data, profile):
+        self.data = data
+        path = os.path.join(data, profile, "index.parquet")
+        if not os.path.exists(path):
+            sys.exit(f"{path}: no catalog; run `wearcoef run --profile {profile} --data {data}` first")
+        self.index = pd.read_parquet(path)
+
+    def _path(self, p):
+        return p if os.path.isabs(p) else os.path.join(self.data, p)
+
+    def table(self, stage, study, file):
+        rows = self.index[
+            (self.index.stage == stage) & (self.index.studies == study) & (self.index.file == file)
+        ]
+        if rows.empty:
+            return None
+        return pd.read_parquet(self._path(rows.path.iloc[0]))
+
+    def audit(self, figure):
+        rows = self.index[(self.index.stage == "audits") & (self.index.name == figure)]
+        if rows.empty:
+            return None
+        manifest = os.path.join(os.path.dirname(self._path(rows.path.iloc[0])), "manifest.json")
+        with open(manifest) as f:
+            return json.load(f)["results"]
+
+
+def nearest(values, target):
+    values = np.asarray(sorted(set(values)))
+    return float(values[np.argmin(np.abs(np.log(values) - math.log(target)))])
+
+
+def fmt(x, digits=3):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "–"
+    if x == 0:
+        return "0"
+    if abs(x) < 1e-3 or abs(x) >= 1e4:
+        return f"{x:.{max(digits - 1, 1)}e}"
+    return f"{x:.{digits}g}"
+
+
+def alpha_rows(store, study, loads, out, key):
+    a = store.table("statistics", study, "alpha.parquet")
+    if a is None:
+        out[key] = "absent"
+        return
+    cells = []
+    for estimator, name in [
+        ("discrete_plateau_power_law_mle", "plateau + power law"),
+        ("discrete_truncated_mle", "truncated power law"),
+    ]:
+        parts = []
+        for t in loads:
+            w = nearest(a.w_over_w0, t)
+            r = a[(a.w_over_w0 == w) & (a.estimator == estimator)].iloc[0]
+            parts.append(f"{fmt(r.alpha)} [{fmt(r.ci95_low)}, {fmt(r.ci95_high)}] at {fmt(w, 2)}")
+        cells.append(f"{name}: " + "; ".join(parts))
+    out[key] = " | ".join(cells)
+
+
+def wear_rows(store, study, out):
+    wear = store.table("statistics", study, "wear.parquet")
+    if wear is None:
+        for k in ["K_transition", "K_levels", "K_after", "K_range", "Kup_at_max", "rate_slope"]:
+            out[k] = "absent"
+        return
+    loads = sorted(wear.w_over_w0.unique())
+    w_max = loads[-1]
+    transitions, growth, kup, slopes, levels = [], [], [], [], []
+    positive = []
+    for a_star in A_STARS:
+        rows = wear[wear.a_star_over_ls2 == a_star].sort_values("w_over_w0")
+        k = rows.k_archard_pooled.values
+        w = rows.w_over_w0.values
+        nz = np.nonzero(k > 0)[0]
+        if len(nz) == 0:
+            transitions.append(f"{fmt(a_star, 3)} λ_s²: none up to {fmt(w_max, 2)}")
+            continue
+        first = nz[0]
+        # The transition lies between the last load with K = 0 and the first with K > 0.
+        if first == 0:
+            transitions.append(f"{fmt(a_star, 3)} λ_s²: below {fmt(w[0], 2)}")
+        else:
+            transitions.append(f"{fmt(a_star, 3)} λ_s²: {fmt(w[first - 1], 2)}–{fmt(w[first], 2)}")
+        # Growth of K from the first load after the transition to the largest load.
+        growth.append(f"{fmt(a_star, 3)} λ_s²: ×{fmt(k[-1] / k[first], 2)}")
+        positive.extend(k[first:][k[first:] > 0])
+        last = rows.iloc[-1]
+        levels.append(
+            f"{fmt(a_star, 3)} λ_s²: {fmt(last.k_archard_pooled, 2)} "
+            f"(mean {fmt(last.k_archard_mean, 2)} ± {fmt(last.k_archard_ci95, 1)})"
+        )
+        kup.append(
+            f"{fmt(a_star, 3)} λ_s²: {fmt(last.k_upscaled_pooled)} "
+            f"(mean {fmt(last.k_upscaled_mean)} ± {fmt(last.k_upscaled_ci95, 2)})"
+        )
+        # Wear rate against load in log–log over the upper half of the sweep.
+        r = rows.wear_rate_over_l2_mean.values
+        upper = (w >= math.sqrt(w[first] * w_max)) & (r > 0)
+        if upper.sum() >= 3:
+            slope = np.polyfit(np.log(w[upper]), np.log(r[upper]), 1)[0]
+            slopes.append(f"{fmt(a_star, 3)} λ_s²: {slope:.2f}")
+    out["K_transition"] = "; ".join(transitions)
+    out["K_levels"] = "; ".join(levels) + f" at W/W0 = {fmt(w_max, 2)}"
+    out["K_after"] = "; ".join(growth) + f" (from the first load after the transition to W/W0 = {fmt(w_max, 2)})"
+    if positive:
+        out["K_range"] = f"{fmt(min(positive), 2)} to {fmt(max(positive), 2)} (pooled K > 0, A* = 2–512 λ_s², all loads)"
+    out["Kup_at_max"] = "; ".join(kup) + f" at W/W0 = {fmt(w_max, 2)}"
+    out["rate_slope"] = "; ".join(slopes) + " (d ln R / d ln W over the upper half of each post-transition range)"
+
+
+def regime(store, study, out, key):
+    loads = store.table("statistics", study, "loads.parquet")
+    if loads is None:
+        out[key] = "absent"
+        return
+    w = loads.w_over_w0.values
+    d = loads.dn_dac_per_ls2.values
+    n = loads.n_clusters_mean.values
+    peak = w[int(np.argmax(n))]
+    neg = w[d < 0]
+    sign = f"dN/dA_c < 0 from W/W0 = {fmt(neg[0], 2)}" if len(neg) else f"dN/dA_c > 0 at every load ({fmt(w[0], 2)}–{fmt(w[-1], 2)})"
+    out[key] = f"{sign}; N peaks at W/W0 = {fmt(peak, 2)}"
+
+
+def ks(a, b):
+    a, b = np.sort(a), np.sort(b)
+    x = np.concatenate([a, b])
+    return float(np.max(np.abs(np.searchsorted(a, x, "right") / len(a) - np.searchsorted(b, x, "right") / len(b))))
+
+
+def hurst(store, out):
+    c = {}
+    for study in ["fig3_h06", "fig3_h07", "fig3_ll128"]:
+        t = store.table("statistics", study, "ccdf.parquet")
+        if t is None:
+            out["hurst"] = "absent"
+            return
+        w = nearest(t.w_over_w0, 0.06)
+        c[study] = t[(t.w_over_w0 == w) & t.realization.isna()]
+    parts = []
+    for study, h in [("fig3_h06", "0.6"), ("fig3_h07", "0.7"), ("fig3_ll128", "0.8")]:
+        t = c[study]
+        at = lambda a: float(np.interp(a, t.area_over_ls2.values, t.ccdf.values, right=0.0))
+        parts.append(f"H = {h}: P(A > 10 λ_s²) = {fmt(at(10.0), 2)}, P(A > 100 λ_s²) = {fmt(at(100.0), 2)}")
+    a = store.table("statistics", "fig3_h06", "alpha.parquet")
+    b = store.table("statistics", "fig3_ll128", "alpha.parquet")
+    est = "discrete_plateau_power_law_mle"
+    ra = a[(a.estimator == est)].iloc[0]
+    rb = b[(b.estimator == est) & (b.w_over_w0 == nearest(b.w_over_w0, 0.06))].iloc[0]
+    parts.append(
+        f"plateau + power-law α̂: H = 0.6 {fmt(ra.alpha)} [{fmt(ra.ci95_low)}, {fmt(ra.ci95_high)}], "
+        f"H = 0.8 {fmt(rb.alpha)} [{fmt(rb.ci95_low)}, {fmt(rb.ci95_high)}]"
+    )
+    out["hurst"] = "; ".join(parts) + " (W/W0 = 0.06, equal boxes)"
+
+
+def settings(store, figure, out, key):
+    r = store.audit(figure)
+    if r is None:
+        out[key] = "absent"
+        return
+    parts = []
+    for s in r["settings"]:
+        by_load = ", ".join(f"{fmt(k, 2)} at {fmt(w, 2)}" for w, k in s["ks_by_load"])
+        parts.append(f"{s['setting']}: KS {by_load}")
+    out[key] = f"reference {r['reference']}: " + "; ".join(parts) + f"; the rule's choice: {fmt(r.get('smallest_converged_setting'))}"
+
+
+def area_load(store, out):
+    loads = store.table("statistics", "fig3_ll128", "loads.parquet")
+    if loads is None:
+        out["area_load"] = "absent"
+        return
+    w = loads.w_over_w0.values
+    ac = loads.area_fraction_mean.values
+    ratio = ac / w
+    slope = np.polyfit(np.log(w), np.log(ac), 1)[0]
+    out["area_load"] = (
+        f"A_c/(L² W/W0) = {fmt(ratio[0])} at {fmt(w[0], 2)}, {fmt(ratio[-1])} at {fmt(w[-1], 2)}; "
+        f"log–log slope {slope:.3f} (λ_l/λ_s = 128)"
+    )
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("data")
+    ap.add_argument("profile")
+    ap.add_argument("--json", help="also write the values to this file")
+    args = ap.parse_args()
+    store = Store(args.data, args.profile)
+    out = {}
+    alpha_rows(store, "fig3_ll128", FIG3_LOADS, out, "alpha128")
+    alpha_rows(store, "fig3_ll32", FIG3_LOADS, out, "alpha32")
+    alpha_rows(store, "fig3_ll8", FIG3_LOADS, out, "alpha8")
+    regime(store, "fig2", out, "regime8")
+    regime(store, "fig3_ll128", out, "regime128")
+    wear_rows(store, "fig3_ll128", out)
+    hurst(store, out)
+    area_load(store, out)
+    settings(store, "figB1", out, "b1")
+    settings(store, "figB2", out, "b2")
+    for k, v in out.items():
+        print(f"{k}: {v}")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(out, f, indent=1, ensure_ascii=False)
+
+
+if __name__ == "__main__":
+    main()
