@@ -110,7 +110,7 @@ failures = []
 
 # Columns of a figure's data file (src/figures/plot/mod.rs, DATA_COLUMNS).
 DATA_COLUMNS = ["panel", "series", "study", "w_over_w0", "a_star_over_ls2",
-                "x_quantity", "x", "y_quantity", "y"]
+                "x_quantity", "x", "y_quantity", "y", "y_ci95_low", "y_ci95_high"]
 
 
 def check(cond, message):
@@ -494,6 +494,11 @@ def main(data_dir, profile):
             check(list(df.columns) == DATA_COLUMNS, f"{r.path}: columns {list(df.columns)}")
             check(len(df) > 0 and (df["series"] != "").all(),
                   f"{r.path}: no data, or a row without its curve")
+            # A band is given whole (both edges) or not at all, its low edge below its high.
+            if list(df.columns) == DATA_COLUMNS:
+                lo, hi = (pd.to_numeric(df[c].replace("", np.nan)) for c in ("y_ci95_low", "y_ci95_high"))
+                check((lo.isna() == hi.isna()).all() and (lo[lo.notna()] <= hi[hi.notna()]).all(),
+                      f"{r.path}: a band with one edge, or its low edge above its high")
         elif r.file == "fig45_load_resolution.parquet":
             check_schema(r.path, LOAD_RESOLUTION)
             parquet_files += 1
@@ -524,12 +529,16 @@ def main(data_dir, profile):
             check((finest["ks_distance"] == 0).all(), f"{r.path}: finest setting not at 0")
             # fig128_convergence.parquet, or fig128_convergence_h<H>.parquet per Hurst
             # exponent when a profile holds several (the KS check matches studies by counts).
-            prefix = "c128_" if r.file.startswith("fig128_convergence") else {
+            # fig128_discretisation.parquet: fig3_ll128 against a finer c128_ study.
+            prefix = "c128_" if r.file.startswith(("fig128_convergence", "fig128_discretisation")) else {
                 "figB1_convergence.parquet": "b1_", "figB2_convergence.parquet": "b2_"}.get(r.file)
             if check(prefix is not None, f"{r.path}: an unknown convergence table"):
                 cl = rows("clusters", "clusters.parquet")
-                check_convergence_ks(r.path, cl[cl["study"].str.startswith(prefix)])
-            if r.file.startswith("fig128_convergence"):
+                own = cl["study"].str.startswith(prefix)
+                if r.file.startswith("fig128_discretisation"):
+                    own |= cl["study"] == "fig3_ll128"
+                check_convergence_ks(r.path, cl[own])
+            if r.file.startswith(("fig128_convergence", "fig128_discretisation")):
                 check_fig128_summary(r.path, df, manifest_of(r.path)["results"]["convergence"])
         elif ext == ".npy":
             a = np.load(r.path)
@@ -537,7 +546,7 @@ def main(data_dir, profile):
     expected = ["fig2a", "fig2b", "fig2c", "fig2d", "fig2e", "fig2f", "fig2_convergence",
                 "fig3", "fig4a", "fig4b", "fig5a", "fig5b", "fig6", "figB1", "figB2",
                 "figB1_convergence", "figB2_convergence", "fig128_convergence",
-                "fig45_load_resolution"]
+                "fig128_discretisation", "fig45_dn_dac", "fig45_load_resolution"]
     drawn = {os.path.splitext(f)[0] for f in rows("figures")["file"] if f.endswith(".png")}
     check(set(expected) <= drawn, f"missing figures: {sorted(set(expected) - drawn)}")
 
