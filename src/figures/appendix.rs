@@ -65,6 +65,32 @@ pub fn appendix(
             }
             plots.push(plot);
         }
+        // A grid with a free slot holds every box's ensemble mean at the largest load, the
+        // convergence the panels show one by one.
+        let (rows, cols) = super::plot::grid(plots.len(), 3);
+        if rows * cols > plots.len() {
+            let mut all = LinePlot::new(
+                "Fig. B.1: every box, largest load",
+                "A/λ_s^2",
+                "P(A > a), ensemble mean",
+                true,
+                YAxis::Log,
+            );
+            for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
+                if let Some(&(load_index, w)) = table.loads().last() {
+                    all.series.push(Series {
+                        study: Some(s.study.clone()),
+                        w_over_w0: Some(w),
+                        ..Series::line(
+                            format!("{}, W/W_0 = {w:.3}", s.label),
+                            table.curve(load_index, None, true),
+                            c,
+                        )
+                    });
+                }
+            }
+            plots.push(all);
+        }
     } else {
         let loads = tables.first().map(CcdfTable::loads).unwrap_or_default();
         for &(load_index, w) in &loads {

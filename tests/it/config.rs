@@ -192,6 +192,7 @@ fn the_shipped_pipeline_is_valid_for_every_profile() {
         "convergence128_h06",
         "convergence128_low",
         "load_resolution128",
+        "realizations8",
     ] {
         let plans = p.plan(profile, "pipeline.yaml").unwrap();
         assert!(!plans.is_empty(), "{profile} has studies");

@@ -68,7 +68,7 @@ fn committed_galleries_match_what_their_profiles_would_draw() {
         for (file, section) in [
             ("fig2e.png", "Area–load slope"),
             ("fig4b.png", "Plateau of K"),
-            ("fig3.png", "Exponents α̂ behind it"),
+            ("fig3.png", "Exponents α̂ at the loads drawn"),
         ] {
             if listed.contains(file) {
                 assert!(

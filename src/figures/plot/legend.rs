@@ -3,7 +3,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::style::{draw_marker, draw_path};
+use super::style::{draw_marker, draw_path, BAND_OPACITY};
 use super::text::{self, Align, TextLook};
 use super::{plot_err, DrawResult, Series, LEGEND_PX};
 
@@ -82,7 +82,7 @@ impl LegendBox {
                 let half = (0.35 * self.text_px).round() as i32;
                 area.draw(&Rectangle::new(
                     [(x, yc - half), (x + self.sample, yc + half)],
-                    color.mix(super::line::BAND_OPACITY).filled(),
+                    color.mix(BAND_OPACITY).filled(),
                 ))
                 .map_err(plot_err)?;
             }

@@ -9,16 +9,13 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::legend::{covered_pixels, free_spot, Fractions, LegendBox, Rect};
-use super::style::{draw_marker, draw_path, Dash};
+use super::style::{draw_marker, draw_path, Dash, BAND_OPACITY};
 use super::text::{self, Align, TextLook};
 use super::ticks::{log_key_points, padded, snap_zero, LinLogCoord, Ticks};
 use super::{
     finite_on, plot_err, write_scene, DrawResult, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX,
     DATA_COLUMNS, LEGEND_PX, SIZE_PX, TICK_PX, TITLE_PX,
 };
-
-/// Opacity of a 95 % band's fill.
-pub(super) const BAND_OPACITY: f64 = 0.2;
 
 impl LinePlot {
     /// Finite points (positive on logarithmic axes) of every series, as drawn.

@@ -93,6 +93,9 @@ pub(super) fn draw_path<DB: DrawingBackend>(
         .map_err(plot_err)
 }
 
+/// Opacity of a 95 % band's fill (curves and legend samples).
+pub(super) const BAND_OPACITY: f64 = 0.2;
+
 /// Okabe & Ito's colour-blind-safe palette (yellow last: faint on white).
 pub(super) const PALETTE: [RGBColor; 8] = [
     RGBColor(0, 114, 178),
