@@ -30,8 +30,7 @@
 use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
-use super::extension::OffBlock;
-use super::precond::{free, Level};
+use super::level::{free, Level, OffBlock};
 use crate::contact::elastic::ElasticOperator;
 use crate::spectral::{Fft2, Fft2Scratch};
 

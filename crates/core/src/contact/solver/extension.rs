@@ -33,7 +33,7 @@
 use rayon::prelude::*;
 
 use super::deflation::{Bilinear, Deflation};
-use super::precond::Level;
+use super::level::{Level, OffBlock};
 use crate::contact::elastic::ElasticOperator;
 
 /// Settings of the preconditioner's free-set extension.
@@ -187,17 +187,6 @@ impl Extension {
         }
         Ok(())
     }
-}
-
-/// Per row block of the FFT: the sums of `y / D` off F over the cells its rows touch.
-pub(super) struct OffBlock {
-    first_row: usize,
-    first_cell_row: usize,
-    sums: Vec<f64>,
-    /// With the deflation: the restriction of the output on F to the model rows from
-    /// `restrict_low` (unwrapped) that the block's rows reach.
-    pub(super) restrict_low: i64,
-    pub(super) restrict: Vec<f64>,
 }
 
 /// One Gaussian term of the extension on the cells: its smoothing, weight and the smoothed

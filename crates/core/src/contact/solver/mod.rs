@@ -101,10 +101,13 @@
 mod deflation;
 mod extension;
 mod history;
+mod level;
 mod passes;
 mod precond;
 mod report;
 mod rows;
+#[cfg(test)]
+mod test_support;
 #[cfg(test)]
 mod tests;
 
@@ -112,7 +115,7 @@ use rayon::prelude::*;
 
 use super::elastic::{ElasticOperator, OperatorWorkspace};
 pub use extension::Extension;
-use precond::Level;
+use level::Level;
 pub use report::{SolveReport, Status};
 use rows::{GradientStats, UpdateAcc, LANES};
 

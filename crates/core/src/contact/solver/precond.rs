@@ -7,6 +7,7 @@
 use rayon::iter::Either;
 use rayon::prelude::*;
 
+use super::level::{free, Level};
 use super::rows::{avx2_dispatch, lanes, padded, LANES};
 use super::Solver;
 
@@ -367,24 +368,6 @@ avx2_dispatch! {
 /// non-finite state ends the solve as `Stalled` before a direction is made from it).
 const OFF_FREE_SET: f32 = f32::NAN;
 
-/// The level of the gradient `g = w − mean` on the free set (the mean of `w = u − h` over
-/// the contact set) and the free set's entry threshold `entry ≤ mean`: a node off the
-/// contact set joins F where `w < entry`. `entry = mean − margin`, with the margin of
-/// [`super::Extension::entry_margin`] on large boxes and 0 elsewhere.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Level {
-    pub mean: f64,
-    pub entry: f64,
-}
-
-/// Membership of the free set `F = {p > 0} ∪ {p = 0, w < entry}`: the contact set and the
-/// nodes that interpenetrate (by more than the margin), whose pressure the next step may
-/// raise.
-#[inline(always)]
-pub(super) fn free(p: f64, w: f64, level: Level) -> bool {
-    p > 0.0 || w < level.entry
-}
-
 /// The sums of [`Solver::precondition`] over the free set `F`.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct PreconditionSums {
@@ -424,7 +407,7 @@ impl PreconditionSums {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::support::{require_vector_path, sequence};
+    use super::super::test_support::{require_vector_path, sequence};
     use super::*;
 
     /// The AVX2 output pass (where the processor has it) gives the scalar code's bits: `z`

@@ -616,7 +616,7 @@ unsafe fn update_row_avx2(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::support::{require_vector_path, sequence};
+    use super::super::test_support::{require_vector_path, sequence};
     use super::*;
 
     /// A row exercising every branch of the update: nodes in contact that stay, leave

@@ -103,30 +103,6 @@ fn overflowing_change_lists_are_detected() {
 }
 
 /// Helpers of the tests that compare the intrinsics passes with their scalar code.
-pub(super) mod support {
-    /// A reproducible pseudo-random sequence in [−1, 1) (a 64-bit LCG).
-    pub fn sequence(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
-    }
-
-    /// Fail, rather than compare the scalar code with itself, when CI runs on an x86-64
-    /// processor without AVX2 (the dispatch would never take the intrinsics path).
-    pub fn require_vector_path() {
-        #[cfg(target_arch = "x86_64")]
-        if std::env::var_os("CI").is_some() {
-            assert!(
-                std::is_x86_feature_detected!("avx2"),
-                "CI is set but this processor has no AVX2: the intrinsics are not tested"
-            );
-        }
-    }
-}
 
 /// The load offset `c` of [`Solver::load_offset`] (Newton's method from above) is the one a
 /// sort gives: with the values in decreasing order `x_(1) ≥ x_(2) ≥ …`, the largest `k` for
@@ -138,7 +114,7 @@ fn load_offset_matches_a_sorted_projection() {
     let n = 32;
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let heights = vec![0.0; n * n];
-    let mut next = support::sequence(11);
+    let mut next = super::test_support::sequence(11);
     for (case, keep) in [0.999, 0.9, 0.5, 0.1, 1e-3].into_iter().enumerate() {
         let mut solver = Solver::new(&op, &heights).unwrap();
         for p in solver.pressure.iter_mut() {
@@ -204,7 +180,7 @@ fn preconditioned(
     let count = contact.iter().filter(|&&c| c).count();
     coarse.settle(Some((0, count as f64)));
     solver.coarse = Some(coarse);
-    let sums = solver.precondition(super::precond::Level {
+    let sums = solver.precondition(super::level::Level {
         mean: 0.0,
         entry: 0.0,
     });
@@ -228,7 +204,7 @@ fn deflated_preconditioner_is_symmetric() {
     let inside = contact.iter().filter(|&&c| c).count() as f64;
     // Random values on the contact set, centred there.
     let field = |seed: u64| -> Vec<f64> {
-        let mut next = support::sequence(seed);
+        let mut next = super::test_support::sequence(seed);
         let mut x: Vec<f64> = contact
             .iter()
             .map(|&c| {

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::super::precond::{free, Level};
+use super::super::level::{free, Level};
 use super::super::rows::avx2_dispatch;
 
 avx2_dispatch! {

@@ -74,7 +74,7 @@ fn far_term_only_on_boxes_that_hold_it() {
 
 /// `len` values of the solver tests' reproducible sequence in [−1, 1).
 fn random(len: usize, seed: u64) -> Vec<f64> {
-    let mut next = super::super::tests::support::sequence(seed);
+    let mut next = super::super::test_support::sequence(seed);
     (0..len).map(|_| next()).collect()
 }
 

@@ -1,0 +1,33 @@
+//! What the preconditioner's layers share: the level of the gradient and the free set it
+//! defines ([`Level`], [`free`]), and the per-block sums off the free set that the extension
+//! fills and the deflation restricts ([`OffBlock`]). The layers import this module and not
+//! each other's internals.
+
+/// The level of the gradient `g = w − mean` on the free set (the mean of `w = u − h` over
+/// the contact set) and the free set's entry threshold `entry ≤ mean`: a node off the
+/// contact set joins F where `w < entry`. `entry = mean − margin`, with the margin of
+/// [`super::Extension::entry_margin`] on large boxes and 0 elsewhere.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Level {
+    pub mean: f64,
+    pub entry: f64,
+}
+
+/// Membership of the free set `F = {p > 0} ∪ {p = 0, w < entry}`: the contact set and the
+/// nodes that interpenetrate (by more than the margin), whose pressure the next step may
+/// raise.
+#[inline(always)]
+pub(super) fn free(p: f64, w: f64, level: Level) -> bool {
+    p > 0.0 || w < level.entry
+}
+
+/// Per row block of the FFT: the sums of `y / D` off F over the cells its rows touch.
+pub(super) struct OffBlock {
+    pub(super) first_row: usize,
+    pub(super) first_cell_row: usize,
+    pub(super) sums: Vec<f64>,
+    /// With the deflation: the restriction of the output on F to the model rows from
+    /// `restrict_low` (unwrapped) that the block's rows reach.
+    pub(super) restrict_low: i64,
+    pub(super) restrict: Vec<f64>,
+}
