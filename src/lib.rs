@@ -6,11 +6,14 @@
 //!
 //! The physics and statistics live in the `wearcoef-core` crate (re-exported here under the
 //! same module names); this crate is the application around it:
-//! - [`config`]: `pipeline.yaml` (studies, profiles, figures).
-//! - [`stages`]: the stage contract, the registry and one module per stage.
-//! - [`pipeline`]: content keys, artifact store, plan and cost model, executor, catalog.
-//! - [`figures`]: drawing the paper's figures from stored tables.
-//! - [`io`]: `.npy` fields.
+//! In layers, each importing only its own and lower ones (checked by `tests/it/layout.rs`):
+//! 1. [`io`] (`.npy` fields, atomic writes), [`machine`], [`format`] (numbers for readers);
+//! 2. [`store`]: content keys, the artifact store, Parquet tables, a stage's inputs;
+//!    [`config`]: `pipeline.yaml` (studies, profiles, figures);
+//! 3. [`stages`]: the stage contract and one module per stage; [`figures`]: drawing the
+//!    paper's figures from stored tables (the figures stage's work);
+//! 4. [`pipeline`]: the registry, plan and cost model, executor, catalog, gallery, report,
+//!    Slurm.
 
 pub use wearcoef_core::{
     analytic, clusters, contact, grid, pages, powerlaw, spectral, statistics, surface,
@@ -28,7 +31,9 @@ macro_rules! note {
 
 pub mod config;
 pub mod figures;
+pub mod format;
 pub mod io;
 pub mod machine;
 pub mod pipeline;
 pub mod stages;
+pub mod store;

@@ -11,11 +11,11 @@ use serde_json::json;
 
 use wearcoef::config::Pipeline;
 use wearcoef::pipeline::cost::{machine_memory_bytes, CostModel};
-use wearcoef::pipeline::hash::instance_key;
 use wearcoef::pipeline::plan::{Instance, Plan};
 use wearcoef::pipeline::runner;
-use wearcoef::pipeline::store::Store;
 use wearcoef::pipeline::UsageError;
+use wearcoef::store::hash::instance_key;
+use wearcoef::store::Store;
 
 use super::{load, StoreArgs};
 

@@ -9,7 +9,7 @@ use serde_json::json;
 use super::{load, InputError, StoreArgs};
 use wearcoef::pipeline::runner::{self, RunOptions};
 use wearcoef::pipeline::slurm;
-use wearcoef::pipeline::store::Store;
+use wearcoef::store::Store;
 
 #[derive(clap::Args)]
 pub struct RunArgs {
@@ -352,7 +352,7 @@ pub fn clean(args: CleanArgs) -> anyhow::Result<ExitCode> {
         )?;
         return Ok(ExitCode::SUCCESS);
     }
-    let contents = store.contents().map_err(|why| {
+    let contents = store.contents(&wearcoef::pipeline::registry::names()).map_err(|why| {
         InputError(format!(
             "--data {}: {why}; clean removes only a store, so nothing was removed (remove other files yourself)",
             data.display()
@@ -455,7 +455,7 @@ pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
                     std::path::absolute(data.root())?.display().to_string(),
                 ),
             ];
-            wearcoef::pipeline::table::write_with_metadata(&path, df, kv)?;
+            wearcoef::store::table::write_with_metadata(&path, df, kv)?;
         }
         (CatalogFormat::Parquet, None) => unreachable!("checked above"),
     }

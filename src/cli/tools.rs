@@ -533,8 +533,8 @@ pub struct FitArgs {
 /// α of a discrete power law truncated at the largest area, by maximum likelihood with
 /// x_min chosen by the KS criterion (the statistics stage's `discrete_truncated_mle`).
 pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
-    use wearcoef::pipeline::table;
     use wearcoef::powerlaw;
+    use wearcoef::store::table;
     let FitArgs {
         areas,
         column,

@@ -2,10 +2,10 @@
 //! varies) and their convergence audit.
 
 use super::plot::{Dash, Layout, LinePlot, Marker, Panels, Series, YAxis};
-use super::StudyRef;
 use super::{tolerance_line, CcdfTable, Drawn};
-use crate::pipeline::inputs::Inputs;
 use crate::stages::audits::{ConvergenceRow, ConvergenceTable, CONVERGENCE_KS_TOLERANCE, TABLE};
+use crate::stages::figures::StudyRef;
+use crate::store::inputs::Inputs;
 
 /// Figs. B.1 and B.2: the CCDF of cluster areas per setting. B.1 (one panel per setting):
 /// every realization in grey and the ensemble mean in red, per load; B.2 (one panel per

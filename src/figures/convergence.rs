@@ -4,10 +4,10 @@
 
 use super::appendix::push_convergence_curves;
 use super::plot::{Layout, LinePlot, Marker, Panels, Series, YAxis};
-use super::StudyRef;
 use super::{tolerance_line, CcdfTable, Drawn};
-use crate::pipeline::inputs::Inputs;
 use crate::stages::audits::{ConvergenceTable, CONVERGENCE_KS_TOLERANCE, TABLE};
+use crate::stages::figures::StudyRef;
+use crate::store::inputs::Inputs;
 
 /// The λ_l/λ_s = 128 convergence figure: KS distance and exponent difference of each
 /// setting's pooled cluster areas to the reference's (the last setting, the sizes the

@@ -6,11 +6,11 @@ use super::plot::{
 };
 use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label, Connectivity};
-use crate::pipeline::inputs::Inputs;
-use crate::pipeline::table::{f64_column, u32_column};
 use crate::stages::analytic::AreaLoadSlopeRecord;
 use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
 use crate::stages::contact::contact_file;
+use crate::store::inputs::Inputs;
+use crate::store::table::{f64_column, u32_column};
 
 /// Fig. 2e (A_c and the largest cluster, one panel each, with their 95 % bands) and 2f
 /// (dN/dA_c) against W/W0; the loads of the contact maps (Fig. 2b–d) marked by dashed lines
@@ -221,7 +221,7 @@ fn fig2_convergence(inputs: &Inputs) -> anyhow::Result<Vec<(String, Drawn)>> {
             Drawn::Result(audit.results.clone()),
         )]);
     };
-    let table = crate::pipeline::table::read(&path)?;
+    let table = crate::store::table::read(&path)?;
     let realizations: Vec<f64> = u32_column(&table, "realizations")?
         .into_iter()
         .map(|r| r.unwrap_or(0) as f64)

@@ -4,10 +4,10 @@
 use polars::prelude::*;
 
 use super::plot::{Dash, Fractions, Layout, LinePlot, Marker, Panels, Series, YAxis};
-use super::StudyRef;
 use super::{pick_loads, rows_at, CcdfTable, Drawn};
-use crate::pipeline::inputs::Inputs;
-use crate::pipeline::table::{f64_column, loads_of, str_column, u64_column};
+use crate::stages::figures::StudyRef;
+use crate::store::inputs::Inputs;
+use crate::store::table::{f64_column, loads_of, str_column, u64_column};
 
 /// Tints of the loads of one family, lightest for the smallest load.
 const LOAD_TINTS: [f64; 3] = [0.6, 0.3, 0.0];

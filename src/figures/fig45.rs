@@ -5,9 +5,9 @@ use polars::prelude::*;
 
 use super::plot::{Dash, LinePlot, Marker, Series, YAxis};
 use super::{tolerance_line, Drawn};
-use crate::pipeline::inputs::Inputs;
-use crate::pipeline::table::{bool_column, f64_column, str_column};
 use crate::stages::audits::{FIG45_A_STAR, FIG45_CURVES, LOAD_RESOLUTION_TOLERANCE, TABLE};
+use crate::store::inputs::Inputs;
+use crate::store::table::{bool_column, f64_column, str_column};
 
 /// Fig. 6: K_PL and 𝒦_PL against A_m/A_s for α = 1.5 and several A*/A_s.
 ///

@@ -6,11 +6,10 @@
 use std::path::Path;
 
 use polars::prelude::*;
-use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use crate::pipeline::inputs::Inputs;
-use crate::pipeline::table::{f64_column, u32_column};
+use crate::store::inputs::Inputs;
+use crate::store::table::{f64_column, u32_column};
 
 pub mod appendix;
 pub mod convergence;
@@ -20,19 +19,6 @@ pub mod fig45;
 pub mod plot;
 
 use plot::{LinePlot, Panels, RasterPlot, Series};
-
-/// One study as a figure shows it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StudyRef {
-    pub study: String,
-    /// Legend text, e.g. `λ_l/λ_s = 128`.
-    pub label: String,
-    /// The value the figure varies (λ_l/λ_s, H, L/λ_l, λ_s/Δl or the grid side n).
-    pub value: f64,
-    /// λ_s in grid spacings (areas per λ_s²).
-    pub lambda_s_px: f64,
-}
 
 /// The loads of a sweep nearest to `targets` (deduplicated, increasing).
 pub fn pick_loads(loads: &[(u32, f64)], targets: &[f64]) -> Vec<(u32, f64)> {

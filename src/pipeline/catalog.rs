@@ -23,9 +23,9 @@ use polars::prelude::*;
 use serde_json::Value;
 
 use super::plan::Instance;
-use super::store::Store;
-use super::table;
 use crate::config::StudyPlan;
+use crate::store::table;
+use crate::store::Store;
 
 /// The columns every catalog table starts with, for one instance.
 #[derive(Debug, Clone)]
@@ -412,8 +412,8 @@ pub fn write_csv_to<W: std::io::Write>(
 /// Check every catalog under the store root (`D/<profile>/index.parquet`) against the store:
 /// each row's file exists at its path, belongs to the entry its key names and has the size
 /// that entry's manifest records. Returns the number of rows checked and the problems.
-pub fn verify(store: &Store) -> anyhow::Result<(usize, Vec<super::store::EntryProblem>)> {
-    use super::store::EntryProblem;
+pub fn verify(store: &Store) -> anyhow::Result<(usize, Vec<crate::store::EntryProblem>)> {
+    use crate::store::EntryProblem;
     let mut checked = 0;
     let mut problems = Vec::new();
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(store.root())?

@@ -26,7 +26,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::store::Store;
+use crate::store::Store;
 
 /// What one instance is expected to cost.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -337,7 +337,7 @@ pub use crate::machine::memory_bytes as machine_memory_bytes;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::store::{Manifest, Program};
+    use crate::store::{Manifest, Program};
     use serde_json::json;
 
     fn put(store: &Store, stage: &str, key: &str, params: Value, inputs: &[&str], results: Value) {

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::plan::Instance;
-use super::store::Store;
+use crate::store::Store;
 
 /// The record's file name.
 pub const PROVENANCE: &str = "provenance.json";

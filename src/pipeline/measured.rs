@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::plan::Instance;
-use super::store::Store;
+use crate::store::Store;
 
 /// One stage's estimate and measurement, over the instances measured.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

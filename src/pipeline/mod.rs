@@ -8,8 +8,6 @@ pub mod campaign;
 pub mod catalog;
 pub mod cost;
 pub mod gallery;
-pub mod hash;
-pub mod inputs;
 pub mod measured;
 pub mod plan;
 pub mod registry;
@@ -17,8 +15,6 @@ pub mod report;
 pub mod runner;
 pub mod slurm;
 pub mod status;
-pub mod store;
-pub mod table;
 
 /// A usage error (an unknown target, a plan that cannot run here): the command exits with
 /// status 2.

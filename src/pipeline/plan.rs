@@ -12,17 +12,17 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::cost::Estimate;
-use super::store::Store;
 use crate::config::{FigureDecl, FigureKind, Pipeline, StudyPlan};
-use crate::figures::StudyRef;
 use crate::stages::analytic::{Analytic, AnalyticJob};
 use crate::stages::audits::{AuditJob, Audits, Setting};
 use crate::stages::clusters::{Clusters, ClustersJob};
 use crate::stages::contact::{Contact, ContactJob};
+use crate::stages::figures::StudyRef;
 use crate::stages::figures::{FigureJob, Figures};
 use crate::stages::statistics::{Statistics, StatisticsJob, A_STAR_OVER_LS2};
 use crate::stages::surface::Surface;
 use crate::stages::{keyed, InputRef, Stage};
+use crate::store::Store;
 
 /// One stage instance of a plan.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -144,6 +144,18 @@ impl Plan {
         profile: &str,
         targets: &[String],
     ) -> anyhow::Result<Self> {
+        Self::build_whole(pipeline, origin, profile)?.targeted(pipeline, origin, targets)
+    }
+
+    /// The part of this (whole) plan that `targets` ask for (stage, study or figure names,
+    /// each checked against the profile) with what they need; all of it for no target.
+    pub fn targeted(
+        &self,
+        pipeline: &Pipeline,
+        origin: &str,
+        targets: &[String],
+    ) -> anyhow::Result<Self> {
+        let profile = self.profile.as_str();
         let plans = pipeline.plan(profile, origin)?;
         let figures = pipeline.figures_of(profile);
         for t in targets {
@@ -160,6 +172,21 @@ impl Plan {
                 .into());
             }
         }
+        let mut instances = self.instances.clone();
+        if !targets.is_empty() {
+            instances = select(instances, targets);
+        }
+        instances.sort_by_key(|i| i.level);
+        Ok(Self {
+            profile: profile.to_string(),
+            instances,
+        })
+    }
+
+    /// Every instance of the profile: its studies' and its declared figures'.
+    fn build_whole(pipeline: &Pipeline, origin: &str, profile: &str) -> anyhow::Result<Self> {
+        let plans = pipeline.plan(profile, origin)?;
+        let figures = pipeline.figures_of(profile);
         let mut b = Builder::default();
         let mut keys: Vec<StudyKeys> = Vec::new();
         for plan in &plans {
@@ -169,9 +196,6 @@ impl Plan {
             figure_instances(&mut b, name, decl, profile, &keys)?;
         }
         let mut instances = b.out;
-        if !targets.is_empty() {
-            instances = select(instances, targets);
-        }
         instances.sort_by_key(|i| i.level);
         Ok(Self {
             profile: profile.to_string(),
@@ -512,11 +536,7 @@ fn convergence_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<(
     // Two studies with the same sizes would share a label: tell them apart by name.
     for i in 0..refs.len() {
         if refs.iter().filter(|r| r.label == refs[i].label).count() > 1 {
-            refs[i].label = format!(
-                "{} [{}]",
-                refs[i].label,
-                crate::figures::plot::text::escape(&refs[i].study)
-            );
+            refs[i].label = refs[i].named();
         }
     }
     let hurst = studies[0].plan.surface.hurst;

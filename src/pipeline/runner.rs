@@ -13,9 +13,9 @@ use super::catalog::Catalog;
 use super::cost::{machine_memory_bytes, CostModel};
 use super::gallery;
 use super::plan::{Instance, Plan};
-use super::store::{CommitOutcome, Failure, Manifest, Program, Store};
 use crate::config::Pipeline;
 use crate::stages::Inputs;
+use crate::store::{CommitOutcome, Failure, Manifest, Program, Store};
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -73,7 +73,9 @@ pub fn run(
     opts: &RunOptions,
 ) -> anyhow::Result<RunSummary> {
     let start = Instant::now();
-    let mut plan = Plan::build(pipeline, origin, &opts.profile, &opts.targets)?;
+    // The whole plan, built once: the targets' part runs, the whole is catalogued.
+    let whole = Plan::build(pipeline, origin, &opts.profile, &[])?;
+    let mut plan = whole.targeted(pipeline, origin, &opts.targets)?;
     if plan.instances.is_empty() {
         return Err(crate::pipeline::UsageError(format!(
             "profile {p} builds nothing: no study has an entry for it (studies.<name>.profiles.{p}) and no figure lists it; add one, or run another profile",
@@ -147,12 +149,11 @@ pub fn run(
     }
     // The catalog describes every stored instance of the whole profile: a targeted run adds
     // rows, never drops the other studies'.
-    let whole = if opts.targets.is_empty() {
-        None
+    let listed = if opts.targets.is_empty() {
+        &plan.instances
     } else {
-        Some(Plan::build(pipeline, origin, &opts.profile, &[])?)
+        &whole.instances
     };
-    let listed = whole.as_ref().map_or(&plan.instances, |p| &p.instances);
     let studies = pipeline.plan(&opts.profile, origin)?;
     Catalog::collect(store, &opts.profile, listed, &studies)?.write(&catalog_dir)?;
     // Failures end the run with exit 1, after the catalog lists them.
@@ -479,7 +480,7 @@ fn build(
         )
     })?;
     let keys: Vec<String> = inst.inputs.iter().map(|r| r.key.clone()).collect();
-    let key = super::hash::instance_key(stage.name(), stage.version(), &inst.params, &keys);
+    let key = crate::store::hash::instance_key(stage.name(), stage.version(), &inst.params, &keys);
     anyhow::ensure!(
         key == inst.key,
         "the plan's {} instance {} does not match its parameters (their key is {key}): the plan was edited or made by another version; make it anew with `wearcoef plan`",
@@ -543,9 +544,9 @@ fn build(
             return Err(anyhow::Error::new(ComputeFailed(message)));
         }
     };
-    super::table::stamp(
+    crate::store::table::stamp(
         entry.path(),
-        &super::table::TableOrigin {
+        &crate::store::table::TableOrigin {
             stage: &inst.stage,
             key: &inst.key,
             params: &inst.params,

@@ -9,8 +9,8 @@ use serde_json::Value;
 use super::cost::CostModel;
 use super::plan::{Instance, Plan};
 use super::runner::{forced_keys, RunOptions};
-use super::store::Store;
 use crate::config::Pipeline;
+use crate::store::Store;
 
 /// Presence of every instance of a profile, per stage and study.
 #[derive(Debug, Clone, Serialize)]
@@ -241,16 +241,16 @@ fn previous_instances(store: &Store, profile: &str) -> Vec<(Slot, String)> {
             .root()
             .join(profile)
             .join(format!("index_{stage}.parquet"));
-        let Ok(df) = super::table::read(&path) else {
+        let Ok(df) = crate::store::table::read(&path) else {
             continue;
         };
         let (Ok(keys), Ok(studies)) = (
-            super::table::str_column(&df, "key"),
-            super::table::str_column(&df, "studies"),
+            crate::store::table::str_column(&df, "key"),
+            crate::store::table::str_column(&df, "studies"),
         ) else {
             continue;
         };
-        let realizations = super::table::u32_column(&df, "realization").ok();
+        let realizations = crate::store::table::u32_column(&df, "realization").ok();
         let names = df.column("name").ok().and_then(|c| c.str().ok().cloned());
         for i in 0..df.height() {
             let slot = (

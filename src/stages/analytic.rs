@@ -11,9 +11,9 @@ use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
 use crate::analytic::PlateauPowerLaw;
-use crate::pipeline::table::{col, f64_column, str_column, u32_column, write};
 use crate::powerlaw::Estimator;
 use crate::statistics as stats;
+use crate::store::table::{col, f64_column, str_column, u32_column, write};
 
 pub struct Analytic;
 
@@ -127,7 +127,7 @@ fn fitted_model(
     dir: &Path,
 ) -> anyhow::Result<Value> {
     let path = inputs.file(0, "statistics", "alpha.parquet")?;
-    let df = crate::pipeline::table::read(&path)?;
+    let df = crate::store::table::read(&path)?;
     let ls2 = lambda_s_px * lambda_s_px;
     let est = df.column("estimator")?.str()?.clone();
     let li = df.column("load_index")?.u32()?.clone();

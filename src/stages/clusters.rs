@@ -11,7 +11,7 @@ use serde_json::{json, Value};
 use super::contact::contact_file;
 use super::{Inputs, Stage};
 use crate::clusters::{self, Connectivity};
-use crate::pipeline::table::{col, load_columns, write};
+use crate::store::table::{col, load_columns, write};
 
 pub struct Clusters;
 

@@ -10,7 +10,7 @@ use serde_json::{json, Value};
 use super::{Inputs, Stage};
 use crate::contact::solver::SolverConfig;
 use crate::contact::sweep::{pack_contact, sweep_heights, LoadResult};
-use crate::pipeline::table::{col, load_columns, write};
+use crate::store::table::{col, load_columns, write};
 
 pub struct Contact;
 

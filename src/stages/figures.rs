@@ -8,7 +8,32 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::{Inputs, Stage};
-use crate::figures::{self as draw, StudyRef};
+use crate::figures::{self as draw};
+
+/// One study as a figure shows it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyRef {
+    pub study: String,
+    /// Legend text, e.g. `λ_l/λ_s = 128`.
+    pub label: String,
+    /// The value the figure varies (λ_l/λ_s, H, L/λ_l, λ_s/Δl or the grid side n).
+    pub value: f64,
+    /// λ_s in grid spacings (areas per λ_s²).
+    pub lambda_s_px: f64,
+}
+
+impl StudyRef {
+    /// `label` with the study's name appended in brackets (escaped for label markup), to
+    /// tell apart two studies that would share a label.
+    pub fn named(&self) -> String {
+        format!(
+            "{} [{}]",
+            self.label,
+            crate::figures::plot::text::escape(&self.study)
+        )
+    }
+}
 
 pub struct Figures;
 

@@ -2,7 +2,7 @@
 //!
 //! A stage is a pure function from a serialisable job and the stored outputs of its inputs
 //! to files in a fresh directory. Its key is the SHA-256 of canonical JSON of
-//! `{salt, stage, version, params, inputs}` ([`crate::pipeline::hash::instance_key`]), where
+//! `{salt, stage, version, params, inputs}` ([`crate::store::hash::instance_key`]), where
 //! `params` is the job serialised: a parameter cannot change an output without being in the
 //! key, and nothing but the job's own fields is. Input keys are not part of the job; the
 //! plan lists them beside it (in the order the stage reads them), and they enter the key
@@ -19,8 +19,8 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::pipeline::hash::instance_key;
-pub use crate::pipeline::inputs::{InputRef, Inputs};
+use crate::store::hash::instance_key;
+pub use crate::store::inputs::{InputRef, Inputs};
 
 pub mod analytic;
 pub mod audits;

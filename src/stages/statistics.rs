@@ -11,9 +11,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
-use crate::pipeline::table::{col, load_columns, write};
 use crate::powerlaw::{self, Estimator};
 use crate::statistics as stats;
+use crate::store::table::{col, load_columns, write};
 
 pub struct Statistics;
 
@@ -108,7 +108,7 @@ fn read_sample(job: &StatisticsJob, inputs: &Inputs) -> anyhow::Result<Sample> {
     };
     for r in 0..realizations {
         let path = inputs.file(r, "clusters", "clusters.parquet")?;
-        let df = crate::pipeline::table::read(&path)?;
+        let df = crate::store::table::read(&path)?;
         let li = df.column("load_index")?.u32()?.clone();
         let area = df.column("area_px")?.u64()?.clone();
         let perc = df.column("percolating")?.bool()?.clone();

@@ -259,3 +259,57 @@ fn the_circle_scan_finds_a_small_circle() {
     write("ring/c.rs", "pub struct C;\n");
     assert!(import_circles(src, &[]).0.is_empty());
 }
+
+/// The application's layers (src/lib.rs): a module imports its own layer and lower ones only,
+/// and the plan and the report do not import the drawing code.
+#[test]
+fn the_application_modules_import_only_their_layer_and_lower_ones() {
+    let layer = |top: &str| -> Option<u8> {
+        Some(match top {
+            // The core crate's modules, re-exported.
+            "analytic" | "clusters" | "contact" | "grid" | "pages" | "powerlaw" | "spectral"
+            | "statistics" | "surface" => 0,
+            // `note!`, the crate's stderr macro, belongs to the lowest layer.
+            "io" | "machine" | "format" | "note" => 1,
+            "store" | "config" => 2,
+            "stages" | "figures" => 3,
+            "pipeline" => 4,
+            _ => return None,
+        })
+    };
+    let src = root().join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.retain(|f| {
+        !f.ends_with("main.rs") && !f.ends_with("lib.rs") && !f.starts_with(src.join("cli"))
+    });
+    let mut wrong = Vec::new();
+    let mut seen = 0;
+    for f in &files {
+        let module = module_of(f, &src);
+        let top = module.split("::").next().unwrap_or("").to_string();
+        let Some(own) = layer(&top) else {
+            wrong.push(format!("{module}: module {top} has no layer in this test"));
+            continue;
+        };
+        let text = std::fs::read_to_string(f).unwrap();
+        for p in paths_in(&text, &module, f.ends_with("mod.rs")) {
+            let target = p.split("::").next().unwrap_or("");
+            if target.is_empty() || target == top {
+                continue;
+            }
+            seen += 1;
+            match layer(target) {
+                Some(l) if l > own => wrong.push(format!("{module} imports {p} (a higher layer)")),
+                None => wrong.push(format!("{module} imports {p}, of no layer")),
+                _ => {}
+            }
+            let drawing = ["pipeline::plan", "pipeline::report"];
+            if target == "figures" && drawing.iter().any(|d| module.starts_with(d)) {
+                wrong.push(format!("{module} imports the drawing code ({p})"));
+            }
+        }
+    }
+    assert!(seen > 50, "the scan finds the imports ({seen})");
+    assert!(wrong.is_empty(), "layering: {wrong:#?}");
+}

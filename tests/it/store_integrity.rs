@@ -144,7 +144,7 @@ fn an_entry_computed_from_content_that_changed_since_is_recomputed() {
 /// the entry: two stores built apart agree on every entry's digest (timings differ).
 #[test]
 fn content_digests_do_not_depend_on_timings() {
-    use wearcoef::pipeline::store::Manifest;
+    use wearcoef::store::Manifest;
     let digests = || -> BTreeMap<String, String> {
         let (_t, dir) = workdir(&small_pipeline(0.8, "x"));
         assert!(run_in(&dir, &RUN).status.success());

@@ -13,11 +13,11 @@ mod verdicts;
 use verdicts::audit_lines;
 
 use super::gallery::{FigureRecord, Provenance};
-use super::store::Store;
-use super::table::{f64_column, str_column};
 use crate::config::{FigureKind, Pipeline, StudyPlan};
-use crate::figures::plot::number;
+use crate::format::number;
 use crate::stages::analytic::AreaLoadSlopeRecord;
+use crate::store::table::{f64_column, str_column};
+use crate::store::Store;
 
 /// A study's sizes as the report's parameter table shows them.
 #[derive(Debug, Clone, PartialEq)]
@@ -157,7 +157,7 @@ fn alpha_rows(
     let Ok(path) = store.read_output(&manifest, "alpha.parquet") else {
         return Ok(());
     };
-    let df = super::table::read(&path)?;
+    let df = crate::store::table::read(&path)?;
     let (w, est, a, lo, hi) = (
         f64_column(&df, "w_over_w0")?,
         str_column(&df, "estimator")?,
@@ -236,7 +236,7 @@ fn analytic_lines(
     let Ok(path) = store.read_output(&manifest, "plateau.parquet") else {
         return Ok(());
     };
-    let df = super::table::read(&path)?;
+    let df = crate::store::table::read(&path)?;
     let c = |name: &str| f64_column(&df, name);
     let (a, w, alpha, lim, at, k, ci) = (
         c("a_star_over_ls2")?,

@@ -6,9 +6,9 @@ use std::fmt::Write as _;
 use serde_json::Value;
 
 use super::escape;
-use crate::figures::plot::number;
+use crate::format::number;
 use crate::pipeline::gallery::FigureRecord;
-use crate::pipeline::store::Store;
+use crate::store::Store;
 
 fn f(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)

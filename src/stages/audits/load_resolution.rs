@@ -6,7 +6,7 @@
 use polars::prelude::*;
 use serde_json::{json, Value};
 
-use crate::pipeline::table::f64_column;
+use crate::store::table::f64_column;
 
 /// Thresholds A*/λ_s² drawn in Figs. 4b and 5.
 pub const FIG45_A_STAR: [f64; 5] = [2.0, 8.0, 32.0, 128.0, 512.0];

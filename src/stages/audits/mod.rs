@@ -116,7 +116,7 @@ impl Stage for Audits {
             }
         };
         if let Some(t) = table {
-            crate::pipeline::table::write(dir, TABLE, t)?;
+            crate::store::table::write(dir, TABLE, t)?;
         }
         Ok(result)
     }

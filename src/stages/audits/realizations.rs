@@ -5,8 +5,8 @@
 use polars::prelude::*;
 use serde_json::{json, Value};
 
-use crate::pipeline::table::{f64_column, loads_of, u32_column};
 use crate::stages::Inputs;
+use crate::store::table::{f64_column, loads_of, u32_column};
 
 /// Per realization and load, the quantities behind Fig. 2e–f: contact area `A_c/λ_s²`,
 /// cluster count `N` and largest cluster `A/λ_s²`, all clusters counted (percolating ones

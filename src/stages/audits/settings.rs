@@ -7,10 +7,8 @@ use polars::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use crate::pipeline::table::{
-    bool_column, f64_column, loads_of, str_column, u32_column, u64_column,
-};
 use crate::stages::Inputs;
+use crate::store::table::{bool_column, f64_column, loads_of, str_column, u32_column, u64_column};
 
 /// One compared setting.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

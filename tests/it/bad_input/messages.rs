@@ -26,9 +26,9 @@ fn odd_files(dir: &Path) {
     packed[5 * 2 + 1] = 0b0000_0001;
     write_npy(&dir.join("padded.npy"), "|u1", "(12, 2)", &packed);
     write_npy(&dir.join("ints.npy"), "<i8", "(4, 4)", &[0u8; 16 * 8]);
-    let df = wearcoef::pipeline::table::col("area_px", vec![1.0f64, 0.5]);
+    let df = wearcoef::store::table::col("area_px", vec![1.0f64, 0.5]);
     let df = polars::prelude::DataFrame::new(2, vec![df]).unwrap();
-    wearcoef::pipeline::table::write_with_metadata(&dir.join("areas.parquet"), df, Vec::new())
+    wearcoef::store::table::write_with_metadata(&dir.join("areas.parquet"), df, Vec::new())
         .unwrap();
 }
 

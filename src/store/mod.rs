@@ -22,10 +22,13 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::hash::sha256_file;
+use hash::sha256_file;
 
 mod fresh;
+pub mod hash;
+pub mod inputs;
 mod layout;
+pub mod table;
 pub use layout::Contents;
 
 /// Name of the manifest file in every entry.
@@ -118,7 +121,7 @@ impl Manifest {
     /// The hash `results_sha256` records.
     pub fn results_hash(&self) -> String {
         let v = serde_json::json!({"results": self.results, "wall_seconds": self.wall_seconds});
-        super::hash::sha256_hex(super::hash::canonical_json(&v).as_bytes())
+        hash::sha256_hex(hash::canonical_json(&v).as_bytes())
     }
 }
 

@@ -84,7 +84,7 @@ fn size_of(dir: &Path) -> u64 {
 impl Store {
     /// What the store holds, or the first path in it that a store does not hold (then
     /// nothing may be removed wholesale). The root must have a `cache/` directory.
-    pub fn contents(&self) -> Result<Contents, String> {
+    pub fn contents(&self, stages: &[&str]) -> Result<Contents, String> {
         let root = self.root();
         if !root.join("cache").is_dir() {
             return Err(format!(
@@ -92,7 +92,6 @@ impl Store {
                 root.display()
             ));
         }
-        let stages = crate::pipeline::registry::names();
         let mut c = Contents::default();
         for (name, path, meta) in children(root)? {
             match name.as_str() {

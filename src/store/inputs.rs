@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use polars::prelude::DataFrame;
 use serde::{Deserialize, Serialize};
 
-use super::store::{Manifest, Store};
+use super::{Manifest, Store};
 
 /// A reference to a stage instance: its stage and key.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -82,6 +82,6 @@ impl<'a> Inputs<'a> {
 
     /// Parquet table `file` of input `i` (from `stage`).
     pub fn table(&self, i: usize, stage: &str, file: &str) -> anyhow::Result<DataFrame> {
-        crate::pipeline::table::read(&self.file(i, stage, file)?)
+        super::table::read(&self.file(i, stage, file)?)
     }
 }

@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::hash::{canonical_json, instance_key, sha256_file, sha256_hex};
 use super::{io_err, list_dirs, read_manifest, Manifest, Store, StoreError};
-use crate::pipeline::hash::{canonical_json, instance_key, sha256_file, sha256_hex};
 
 /// What says whether a file changed since it was hashed.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
