@@ -22,95 +22,11 @@ pub fn appendix(
     let tables = (0..settings.len())
         .map(|i| CcdfTable::read(inputs, i))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let mut plots = Vec::new();
-    if b1 {
-        for (s, table) in settings.iter().zip(&tables) {
-            let mut plot = LinePlot::new(
-                format!("Fig. B.1: {}", s.label),
-                "A/λ_s^2",
-                "P(A > a)",
-                true,
-                YAxis::Log,
-            );
-            let loads = table.loads();
-            for (j, &(load_index, w)) in loads.iter().enumerate() {
-                for (r_i, &r) in table.realizations().iter().enumerate() {
-                    let label = if j == 0 && r_i == 0 {
-                        "each realization"
-                    } else {
-                        ""
-                    };
-                    plot.series.push(Series {
-                        rgb: Some((170, 170, 170)),
-                        width: 1,
-                        name: format!("realization {r}"),
-                        study: Some(s.study.clone()),
-                        w_over_w0: Some(w),
-                        ..Series::line(label, table.curve(load_index, Some(r), false), 0)
-                    });
-                }
-            }
-            for (j, &(load_index, w)) in loads.iter().enumerate() {
-                plot.series.push(Series {
-                    rgb: Some((213, 94, 0)),
-                    tint: 0.6 * (loads.len() - 1 - j) as f64 / (loads.len().max(2) - 1) as f64,
-                    study: Some(s.study.clone()),
-                    w_over_w0: Some(w),
-                    ..Series::line(
-                        format!("ensemble mean, W/W_0 = {w:.3}"),
-                        table.curve(load_index, None, true),
-                        3,
-                    )
-                });
-            }
-            plots.push(plot);
-        }
-        // A grid with a free slot holds every box's ensemble mean at the largest load, the
-        // convergence the panels show one by one.
-        let (rows, cols) = super::plot::grid(plots.len(), 3);
-        if rows * cols > plots.len() {
-            let mut all = LinePlot::new(
-                "Fig. B.1: every box, largest load",
-                "A/λ_s^2",
-                "P(A > a), ensemble mean",
-                true,
-                YAxis::Log,
-            );
-            for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
-                if let Some(&(load_index, w)) = table.loads().last() {
-                    all.series.push(Series {
-                        study: Some(s.study.clone()),
-                        w_over_w0: Some(w),
-                        ..Series::line(
-                            format!("{}, W/W_0 = {w:.3}", s.label),
-                            table.curve(load_index, None, true),
-                            c,
-                        )
-                    });
-                }
-            }
-            plots.push(all);
-        }
+    let plots = if b1 {
+        box_panels(settings, &tables)
     } else {
-        let loads = tables.first().map(CcdfTable::loads).unwrap_or_default();
-        for &(load_index, w) in &loads {
-            let mut plot = LinePlot::new(
-                format!("Fig. B.2: W/W_0 = {w:.3}"),
-                "A/λ_s^2",
-                "P(A > a), ensemble mean",
-                true,
-                YAxis::Log,
-            );
-            for (c, (s, table)) in settings.iter().zip(&tables).enumerate() {
-                plot.series.push(Series {
-                    study: Some(s.study.clone()),
-                    w_over_w0: Some(w),
-                    ..Series::line(s.label.clone(), table.curve(load_index, None, true), c)
-                });
-            }
-            plots.push(plot);
-        }
-    }
+        discretisation_panels(settings, &tables)
+    };
     anyhow::ensure!(!plots.is_empty(), "{figure}: no setting to draw");
     let columns = plots.len().min(3);
     let mut out = vec![(
@@ -133,6 +49,104 @@ pub fn appendix(
         Drawn::Result(inputs.of(audit, "audits")?.results.clone()),
     ));
     Ok(out)
+}
+
+/// Fig. B.1: one panel per box, every realization in grey and the ensemble mean per load; a
+/// grid's free slot holds every box's ensemble mean at the largest load.
+fn box_panels(settings: &[StudyRef], tables: &[CcdfTable]) -> Vec<LinePlot> {
+    let mut plots = Vec::new();
+    for (s, table) in settings.iter().zip(tables) {
+        let mut plot = LinePlot::new(
+            format!("Fig. B.1: {}", s.label),
+            "A/λ_s^2",
+            "P(A > a)",
+            true,
+            YAxis::Log,
+        );
+        let loads = table.loads();
+        for (j, &(load_index, w)) in loads.iter().enumerate() {
+            for (r_i, &r) in table.realizations().iter().enumerate() {
+                let label = if j == 0 && r_i == 0 {
+                    "each realization"
+                } else {
+                    ""
+                };
+                plot.series.push(Series {
+                    rgb: Some((170, 170, 170)),
+                    width: 1,
+                    name: format!("realization {r}"),
+                    study: Some(s.study.clone()),
+                    w_over_w0: Some(w),
+                    ..Series::line(label, table.curve(load_index, Some(r), false), 0)
+                });
+            }
+        }
+        for (j, &(load_index, w)) in loads.iter().enumerate() {
+            plot.series.push(Series {
+                rgb: Some((213, 94, 0)),
+                tint: 0.6 * (loads.len() - 1 - j) as f64 / (loads.len().max(2) - 1) as f64,
+                study: Some(s.study.clone()),
+                w_over_w0: Some(w),
+                ..Series::line(
+                    format!("ensemble mean, W/W_0 = {w:.3}"),
+                    table.curve(load_index, None, true),
+                    3,
+                )
+            });
+        }
+        plots.push(plot);
+    }
+    // A grid with a free slot holds every box's ensemble mean at the largest load, the
+    // convergence the panels show one by one.
+    let (rows, cols) = super::plot::grid(plots.len(), 3);
+    if rows * cols > plots.len() {
+        let mut all = LinePlot::new(
+            "Fig. B.1: every box, largest load",
+            "A/λ_s^2",
+            "P(A > a), ensemble mean",
+            true,
+            YAxis::Log,
+        );
+        for (c, (s, table)) in settings.iter().zip(tables).enumerate() {
+            if let Some(&(load_index, w)) = table.loads().last() {
+                all.series.push(Series {
+                    study: Some(s.study.clone()),
+                    w_over_w0: Some(w),
+                    ..Series::line(
+                        format!("{}, W/W_0 = {w:.3}", s.label),
+                        table.curve(load_index, None, true),
+                        c,
+                    )
+                });
+            }
+        }
+        plots.push(all);
+    }
+    plots
+}
+
+/// Fig. B.2: one panel per load, the ensemble mean of each discretisation.
+fn discretisation_panels(settings: &[StudyRef], tables: &[CcdfTable]) -> Vec<LinePlot> {
+    let mut plots = Vec::new();
+    let loads = tables.first().map(CcdfTable::loads).unwrap_or_default();
+    for &(load_index, w) in &loads {
+        let mut plot = LinePlot::new(
+            format!("Fig. B.2: W/W_0 = {w:.3}"),
+            "A/λ_s^2",
+            "P(A > a), ensemble mean",
+            true,
+            YAxis::Log,
+        );
+        for (c, (s, table)) in settings.iter().zip(tables).enumerate() {
+            plot.series.push(Series {
+                study: Some(s.study.clone()),
+                w_over_w0: Some(w),
+                ..Series::line(s.label.clone(), table.curve(load_index, None, true), c)
+            });
+        }
+        plots.push(plot);
+    }
+    plots
 }
 
 /// One curve of a convergence figure: KS distance (markers) and its 95 % critical value

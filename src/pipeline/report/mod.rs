@@ -397,7 +397,29 @@ fn section(
     )?;
     let studies = studies_of(records);
     h.push_str(&parameter_table(context, &studies));
-    // The maps of Fig. 2b–d at the study's kept loads.
+    images(h, records, &studies, context)?;
+    exponents(h, store, name, records, &studies, context)?;
+    fits(h, store, records)?;
+    let mut audits = String::new();
+    for fig in records {
+        audit_lines(store, fig, &mut audits)?;
+    }
+    if !audits.is_empty() {
+        writeln!(h, "<h3>Audit verdicts</h3>\n{audits}")?;
+    }
+    drawn_from(h, records)?;
+    writeln!(h, "</section>")?;
+    Ok(())
+}
+
+/// Each image of a figure with its caption and links to its data and vector files; the maps
+/// of Fig. 2b–d with their study's kept loads.
+fn images(
+    h: &mut String,
+    records: &[&FigureRecord],
+    studies: &[String],
+    context: &Context,
+) -> anyhow::Result<()> {
     let kept: Vec<f64> = studies
         .iter()
         .filter_map(|s| context.sizes.get(s))
@@ -430,10 +452,25 @@ fn section(
             )?;
         }
     }
-    let draws_exponents = !matches!(
+    Ok(())
+}
+
+/// The exponents α̂ of both estimators at the loads a figure draws (its declared loads; a
+/// convergence figure's shared loads), for figures that draw exponents.
+fn exponents(
+    h: &mut String,
+    store: &Store,
+    name: &str,
+    records: &[&FigureRecord],
+    studies: &[String],
+    context: &Context,
+) -> anyhow::Result<()> {
+    if matches!(
         context.kinds.get(name),
         Some(FigureKind::Fig2 | FigureKind::Fig6) | None
-    );
+    ) {
+        return Ok(());
+    }
     let mut loads = context.figure_loads.get(name).cloned().unwrap_or_default();
     if loads.is_empty() && context.kinds.get(name) == Some(&FigureKind::Convergence) {
         // A convergence figure compares its settings at the loads they share: the fewest.
@@ -449,7 +486,7 @@ fn section(
     for d in records
         .iter()
         .flat_map(|r| &r.drawn_from)
-        .filter(|d| d.stage == "statistics" && draws_exponents)
+        .filter(|d| d.stage == "statistics")
     {
         // A study drawn twice (Fig. 3's λ_l/λ_s = 128 is also its inset's H = 0.8) once.
         if seen.contains(&d.key.as_str()) {
@@ -466,6 +503,11 @@ fn section(
              <th>truncated power law α̂ [95 %]</th></tr>\n{alphas}</table>\n</details>"
         )?;
     }
+    Ok(())
+}
+
+/// The analytic fits a figure was drawn from: the area–load slope and the plateau of K.
+fn fits(h: &mut String, store: &Store, records: &[&FigureRecord]) -> anyhow::Result<()> {
     let (mut plateau, mut slopes) = (String::new(), String::new());
     for d in records
         .iter()
@@ -503,13 +545,11 @@ fn section(
              {plateau}</table>\n</details>"
         )?;
     }
-    let mut audits = String::new();
-    for fig in records {
-        audit_lines(store, fig, &mut audits)?;
-    }
-    if !audits.is_empty() {
-        writeln!(h, "<h3>Audit verdicts</h3>\n{audits}")?;
-    }
+    Ok(())
+}
+
+/// The store instances a figure was drawn from, its own first.
+fn drawn_from(h: &mut String, records: &[&FigureRecord]) -> anyhow::Result<()> {
     writeln!(
         h,
         "<details><summary>Drawn from</summary>\n<table>\n\
@@ -531,7 +571,7 @@ fn section(
             )?;
         }
     }
-    writeln!(h, "</table>\n</details>\n</section>")?;
+    writeln!(h, "</table>\n</details>")?;
     Ok(())
 }
 
