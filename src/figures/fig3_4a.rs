@@ -96,6 +96,141 @@ fn fitted_plateau(
     Ok(Some((points, text)))
 }
 
+/// One spectrum's curves (input `c`, study `study`) at the loads of its sweep nearest to
+/// `loads`: its PDFs on Fig. 3 with the plateau + power law fitted at the largest, its CCDFs
+/// on Fig. 4a, the largest load's with its 95 % band.
+fn study_curves(
+    inputs: &Inputs,
+    c: usize,
+    study: &StudyRef,
+    loads: &[f64],
+    main: &mut LinePlot,
+    ccdf_plot: &mut LinePlot,
+) -> anyhow::Result<()> {
+    // The fits of the studies told apart by colour and by dash.
+    let fit_dashes = [Dash::Dashed, Dash::Dotted, Dash::LongDashed];
+    let pdf = inputs.table(c, "statistics", "pdf.parquet")?;
+    let alpha = inputs.table(c, "statistics", "alpha.parquet")?;
+    let ccdf = CcdfTable::read(inputs, c)?;
+    let picked = pick_loads(&loads_of(&pdf)?, loads);
+    let load_list = picked
+        .iter()
+        .map(|l| format!("{:.3}", l.1))
+        .collect::<Vec<_>>()
+        .join(", ");
+    for (j, &(load_index, w)) in picked.iter().enumerate() {
+        let last = j + 1 == picked.len();
+        let about = Series {
+            name: format!("{} (W/W_0 = {w:.3})", study.label),
+            study: Some(study.study.clone()),
+            w_over_w0: Some(w),
+            ..Series::default()
+        };
+        let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
+        let (points, _) = pdf_points(&pdf, load_index)?;
+        // Fig. 3 names the loads in each study's entry; Fig. 4a gives each load's shade an
+        // entry of its own (below), where the curves of one study are told apart by it.
+        let (label, ccdf_label) = if last {
+            (
+                format!("{} (W/W_0 = {load_list}, light → dark)", study.label),
+                study.label.clone(),
+            )
+        } else {
+            (String::new(), String::new())
+        };
+        // The largest load of each study carries its 95 % band (one band per spectrum
+        // keeps the curves readable).
+        let (pdf_shade, ccdf_shade) = if last {
+            (pdf_band(&pdf, load_index)?, ccdf.band(load_index))
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        main.series.push(Series {
+            tint,
+            marker: Some(Marker::ALL[c % Marker::ALL.len()]),
+            width: 1,
+            label: label.clone(),
+            points,
+            color: c,
+            band: pdf_shade,
+            ..about.clone()
+        });
+        ccdf_plot.series.push(Series {
+            tint,
+            label: ccdf_label,
+            points: ccdf.curve(load_index, None, false),
+            color: c,
+            band: ccdf_shade,
+            ..about.clone()
+        });
+        if last {
+            if let Some((fit, text)) = fitted_plateau(&alpha, load_index, study.lambda_s_px)? {
+                main.series.push(Series {
+                    dash: fit_dashes[c % fit_dashes.len()],
+                    width: 3,
+                    label: format!("{} fit: {text}", study.label),
+                    points: fit,
+                    color: c,
+                    ..about.clone()
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Fig. 4a's legend of the loads, told apart by shade (each study draws its sweep's nearest
+/// loads): one entry each, in grey, lightest for the smallest.
+fn load_shades(loads: &[f64]) -> Vec<Series> {
+    let mut asked = loads.to_vec();
+    asked.sort_by(f64::total_cmp);
+    asked.dedup();
+    asked
+        .iter()
+        .enumerate()
+        .take(LOAD_TINTS.len())
+        .map(|(j, w)| Series {
+            label: format!("W/W_0 ≈ {w}"),
+            rgb: Some((60, 60, 60)),
+            tint: LOAD_TINTS[LOAD_TINTS.len() - asked.len().min(LOAD_TINTS.len()) + j],
+            width: 3,
+            name: "load shade".into(),
+            ..Series::default()
+        })
+        .collect()
+}
+
+/// The inset of Fig. 3: the PDF of each Hurst study (inputs from `first` on) at the load of
+/// its sweep nearest to `inset_load`.
+fn inset_plot(
+    inputs: &Inputs,
+    first: usize,
+    hurst: &[StudyRef],
+    inset_load: f64,
+) -> anyhow::Result<LinePlot> {
+    let mut inset = LinePlot::new(
+        format!("λ_l/λ_s = 128, W/W_0 ≈ {inset_load}"),
+        "A/λ_s^2",
+        "p(A/λ_s^2)",
+        true,
+        YAxis::Log,
+    );
+    for (c, study) in hurst.iter().enumerate() {
+        let pdf = inputs.table(first + c, "statistics", "pdf.parquet")?;
+        if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[inset_load]).first() {
+            let (points, _) = pdf_points(&pdf, load_index)?;
+            inset.series.push(Series {
+                marker: Some(Marker::ALL[(c + 3) % Marker::ALL.len()]),
+                width: 1,
+                study: Some(study.study.clone()),
+                w_over_w0: Some(w),
+                ..Series::line(study.label.clone(), points, c + 3)
+            });
+        }
+    }
+    Ok(inset)
+}
+
 /// Fig. 3 (PDF of A/λ_s² for several λ_l/λ_s and loads, fitted power law; inset: H) and
 /// Fig. 4a (CCDF for the same studies and loads).
 ///
@@ -107,7 +242,6 @@ pub fn fig34a(
     loads: &[f64],
     inset_load: f64,
 ) -> anyhow::Result<Vec<(String, Drawn)>> {
-    let stats = |i: usize, file: &str| inputs.table(i, "statistics", file);
     let mut main = LinePlot::new(
         "Fig. 3: cluster-area PDF, H = 0.8",
         "A/λ_s^2",
@@ -122,93 +256,10 @@ pub fn fig34a(
         true,
         YAxis::Log,
     );
-    // The fits of the studies told apart by colour and by dash.
-    let fit_dashes = [Dash::Dashed, Dash::Dotted, Dash::LongDashed];
     for (c, study) in ratios.iter().enumerate() {
-        let pdf = stats(c, "pdf.parquet")?;
-        let alpha = stats(c, "alpha.parquet")?;
-        let ccdf = CcdfTable::read(inputs, c)?;
-        let picked = pick_loads(&loads_of(&pdf)?, loads);
-        let load_list = picked
-            .iter()
-            .map(|l| format!("{:.3}", l.1))
-            .collect::<Vec<_>>()
-            .join(", ");
-        for (j, &(load_index, w)) in picked.iter().enumerate() {
-            let last = j + 1 == picked.len();
-            let about = Series {
-                name: format!("{} (W/W_0 = {w:.3})", study.label),
-                study: Some(study.study.clone()),
-                w_over_w0: Some(w),
-                ..Series::default()
-            };
-            let tint = LOAD_TINTS[LOAD_TINTS.len() - picked.len() + j];
-            let (points, _) = pdf_points(&pdf, load_index)?;
-            // Fig. 3 names the loads in each study's entry; Fig. 4a gives each load's shade an
-            // entry of its own (below), where the curves of one study are told apart by it.
-            let (label, ccdf_label) = if last {
-                (
-                    format!("{} (W/W_0 = {load_list}, light → dark)", study.label),
-                    study.label.clone(),
-                )
-            } else {
-                (String::new(), String::new())
-            };
-            // The largest load of each study carries its 95 % band (one band per spectrum
-            // keeps the curves readable).
-            let (pdf_shade, ccdf_shade) = if last {
-                (pdf_band(&pdf, load_index)?, ccdf.band(load_index))
-            } else {
-                (Vec::new(), Vec::new())
-            };
-            main.series.push(Series {
-                tint,
-                marker: Some(Marker::ALL[c % Marker::ALL.len()]),
-                width: 1,
-                label: label.clone(),
-                points,
-                color: c,
-                band: pdf_shade,
-                ..about.clone()
-            });
-            ccdf_plot.series.push(Series {
-                tint,
-                label: ccdf_label,
-                points: ccdf.curve(load_index, None, false),
-                color: c,
-                band: ccdf_shade,
-                ..about.clone()
-            });
-            if last {
-                if let Some((fit, text)) = fitted_plateau(&alpha, load_index, study.lambda_s_px)? {
-                    main.series.push(Series {
-                        dash: fit_dashes[c % fit_dashes.len()],
-                        width: 3,
-                        label: format!("{} fit: {text}", study.label),
-                        points: fit,
-                        color: c,
-                        ..about.clone()
-                    });
-                }
-            }
-        }
+        study_curves(inputs, c, study, loads, &mut main, &mut ccdf_plot)?;
     }
-    // Fig. 4a: the loads told apart by shade (each study draws its sweep's nearest loads), one
-    // legend entry each, in grey, lightest for the smallest.
-    let mut asked = loads.to_vec();
-    asked.sort_by(f64::total_cmp);
-    asked.dedup();
-    for (j, w) in asked.iter().enumerate().take(LOAD_TINTS.len()) {
-        let shade = Series {
-            label: format!("W/W_0 ≈ {w}"),
-            rgb: Some((60, 60, 60)),
-            tint: LOAD_TINTS[LOAD_TINTS.len() - asked.len().min(LOAD_TINTS.len()) + j],
-            width: 3,
-            name: "load shade".into(),
-            ..Series::default()
-        };
-        ccdf_plot.series.push(shade);
-    }
+    ccdf_plot.series.extend(load_shades(loads));
     let key = Series::band_key(
         "shaded: 95 % band of the realizations' mean at the largest load (where > 0)",
     );
@@ -218,26 +269,7 @@ pub fn fig34a(
     if hurst.is_empty() {
         out.push(("fig3".to_string(), Drawn::Line(main)));
     } else {
-        let mut inset = LinePlot::new(
-            format!("λ_l/λ_s = 128, W/W_0 ≈ {inset_load}"),
-            "A/λ_s^2",
-            "p(A/λ_s^2)",
-            true,
-            YAxis::Log,
-        );
-        for (c, study) in hurst.iter().enumerate() {
-            let pdf = stats(ratios.len() + c, "pdf.parquet")?;
-            if let Some(&(load_index, w)) = pick_loads(&loads_of(&pdf)?, &[inset_load]).first() {
-                let (points, _) = pdf_points(&pdf, load_index)?;
-                inset.series.push(Series {
-                    marker: Some(Marker::ALL[(c + 3) % Marker::ALL.len()]),
-                    width: 1,
-                    study: Some(study.study.clone()),
-                    w_over_w0: Some(w),
-                    ..Series::line(study.label.clone(), points, c + 3)
-                });
-            }
-        }
+        let inset = inset_plot(inputs, ratios.len(), hurst, inset_load)?;
         out.push((
             "fig3".to_string(),
             Drawn::Panels(Panels {
