@@ -160,10 +160,17 @@ impl FigureDecl {
         studies: &BTreeMap<String, super::Study>,
         profiles: &BTreeMap<String, String>,
     ) -> Result<(), ConfigError> {
-        let base = format!("figures.{name}");
+        self.check_fields(name, origin)?;
+        self.check_loads(name, origin)?;
+        self.check_profiles(name, origin, studies, profiles)?;
+        self.check_lists(name, origin)
+    }
+
+    /// The fields its kind requires are given, and no other.
+    fn check_fields(&self, name: &str, origin: &str) -> Result<(), ConfigError> {
         let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
             path: origin.to_string(),
-            field: format!("{base}{field}"),
+            field: format!("figures.{name}{field}"),
             value,
             allowed,
         };
@@ -209,6 +216,18 @@ impl FigureDecl {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The kinds that draw chosen loads list them, the others none; each in (0, max].
+    fn check_loads(&self, name: &str, origin: &str) -> Result<(), ConfigError> {
+        use FigureKind::*;
+        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
+            path: origin.to_string(),
+            field: format!("figures.{name}{field}"),
+            value,
+            allowed,
+        };
         let wants_loads = matches!(self.kind, Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2);
         if wants_loads && self.loads.is_empty() {
             return Err(invalid(
@@ -239,6 +258,23 @@ impl FigureDecl {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Its profiles are declared, and every study it draws in one has an entry for it.
+    fn check_profiles(
+        &self,
+        name: &str,
+        origin: &str,
+        studies: &BTreeMap<String, super::Study>,
+        profiles: &BTreeMap<String, String>,
+    ) -> Result<(), ConfigError> {
+        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
+            path: origin.to_string(),
+            field: format!("figures.{name}{field}"),
+            value,
+            allowed,
+        };
         if self.profiles.is_empty() {
             return Err(invalid(
                 ".profiles",
@@ -280,6 +316,19 @@ impl FigureDecl {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// No study or profile listed twice, a comparison of two different studies, omissions of
+    /// studies it names, and enough studies left in each profile for its kind.
+    fn check_lists(&self, name: &str, origin: &str) -> Result<(), ConfigError> {
+        use FigureKind::*;
+        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
+            path: origin.to_string(),
+            field: format!("figures.{name}{field}"),
+            value,
+            allowed,
+        };
         for (field, list) in [
             (".studies", &self.studies),
             (".ratios", &self.ratios),
