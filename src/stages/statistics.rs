@@ -444,137 +444,158 @@ fn write_wear(study: &Study, dir: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One row of `alpha.parquet`: one estimator at one load (`None`: not fitted, or not an
+/// output of that estimator).
+#[derive(Default)]
+struct AlphaRow {
+    alpha: Option<f64>,
+    std_error: Option<f64>,
+    ci95: Option<(f64, f64, &'static str)>,
+    k_min: Option<f64>,
+    k_max: Option<f64>,
+    k_s: Option<f64>,
+    n_fitted: Option<u64>,
+    ks_distance: Option<f64>,
+    note: String,
+}
+
+/// The discrete truncated MLE at load `l`: k_min by the KS criterion, k_max the largest
+/// area, a bootstrap interval.
+fn truncated_row(job: &StatisticsJob, l: usize, areas: &[u64]) -> AlphaRow {
+    let k_hi = areas.iter().copied().max();
+    match k_hi
+        .ok_or(powerlaw::FitError::Empty)
+        .and_then(|m| powerlaw::fit_discrete_tail(areas, Some(m)).map(|t| (t, m)))
+    {
+        Ok((t, m)) => {
+            let f = t.fit;
+            let ci = powerlaw::bootstrap_discrete(
+                areas,
+                f.lower as u64,
+                Some(m),
+                job.bootstrap_resamples,
+                job.seed ^ (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            )
+            .ok();
+            AlphaRow {
+                alpha: Some(f.alpha),
+                std_error: Some(f.std_error),
+                ci95: ci.map(|c| (c.0, c.1, "bootstrap")),
+                k_min: Some(f.lower),
+                k_max: Some(f.upper),
+                n_fitted: Some(f.n as u64),
+                ks_distance: Some(f.ks_distance),
+                ..AlphaRow::default()
+            }
+        }
+        Err(e) => AlphaRow {
+            note: format!("no fit: {e}"),
+            ..AlphaRow::default()
+        },
+    }
+}
+
+/// The paper's plateau + power law fitted jointly, with its 95 % profile-likelihood
+/// interval.
+fn plateau_row(areas: &[u64]) -> AlphaRow {
+    match powerlaw::fit_plateau_power_law(areas) {
+        Ok(f) => {
+            // The 95 % profile-likelihood interval (the fit succeeded, so this does).
+            let ci = powerlaw::plateau_alpha_interval(areas, &f).ok();
+            AlphaRow {
+                alpha: Some(f.alpha),
+                ci95: ci.map(|c| (c.low, c.high, "profile_likelihood")),
+                k_max: Some(f.k_m as f64),
+                k_s: Some(f.k_s),
+                n_fitted: Some(f.n as u64),
+                note: match ci {
+                    Some(c) if c.low_at_edge || c.high_at_edge => format!(
+                        "the interval reaches the searched range of α ({} side): the data bound α on one side only",
+                        if c.low_at_edge { "low" } else { "high" }
+                    ),
+                    _ => String::new(),
+                },
+                ..AlphaRow::default()
+            }
+        }
+        Err(e) => AlphaRow {
+            note: format!("no fit: {e}"),
+            ..AlphaRow::default()
+        },
+    }
+}
+
 /// One row per load and estimator; a fit that cannot be made leaves nulls and says why.
+/// Returns the number of loads the truncated power law was fitted at.
 fn write_alpha(
     job: &StatisticsJob,
     dir: &Path,
     pooled: &[Vec<u64>],
     ls2: f64,
 ) -> anyhow::Result<usize> {
-    let mut li = Vec::new();
-    let mut w = Vec::new();
-    let mut est = Vec::new();
-    let mut alpha: Vec<Option<f64>> = Vec::new();
-    let mut se: Vec<Option<f64>> = Vec::new();
-    let mut ci_lo: Vec<Option<f64>> = Vec::new();
-    let mut ci_hi: Vec<Option<f64>> = Vec::new();
-    let mut ci_method: Vec<Option<String>> = Vec::new();
-    let mut k_min: Vec<Option<f64>> = Vec::new();
-    let mut k_max: Vec<Option<f64>> = Vec::new();
-    let mut k_s: Vec<Option<f64>> = Vec::new();
-    let mut k_s_ls2: Vec<Option<f64>> = Vec::new();
-    let mut n_fit: Vec<Option<u64>> = Vec::new();
-    let mut ks: Vec<Option<f64>> = Vec::new();
-    let mut note = Vec::new();
-    let mut fitted = 0;
+    let mut rows: Vec<(usize, Estimator, AlphaRow)> = Vec::new();
     for (l, areas) in pooled.iter().enumerate() {
-        // Discrete truncated MLE, KS-chosen k_min, k_max = largest area.
-        li.push(l as u32);
-        w.push(job.loads[l]);
-        est.push(Estimator::DiscreteTruncated.name().to_string());
-        let k_hi = areas.iter().copied().max();
-        match k_hi
-            .ok_or(powerlaw::FitError::Empty)
-            .and_then(|m| powerlaw::fit_discrete_tail(areas, Some(m)).map(|t| (t, m)))
-        {
-            Ok((t, m)) => {
-                let f = t.fit;
-                let ci = powerlaw::bootstrap_discrete(
-                    areas,
-                    f.lower as u64,
-                    Some(m),
-                    job.bootstrap_resamples,
-                    job.seed ^ (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
-                )
-                .ok();
-                alpha.push(Some(f.alpha));
-                se.push(Some(f.std_error));
-                ci_lo.push(ci.map(|c| c.0));
-                ci_hi.push(ci.map(|c| c.1));
-                ci_method.push(ci.map(|_| "bootstrap".to_string()));
-                k_min.push(Some(f.lower));
-                k_max.push(Some(f.upper));
-                n_fit.push(Some(f.n as u64));
-                ks.push(Some(f.ks_distance));
-                note.push(String::new());
-                fitted += 1;
-            }
-            Err(e) => {
-                for v in [
-                    &mut alpha, &mut se, &mut ci_lo, &mut ci_hi, &mut k_min, &mut k_max, &mut ks,
-                ] {
-                    v.push(None);
-                }
-                ci_method.push(None);
-                n_fit.push(None);
-                note.push(format!("no fit: {e}"));
-            }
-        }
-        k_s.push(None);
-        k_s_ls2.push(None);
-
-        // Joint plateau + power law.
-        li.push(l as u32);
-        w.push(job.loads[l]);
-        est.push(Estimator::DiscretePlateauPowerLaw.name().to_string());
-        for v in [&mut se, &mut k_min, &mut ks] {
-            v.push(None);
-        }
-        match powerlaw::fit_plateau_power_law(areas) {
-            Ok(f) => {
-                // The 95 % profile-likelihood interval (the fit succeeded, so this does).
-                let ci = powerlaw::plateau_alpha_interval(areas, &f).ok();
-                alpha.push(Some(f.alpha));
-                ci_lo.push(ci.map(|c| c.low));
-                ci_hi.push(ci.map(|c| c.high));
-                ci_method.push(ci.map(|_| "profile_likelihood".to_string()));
-                k_max.push(Some(f.k_m as f64));
-                k_s.push(Some(f.k_s));
-                k_s_ls2.push(Some(f.k_s / ls2));
-                n_fit.push(Some(f.n as u64));
-                note.push(match ci {
-                    Some(c) if c.low_at_edge || c.high_at_edge => format!(
-                        "the interval reaches the searched range of α ({} side): the data bound α on one side only",
-                        if c.low_at_edge { "low" } else { "high" }
-                    ),
-                    _ => String::new(),
-                });
-            }
-            Err(e) => {
-                ci_lo.push(None);
-                ci_hi.push(None);
-                ci_method.push(None);
-                alpha.push(None);
-                k_max.push(None);
-                k_s.push(None);
-                k_s_ls2.push(None);
-                n_fit.push(None);
-                note.push(format!("no fit: {e}"));
-            }
-        }
+        rows.push((
+            l,
+            Estimator::DiscreteTruncated,
+            truncated_row(job, l, areas),
+        ));
+        rows.push((l, Estimator::DiscretePlateauPowerLaw, plateau_row(areas)));
     }
-    let rows = li.len();
+    let fitted = rows
+        .iter()
+        .filter(|r| r.1 == Estimator::DiscreteTruncated && r.2.alpha.is_some())
+        .count();
+    let opt =
+        |f: &dyn Fn(&AlphaRow) -> Option<f64>| rows.iter().map(|r| f(&r.2)).collect::<Vec<_>>();
+    let n = rows.len();
     write(
         dir,
         "alpha.parquet",
         DataFrame::new(
-            rows,
+            n,
             vec![
-                col("load_index", li),
-                col("w_over_w0", w),
-                col("estimator", est),
-                Column::new("alpha".into(), alpha),
-                Column::new("std_error".into(), se),
-                Column::new("ci95_low".into(), ci_lo),
-                Column::new("ci95_high".into(), ci_hi),
-                Column::new("ci95_method".into(), ci_method),
-                Column::new("k_min_px".into(), k_min),
-                Column::new("k_max_px".into(), k_max),
-                Column::new("k_s_px".into(), k_s),
-                Column::new("k_s_over_ls2".into(), k_s_ls2),
-                Column::new("n_fitted".into(), n_fit),
-                Column::new("ks_distance".into(), ks),
-                col("note", note),
+                col(
+                    "load_index",
+                    rows.iter().map(|r| r.0 as u32).collect::<Vec<u32>>(),
+                ),
+                col(
+                    "w_over_w0",
+                    rows.iter().map(|r| job.loads[r.0]).collect::<Vec<f64>>(),
+                ),
+                col(
+                    "estimator",
+                    rows.iter()
+                        .map(|r| r.1.name().to_string())
+                        .collect::<Vec<String>>(),
+                ),
+                Column::new("alpha".into(), opt(&|r| r.alpha)),
+                Column::new("std_error".into(), opt(&|r| r.std_error)),
+                Column::new("ci95_low".into(), opt(&|r| r.ci95.map(|c| c.0))),
+                Column::new("ci95_high".into(), opt(&|r| r.ci95.map(|c| c.1))),
+                Column::new(
+                    "ci95_method".into(),
+                    rows.iter()
+                        .map(|r| r.2.ci95.map(|c| c.2.to_string()))
+                        .collect::<Vec<Option<String>>>(),
+                ),
+                Column::new("k_min_px".into(), opt(&|r| r.k_min)),
+                Column::new("k_max_px".into(), opt(&|r| r.k_max)),
+                Column::new("k_s_px".into(), opt(&|r| r.k_s)),
+                Column::new("k_s_over_ls2".into(), opt(&|r| r.k_s.map(|k| k / ls2))),
+                Column::new(
+                    "n_fitted".into(),
+                    rows.iter()
+                        .map(|r| r.2.n_fitted)
+                        .collect::<Vec<Option<u64>>>(),
+                ),
+                Column::new("ks_distance".into(), opt(&|r| r.ks_distance)),
+                col(
+                    "note",
+                    rows.iter()
+                        .map(|r| r.2.note.clone())
+                        .collect::<Vec<String>>(),
+                ),
             ],
         )?,
     )?;
