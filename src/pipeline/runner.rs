@@ -462,6 +462,57 @@ fn thread_cpu_seconds() -> f64 {
     }
 }
 
+/// The error of an instance whose computation failed with `e` (its message `cause`, in the
+/// user's paths). A failure of the computation itself (a solve that does not converge, a
+/// degenerate input) is data: recorded for status, the catalog and an audit, never as an
+/// entry that looks valid (the temporary entry is dropped). A failure of the machine (a full
+/// disk, a permission) is not the instance's: it is only reported, and the next run tries
+/// again.
+fn failed(
+    store: &Store,
+    inst: &Instance,
+    e: &anyhow::Error,
+    cause: String,
+    keys: Vec<String>,
+    start: Instant,
+) -> anyhow::Error {
+    let message = format!(
+        "stage {} ({}, realization {}, key {}) failed: {cause}",
+        inst.stage,
+        inst.name.as_ref().map_or_else(
+            || format!("studies {}", inst.studies.join(", ")),
+            |n| n.clone()
+        ),
+        inst.realization.map_or("-".to_string(), |r| r.to_string()),
+        &inst.key[..12.min(inst.key.len())]
+    );
+    if !is_computational(e) {
+        let note = if message.contains("bytes free") {
+            String::new()
+        } else {
+            crate::io::disk_note(store.root())
+        };
+        return anyhow::Error::new(ComputeFailed(format!(
+            "{message}{note} (not recorded as a failure: the next run tries again)"
+        )));
+    }
+    if let Err(record) = store.record_failure(&Failure {
+        stage: inst.stage.clone(),
+        key: inst.key.clone(),
+        params: inst.params.clone(),
+        inputs: keys,
+        studies: inst.studies.clone(),
+        realization: inst.realization,
+        error: message.clone(),
+        report: failure_report(e),
+        program: Program::current(),
+        wall_seconds: start.elapsed().as_secs_f64(),
+    }) {
+        return record.into();
+    }
+    anyhow::Error::new(ComputeFailed(message))
+}
+
 /// Compute one instance on `pool` (whose threads had used `cpu_before` CPU seconds).
 fn build(
     store: &Store,
@@ -503,45 +554,8 @@ fn build(
         Ok(results) => results,
         Err(e) => {
             let cause = plain(&e);
-            let message = format!(
-                "stage {} ({}, realization {}, key {}) failed: {cause}",
-                inst.stage,
-                inst.name.as_ref().map_or_else(
-                    || format!("studies {}", inst.studies.join(", ")),
-                    |n| n.clone()
-                ),
-                inst.realization.map_or("-".to_string(), |r| r.to_string()),
-                &inst.key[..12.min(inst.key.len())]
-            );
-            // A failure of the computation itself (a solve that does not converge, a
-            // degenerate input) is data: kept for status, the catalog and an audit, never
-            // as an entry that looks valid (the temporary entry is dropped). A failure of
-            // the machine (a full disk, a permission) is not the instance's: it is only
-            // reported, and the next run tries again.
-            if !is_computational(&e) {
-                drop(entry);
-                let note = if message.contains("bytes free") {
-                    String::new()
-                } else {
-                    crate::io::disk_note(store.root())
-                };
-                return Err(anyhow::Error::new(ComputeFailed(format!(
-                    "{message}{note} (not recorded as a failure: the next run tries again)"
-                ))));
-            }
-            store.record_failure(&Failure {
-                stage: inst.stage.clone(),
-                key: inst.key.clone(),
-                params: inst.params.clone(),
-                inputs: keys,
-                studies: inst.studies.clone(),
-                realization: inst.realization,
-                error: message.clone(),
-                report: failure_report(&e),
-                program: Program::current(),
-                wall_seconds: start.elapsed().as_secs_f64(),
-            })?;
-            return Err(anyhow::Error::new(ComputeFailed(message)));
+            drop(entry);
+            return Err(failed(store, inst, &e, cause, keys, start));
         }
     };
     crate::store::table::stamp(
