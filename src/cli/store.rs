@@ -159,30 +159,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     } else {
         slurm::states(&ids)
     };
-    let campaign_json: Vec<_> = campaigns
-        .iter()
-        .map(|(dir, c)| {
-            let arrays: Vec<_> = c
-                .arrays
-                .iter()
-                .flat_map(|a| {
-                    a.chunks.iter().map(|ch| {
-                        let id = ch.job_id.clone().unwrap_or_default();
-                        let st = states.get(&id).cloned().unwrap_or_default();
-                        json!({
-                            "array": a.spec.name,
-                            "level": a.spec.level,
-                            "job_id": id,
-                            "tasks": ch.chunk.len,
-                            "states": st.counts(),
-                            "finished_from": st.finished_from,
-                        })
-                    })
-                })
-                .collect();
-            json!({"dir": dir.display().to_string(), "created": c.created, "arrays": arrays})
-        })
-        .collect();
+    let campaign_json = campaigns_json(&campaigns, &states);
     if json {
         out!(
             "{}",
@@ -239,7 +216,44 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
             l.missing
         )?;
     }
-    for (dir, c) in &campaigns {
+    print_campaigns(&campaigns, &states)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+type Campaigns = [(PathBuf, super::submit::Campaign)];
+type States = std::collections::BTreeMap<String, slurm::JobStates>;
+
+/// The submitted campaigns of `status --json`: per array chunk its job and task states.
+fn campaigns_json(campaigns: &Campaigns, states: &States) -> Vec<serde_json::Value> {
+    campaigns
+        .iter()
+        .map(|(dir, c)| {
+            let arrays: Vec<_> = c
+                .arrays
+                .iter()
+                .flat_map(|a| {
+                    a.chunks.iter().map(|ch| {
+                        let id = ch.job_id.clone().unwrap_or_default();
+                        let st = states.get(&id).cloned().unwrap_or_default();
+                        json!({
+                            "array": a.spec.name,
+                            "level": a.spec.level,
+                            "job_id": id,
+                            "tasks": ch.chunk.len,
+                            "states": st.counts(),
+                            "finished_from": st.finished_from,
+                        })
+                    })
+                })
+                .collect();
+            json!({"dir": dir.display().to_string(), "created": c.created, "arrays": arrays})
+        })
+        .collect()
+}
+
+/// The submitted campaigns in `status`'s text: per array chunk its job and task states.
+fn print_campaigns(campaigns: &Campaigns, states: &States) -> anyhow::Result<()> {
+    for (dir, c) in campaigns {
         out!(
             "\ncampaign {} ({} instances submitted)",
             dir.display(),
@@ -270,7 +284,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }
 
 #[derive(clap::Args)]
