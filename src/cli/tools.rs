@@ -321,6 +321,65 @@ pub fn solve(args: SolveArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
+    let extension = check_solve_args(&args)?;
+    let (n, heights) = read_checked_surface(&args)?;
+    let cfg = SolverConfig {
+        tolerance: args.tol,
+        max_iterations: args.max_iter,
+        preconditioned: !args.plain_cg,
+        extension: (!args.no_extension).then_some(extension),
+        offset_to_load: !args.scale_to_load,
+        extrapolate_start: !args.scale_start,
+        ..SolverConfig::default()
+    };
+    let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
+    let mut pressures = Vec::new();
+    let mut contacts = Vec::new();
+    let (_, results) = sweep_heights(
+        &heights,
+        n,
+        args.e_star,
+        &args.loads,
+        &cfg,
+        |_, pressure, _| {
+            if keep_fields {
+                pressures.extend_from_slice(pressure);
+                contacts.extend(pressure.iter().map(|&p| u8::from(p > 0.0)));
+            }
+            Ok(())
+        },
+    )?;
+    let shape: Vec<usize> = if args.loads.len() == 1 {
+        vec![n, n]
+    } else {
+        vec![args.loads.len(), n, n]
+    };
+    // Both outputs or neither: each is written to its temporary, then both are renamed.
+    let mut files: Vec<(&std::path::Path, wearcoef::io::atomic::FileWriter)> = Vec::new();
+    if let Some(path) = &args.pressure_out {
+        let shape = shape.clone();
+        files.push((
+            path,
+            Box::new(move |tmp| Ok(wearcoef::io::write_f64(tmp, &shape, pressures)?)),
+        ));
+    }
+    if let Some(path) = &args.contact_out {
+        let shape = shape.clone();
+        files.push((
+            path,
+            Box::new(move |tmp| Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)),
+        ));
+    }
+    wearcoef::io::atomic::write_all_atomically(files)?;
+    if args.json {
+        out!("{}", serde_json::to_string(&json_rows(&results))?)?;
+    }
+    Ok(())
+}
+
+/// `solve`'s numeric flags checked one by one (each error names its flag); the extension they
+/// ask for.
+fn check_solve_args(args: &SolveArgs) -> anyhow::Result<wearcoef::contact::solver::Extension> {
     if let Some((i, w)) = args
         .loads
         .iter()
@@ -377,10 +436,15 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
             args.entry_margin
         ))
     })?;
-    let extension = Extension {
+    Ok(Extension {
         coarse_block: args.coarse_block,
         ..margin
-    };
+    })
+}
+
+/// The outputs checked, then the surface: its header against the memory a sweep of it needs,
+/// then its heights (square, even side, finite).
+fn read_checked_surface(args: &SolveArgs) -> anyhow::Result<(usize, Vec<f64>)> {
     let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
     if let Some(p) = &args.pressure_out {
         outputs.push(("--pressure-out", p));
@@ -438,75 +502,28 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let cfg = SolverConfig {
-        tolerance: args.tol,
-        max_iterations: args.max_iter,
-        preconditioned: !args.plain_cg,
-        extension: (!args.no_extension).then_some(extension),
-        offset_to_load: !args.scale_to_load,
-        extrapolate_start: !args.scale_start,
-        ..SolverConfig::default()
-    };
-    let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
-    let mut pressures = Vec::new();
-    let mut contacts = Vec::new();
-    let (_, results) = sweep_heights(
-        &heights,
-        n,
-        args.e_star,
-        &args.loads,
-        &cfg,
-        |_, pressure, _| {
-            if keep_fields {
-                pressures.extend_from_slice(pressure);
-                contacts.extend(pressure.iter().map(|&p| u8::from(p > 0.0)));
-            }
-            Ok(())
-        },
-    )?;
-    let shape: Vec<usize> = if args.loads.len() == 1 {
-        vec![n, n]
-    } else {
-        vec![args.loads.len(), n, n]
-    };
-    // Both outputs or neither: each is written to its temporary, then both are renamed.
-    let mut files: Vec<(&std::path::Path, wearcoef::io::atomic::FileWriter)> = Vec::new();
-    if let Some(path) = &args.pressure_out {
-        let shape = shape.clone();
-        files.push((
-            path,
-            Box::new(move |tmp| Ok(wearcoef::io::write_f64(tmp, &shape, pressures)?)),
-        ));
-    }
-    if let Some(path) = &args.contact_out {
-        let shape = shape.clone();
-        files.push((
-            path,
-            Box::new(move |tmp| Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)),
-        ));
-    }
-    wearcoef::io::atomic::write_all_atomically(files)?;
-    if args.json {
-        let rows: Vec<_> = results
-            .iter()
-            .map(|r| {
-                json!({
-                    "w_over_w0": r.w_over_w0,
-                    "mean_pressure": r.mean_pressure,
-                    "area_fraction": r.area_fraction,
-                    "n_contact_px": r.n_contact_px,
-                    "iterations": r.report.iterations,
-                    "convolutions": r.report.convolutions,
-                    "error": r.report.error,
-                    "converged": r.report.converged(),
-                    "seconds": r.seconds,
-                    "peak_rss_bytes": wearcoef::machine::peak_rss_bytes(),
-                })
+    Ok((n, heights))
+}
+
+/// One JSON object per load of a `solve`.
+fn json_rows(results: &[wearcoef::contact::sweep::LoadResult]) -> Vec<serde_json::Value> {
+    results
+        .iter()
+        .map(|r| {
+            json!({
+                "w_over_w0": r.w_over_w0,
+                "mean_pressure": r.mean_pressure,
+                "area_fraction": r.area_fraction,
+                "n_contact_px": r.n_contact_px,
+                "iterations": r.report.iterations,
+                "convolutions": r.report.convolutions,
+                "error": r.report.error,
+                "converged": r.report.converged(),
+                "seconds": r.seconds,
+                "peak_rss_bytes": wearcoef::machine::peak_rss_bytes(),
             })
-            .collect();
-        out!("{}", serde_json::to_string(&rows)?)?;
-    }
-    Ok(())
+        })
+        .collect()
 }
 
 #[derive(clap::Args)]
