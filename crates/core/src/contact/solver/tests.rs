@@ -102,8 +102,6 @@ fn overflowing_change_lists_are_detected() {
     assert!(!solver.changes_listed());
 }
 
-/// Helpers of the tests that compare the intrinsics passes with their scalar code.
-
 /// The load offset `c` of [`Solver::load_offset`] (Newton's method from above) is the one a
 /// sort gives: with the values in decreasing order `x_(1) ≥ x_(2) ≥ …`, the largest `k` for
 /// which `c_k = (load − Σ_{j ≤ k} x_(j)) / k` leaves `x_(k) + c_k > 0`. Random pressures
