@@ -101,6 +101,7 @@
 mod deflation;
 mod extension;
 mod history;
+mod iteration;
 mod level;
 mod passes;
 mod precond;
@@ -115,6 +116,7 @@ use rayon::prelude::*;
 
 use super::elastic::{ElasticOperator, OperatorWorkspace};
 pub use extension::Extension;
+use iteration::Iteration;
 use level::Level;
 pub use report::{SolveReport, Status};
 use rows::{GradientStats, UpdateAcc, LANES};
@@ -386,21 +388,7 @@ impl<'a> Solver<'a> {
         cfg: &SolverConfig,
     ) -> Result<SolveReport, ContactError> {
         check_request(mean_pressure, cfg)?;
-        let len = self.pressure.len();
-        if cfg.preconditioned && self.preconditioned.len() != len {
-            self.preconditioned = crate::pages::filled(len, 0.0);
-        }
-        match cfg.extension.filter(|_| cfg.preconditioned) {
-            Some(settings) => {
-                if self.coarse.as_ref().map(|c| c.settings) != Some(settings) {
-                    let n = self.op.grid().n();
-                    let mut coarse = extension::Coarse::new(n, self.op.rows_per_block(), settings);
-                    coarse.deflate(self.op);
-                    self.coarse = Some(coarse);
-                }
-            }
-            None => self.coarse = None,
-        }
+        self.prepare_parts(cfg);
         let target = mean_pressure;
         let mut report = SolveReport {
             status: Status::Converged,
@@ -410,40 +398,20 @@ impl<'a> Solver<'a> {
             convolutions: 0,
             mean_pressure,
         };
-
         if target == 0.0 || self.flat {
             self.uniform_solution(target);
             report.error_history.push(0.0);
             return Ok(report);
         }
-        if cfg.extrapolate_start && self.has_solution && self.separation_exact {
-            if self
-                .history
-                .advance(&mut self.pressure, self.solved_mean, target)
-            {
-                self.separation_exact = false;
-            }
-        } else {
-            self.history.forget();
-        }
+        self.warm_start(target, cfg);
         let mut stats = self.start(target, &mut report);
         self.has_solution = false;
         self.separation_exact = false;
-
-        let mut exact = true;
-        let mut linear_steps = 0usize;
-        let mut shift = 0.0f64;
-        let mut restart = true;
-        // The last iteration's changes to the contact set and its size (none yet).
-        let mut changes: Option<(usize, f64)> = None;
-        let mut g_norm_old = 0.0f64;
-        let mut best = f64::INFINITY;
-        let mut best_at = 0usize;
-        let mut direction_mean = 0.0f64;
+        let len = self.pressure.len() as f64;
         let self_influence = self.op.self_influence();
-
+        let mut it = Iteration::new();
         loop {
-            // Gradient statistics on the contact set.
+            // The error from the gradient's statistics on the contact set.
             let GradientStats {
                 contact_nodes: n_s,
                 sum_g,
@@ -455,157 +423,49 @@ impl<'a> Solver<'a> {
             let mean_g = sum_g / n_s;
             let g_norm = (sum_g2 - n_s * mean_g * mean_g).max(0.0);
             let error = (sum_pg - min_g * sum_p) / (sum_p * self.height_std);
-
-            if error <= cfg.tolerance && !exact {
+            if error <= cfg.tolerance && !it.exact {
                 // Confirm with an exact deflection (and the exact load) before declaring
                 // convergence.
-                stats = self.exact_deflection(target * len as f64 / sum_p, shift);
+                stats = self.exact_deflection(target * len / sum_p, it.shift);
                 report.convolutions += 1;
-                exact = true;
-                linear_steps = 0;
+                it.exact = true;
+                it.linear_steps = 0;
                 continue;
             }
-            report.error_history.push(error);
-            report.error = error;
-            if !error.is_finite() {
-                report.status = Status::Stalled;
-                break;
-            }
-            if error <= cfg.tolerance {
-                report.status = Status::Converged;
-                break;
-            }
-            if error < best {
-                best = error;
-                best_at = report.iterations;
-            } else if report.iterations - best_at >= cfg.stall_window {
-                report.status = Status::Stalled;
-                break;
-            }
-            if report.iterations >= cfg.max_iterations {
-                report.status = Status::MaxIterations;
+            if let Some(status) = it.verdict(error, cfg, &mut report) {
+                report.status = status;
                 break;
             }
             report.iterations += 1;
-
-            // Pass 2, fused with the forward FFT: conjugate direction on the contact set,
-            // kept centred there; then K t and the curvature ⟨t, K t⟩ (Parseval).
-            let level = shift + mean_g;
-            // ⟨g, z⟩ replaces ⟨g, g⟩ in β when preconditioned.
-            let preconditioned = if cfg.preconditioned {
-                // The extension's near term is used once the contact set has settled; the
-                // direction restarts when the preconditioner changes. On large boxes a node
-                // joins F only below the level less a margin that falls with the error.
-                let mut entry = level;
-                if let Some(coarse) = self.coarse.as_mut() {
-                    restart |= coarse.settle(changes);
-                    entry -= coarse.entry_margin(error * self.height_std);
-                }
-                report.convolutions += 1;
-                Some(self.precondition(Level { mean: level, entry }))
-            } else {
-                None
-            };
-            let g_dot = preconditioned.map_or(g_norm, |sums| sums.g_dot_z);
-            let mut beta = if restart || g_norm_old <= 0.0 {
-                0.0
-            } else {
-                g_dot / g_norm_old
-            };
-            g_norm_old = g_dot;
-            let (denominator, numerator) = match preconditioned {
-                Some(sums) => {
-                    // The old direction is centred on the current free set.
-                    direction_mean = sums.t_old_mean;
-                    // Σ_F g t = ⟨g, z − z̄⟩ + β (Σ_F g t_old − t̄ Σ_F g), from the sums of
-                    // `precondition`, so the direction pass need not sum.
-                    let conjugate = |beta: f64| {
-                        sums.g_dot_z + beta * (sums.g_dot_t_old - direction_mean * sums.g_sum)
-                    };
-                    // A conjugate direction kept across changes of the set may descend
-                    // little or not at all: then restart from the preconditioned gradient.
-                    if conjugate(beta) < DESCENT_FRACTION * sums.g_dot_z {
-                        beta = 0.0;
-                    }
-                    (
-                        self.preconditioned_direction_and_transform(
-                            sums.z_mean,
-                            beta,
-                            direction_mean,
-                        ),
-                        conjugate(beta),
-                    )
-                }
-                None => self.direction_and_transform(level, beta, direction_mean),
-            };
+            // The direction (fused with the forward FFT), then K t and the curvature ⟨t, K t⟩
+            // (Parseval), and the exact line search.
+            let level = it.shift + mean_g;
+            let (denominator, numerator) =
+                self.search_direction(cfg, level, error, g_norm, &mut it, &mut report);
             report.convolutions += 1;
-            // Exact line search.
             let tau = if denominator > 0.0 && denominator.is_finite() && numerator.is_finite() {
                 numerator / denominator
             } else {
                 1.0 / self_influence
             };
-
-            // Pass 3, fused with the inverse FFT: step, project, re-admit interpenetrating
-            // nodes; speculatively update the deflection linearly (u − τ K t) and gather the
-            // next gradient statistics.
-            let new_shift = level;
+            // Fused with the inverse FFT: step, project, re-admit interpenetrating nodes;
+            // speculatively update the deflection linearly (u − τ K t) and gather the next
+            // gradient statistics.
             let (totals, linear_stats) =
-                self.update_from_transform(tau, level, new_shift, !cfg.preconditioned);
-            let total = totals.sum_p;
-            direction_mean = if totals.contact_nodes > 0.0 {
-                totals.sum_t_kept / totals.contact_nodes
-            } else {
-                0.0
-            };
-            // The plain iteration restarts whenever a node is re-admitted (Polonsky & Keer);
-            // the preconditioned one only when the free set changed by more than
-            // RESTART_FRACTION of the contact set.
-            restart = if cfg.preconditioned {
-                totals.changed as f64 > RESTART_FRACTION * totals.contact_nodes
-            } else {
-                totals.readmitted > 0
-            };
-            changes = Some((totals.changed, totals.contact_nodes));
-            shift = new_shift;
-            if total <= 0.0 {
+                self.update_from_transform(tau, level, level, !cfg.preconditioned);
+            it.after_step(&totals, cfg, level);
+            if totals.sum_p <= 0.0 {
                 self.pressure.fill(target);
-                stats = self.exact_deflection(1.0, shift);
+                stats = self.exact_deflection(1.0, it.shift);
                 report.convolutions += 1;
-                exact = true;
-                restart = true;
-                changes = None;
+                it.exact = true;
+                it.restart = true;
+                it.changes = None;
                 continue;
             }
-            let load = target * len as f64;
-            // The load restored by a uniform offset where the step changed many nodes. When
-            // the load is below the rounding of the largest pressures (W/W0 ≈ 1e-20), the
-            // offset's sum cancels to zero: the rescaling below restores it instead.
-            let offset = (cfg.preconditioned
-                && cfg.offset_to_load
-                && totals.changed > MAX_SPARSE
-                && total > load)
-                .then(|| self.load_offset(load, total, totals.contact_nodes))
-                .filter(|&(_, shifted)| shifted > 0.0);
-            stats = if let Some((offset, shifted)) = offset {
-                // `u = K p` recomputed: one convolution, as a correction of this many
-                // changes would take.
-                report.convolutions += 1;
-                linear_steps = 0;
-                self.offset_deflection(offset, load / shifted, shift)
-            } else {
-                self.next_deflection(
-                    &totals,
-                    linear_stats,
-                    load / total,
-                    shift,
-                    &mut linear_steps,
-                    &mut report,
-                )
-            };
-            exact = linear_steps == 0;
+            stats = self.restore_load(cfg, &totals, linear_stats, target, &mut it, &mut report);
+            it.exact = it.linear_steps == 0;
         }
-
         self.finish_gap();
         self.has_solution = report.status == Status::Converged;
         self.solved_mean = target;
