@@ -117,7 +117,6 @@ use rayon::prelude::*;
 use super::elastic::{ElasticOperator, OperatorWorkspace};
 pub use extension::Extension;
 use iteration::Iteration;
-use level::Level;
 pub use report::{SolveReport, Status};
 use rows::{GradientStats, UpdateAcc, LANES};
 
