@@ -222,7 +222,26 @@ pub(super) fn load_resolution(
             })
         })
         .collect();
-    let table = DataFrame::new(
+    let table = load_resolution_table(&rows)?;
+    let result = json!({
+        "tolerance_error_over_ci95": LOAD_RESOLUTION_TOLERANCE,
+        "fine_loads": fine_loads.len(),
+        "chosen_loads": chosen_loads.len(),
+        "chosen_largest_load_ratio": largest_step,
+        "points": rows.len(),
+        "points_at_transition": transitions,
+        "points_judged": rows.len() - transitions,
+        "points_beyond_band": beyond_band,
+        "max_error_over_ci95": worst,
+        "rule_met": met,
+    });
+    Ok((table, result))
+}
+
+/// The audit's table: one row per judged point of the finer sweep (curve, threshold, load,
+/// value and band, the interpolation and its error in bands, the neighbours' own).
+fn load_resolution_table(rows: &[LoadResolutionRow]) -> anyhow::Result<DataFrame> {
+    Ok(DataFrame::new(
         rows.len(),
         vec![
             Column::new(
@@ -278,20 +297,7 @@ pub(super) fn load_resolution(
                     .collect::<Vec<bool>>(),
             ),
         ],
-    )?;
-    let result = json!({
-        "tolerance_error_over_ci95": LOAD_RESOLUTION_TOLERANCE,
-        "fine_loads": fine_loads.len(),
-        "chosen_loads": chosen_loads.len(),
-        "chosen_largest_load_ratio": largest_step,
-        "points": rows.len(),
-        "points_at_transition": transitions,
-        "points_judged": rows.len() - transitions,
-        "points_beyond_band": beyond_band,
-        "max_error_over_ci95": worst,
-        "rule_met": met,
-    });
-    Ok((table, result))
+    )?)
 }
 
 #[cfg(test)]
