@@ -71,7 +71,7 @@ enum Command {
 
     /// Fit α to a table of cluster areas: discrete truncated power law by maximum
     /// likelihood, x_min by the KS criterion, a bootstrap 95 % interval; per load.
-    Fit(cli::tools::FitArgs),
+    Fit(cli::fit::FitArgs),
 
     /// Label the contact clusters of a map, or of each map of a stack, on the periodic torus.
     Clusters(cli::tools::ClustersArgs),
@@ -147,7 +147,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Solve(args) => cli::tools::solve(args),
         Command::Model(args) => cli::tools::model(args),
         Command::Clusters(args) => cli::tools::clusters(args),
-        Command::Fit(args) => cli::tools::fit(args),
+        Command::Fit(args) => cli::fit::fit(args),
         Command::Surface(args) => cli::tools::surface(args),
     }?;
     std::io::stdout().flush().ok();

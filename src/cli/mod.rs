@@ -18,6 +18,7 @@ macro_rules! out {
     }};
 }
 
+pub mod fit;
 pub mod plan;
 pub mod store;
 pub mod submit;

@@ -1,0 +1,200 @@
+//! `wearcoef fit`: the exponent of a table of cluster areas, per load.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use serde_json::json;
+
+use super::InputError;
+
+#[derive(clap::Args)]
+pub struct FitArgs {
+    /// Parquet table of cluster areas, e.g. a clusters stage's clusters.parquet, or several
+    /// concatenated; with a `load_index` column each load is fitted on its own (realizations
+    /// pooled), and with a `percolating` column percolating clusters are left out, as the
+    /// statistics stage does.
+    #[arg(long)]
+    pub areas: PathBuf,
+    /// Column of areas in whole grid cells (integers ≥ 1).
+    #[arg(long, default_value = "area_px")]
+    pub column: String,
+    /// Bootstrap resamples of the 95 % interval.
+    #[arg(long, default_value_t = 200)]
+    pub resamples: usize,
+    /// Seed of the bootstrap.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// α of a discrete power law truncated at the largest area, by maximum likelihood with
+/// x_min chosen by the KS criterion (the statistics stage's `discrete_truncated_mle`).
+/// The areas table and its column `column` as whole numbers of cells ≥ 1 (each error names
+/// the file, the column and the row).
+fn read_areas(
+    areas: &std::path::Path,
+    column: &str,
+) -> anyhow::Result<(polars::prelude::DataFrame, Vec<u64>)> {
+    use wearcoef::store::table;
+    let df = table::read(areas)
+        .map_err(|e| InputError(format!("--areas {}: {e:#}", areas.display())))?;
+    let col = df.column(column).map_err(|_| {
+        InputError(format!(
+            "--areas {}: no column '{column}' (columns: {}); name the areas with --column",
+            areas.display(),
+            df.get_column_names()
+                .iter()
+                .map(|c| c.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })?;
+    let values: Vec<Option<f64>> = col
+        .cast(&polars::prelude::DataType::Float64)
+        .map_err(|_| InputError(format!("--column {column}: not numeric")))?
+        .f64()?
+        .iter()
+        .collect();
+    let mut cells = Vec::with_capacity(values.len());
+    for (i, v) in values.iter().enumerate() {
+        match v {
+            Some(x) if x.is_finite() && *x >= 1.0 && x.fract() == 0.0 && *x < 2f64.powi(53) => {
+                cells.push(*x as u64)
+            }
+            _ => {
+                return Err(InputError(format!(
+                    "--areas {}: row {i} of '{column}' is {}; areas must be whole numbers of grid cells ≥ 1",
+                    areas.display(),
+                    v.map_or("null".to_string(), |x| x.to_string())
+                ))
+                .into())
+            }
+        }
+    }
+    Ok((df, cells))
+}
+
+/// Per load (`load_index`, or one group without it): W/W0, the areas of the clusters that do
+/// not percolate, and how many percolating ones were left out.
+type LoadGroups = std::collections::BTreeMap<Option<u32>, (f64, Vec<u64>, usize)>;
+
+fn group_by_load(df: &polars::prelude::DataFrame, cells: &[u64]) -> anyhow::Result<LoadGroups> {
+    use wearcoef::store::table;
+    let loads: Vec<Option<u32>> = match df.column("load_index") {
+        Ok(_) => table::u32_column(df, "load_index")?,
+        Err(_) => vec![None; df.height()],
+    };
+    let w: Vec<f64> =
+        table::f64_column(df, "w_over_w0").unwrap_or_else(|_| vec![f64::NAN; df.height()]);
+    let percolating: Vec<bool> =
+        table::bool_column(df, "percolating").unwrap_or_else(|_| vec![false; df.height()]);
+    let mut groups = LoadGroups::default();
+    for i in 0..cells.len() {
+        let g = groups.entry(loads[i]).or_insert((w[i], Vec::new(), 0));
+        if percolating[i] {
+            g.2 += 1;
+        } else {
+            g.1.push(cells[i]);
+        }
+    }
+    Ok(groups)
+}
+
+/// The truncated power law fitted to one load's areas, with its bootstrap interval, as JSON.
+fn fit_row(
+    load: Option<u32>,
+    w: f64,
+    data: &[u64],
+    excluded: usize,
+    resamples: usize,
+    seed: u64,
+) -> serde_json::Value {
+    use wearcoef::powerlaw;
+    let fit = data
+        .iter()
+        .copied()
+        .max()
+        .ok_or(powerlaw::FitError::Empty)
+        .and_then(|m| powerlaw::fit_discrete_tail(data, Some(m)).map(|t| (t, m)));
+    match fit {
+        Ok((t, m)) => {
+            let f = t.fit;
+            let ci =
+                powerlaw::bootstrap_discrete(data, f.lower as u64, Some(m), resamples, seed).ok();
+            json!({
+                "load_index": load, "w_over_w0": (w.is_finite()).then_some(w),
+                "clusters": data.len(), "percolating_left_out": excluded,
+                "alpha": f.alpha, "std_error": f.std_error,
+                "bootstrap_ci95_low": ci.map(|c| c.0), "bootstrap_ci95_high": ci.map(|c| c.1),
+                "x_min_px": f.lower, "x_max_px": f.upper, "n_fitted": f.n,
+                "ks_distance": f.ks_distance, "x_min_candidates": t.candidates,
+            })
+        }
+        Err(e) => json!({
+            "load_index": load, "w_over_w0": (w.is_finite()).then_some(w),
+            "clusters": data.len(), "percolating_left_out": excluded,
+            "alpha": null, "note": format!("no fit: {e}"),
+        }),
+    }
+}
+
+/// `fit`'s rows as text, one line per load.
+fn print_fit_rows(out: &[serde_json::Value]) -> anyhow::Result<()> {
+    for r in out {
+        let load = r["load_index"]
+            .as_u64()
+            .map_or("all".to_string(), |l| format!("load {l}"));
+        match r["alpha"].as_f64() {
+                Some(a) => out!(
+                    "{load}: α = {a:.4} ± {:.4} (95 % bootstrap [{:.4}, {:.4}]), x_min = {} px, x_max = {} px, {} of {} clusters fitted, KS {:.4}",
+                    r["std_error"].as_f64().unwrap_or(f64::NAN),
+                    r["bootstrap_ci95_low"].as_f64().unwrap_or(f64::NAN),
+                    r["bootstrap_ci95_high"].as_f64().unwrap_or(f64::NAN),
+                    r["x_min_px"],
+                    r["x_max_px"],
+                    r["n_fitted"],
+                    r["clusters"],
+                    r["ks_distance"].as_f64().unwrap_or(f64::NAN),
+                )?,
+                None => out!("{load}: {} ({} clusters)", r["note"].as_str().unwrap_or(""), r["clusters"])?,
+            }
+    }
+    Ok(())
+}
+
+pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
+    let FitArgs {
+        areas,
+        column,
+        resamples,
+        seed,
+        json,
+    } = args;
+    if resamples < 10 {
+        return Err(InputError(format!(
+            "--resamples {resamples}: at least 10 are needed for a 95 % interval"
+        ))
+        .into());
+    }
+    let is_parquet = areas.extension().is_some_and(|e| e == "parquet");
+    if !is_parquet {
+        return Err(InputError(format!(
+            "--areas {}: expected a .parquet table (a clusters stage's clusters.parquet, or a table with an integer column of areas)",
+            areas.display()
+        ))
+        .into());
+    }
+    let (df, cells) = read_areas(&areas, &column)?;
+    let groups = group_by_load(&df, &cells)?;
+    let out: Vec<serde_json::Value> = groups
+        .into_iter()
+        .map(|(load, (w, data, excluded))| fit_row(load, w, &data, excluded, resamples, seed))
+        .collect();
+    if json {
+        out!("{}", serde_json::to_string(&out)?)?;
+    } else {
+        print_fit_rows(&out)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
