@@ -16,6 +16,7 @@ use crate::surface::{Method, SurfaceParams};
 mod cluster;
 mod figures;
 mod limits;
+mod sizes;
 pub use cluster::ClusterConfig;
 pub use figures::{FigureDecl, FigureKind};
 
@@ -368,14 +369,14 @@ impl Pipeline {
         let sp = &study.profiles[profile];
         let base = format!("studies.{name}");
         let pbase = format!("{base}.profiles.{profile}");
-        let ratio = checked_spectrum(study, &base, origin)?;
+        let ratio = sizes::checked_spectrum(study, &base, origin)?;
         let method = Method::parse(&study.method).ok_or_else(|| ConfigError::Invalid {
             path: origin.to_string(),
             field: format!("{base}.method"),
             value: study.method.clone(),
             allowed: "must be `filter` or `random-phase`".into(),
         })?;
-        let n = checked_grid_side(study, sp, ratio, &base, &pbase, origin)?;
+        let n = sizes::checked_grid_side(study, sp, ratio, &base, &pbase, origin)?;
         let res = sp.lambda_s_over_dl;
         let (loads, sweep, keep_pressure) = self.resolve_study_loads(name, profile, origin)?;
         limits::check_realizations(&pbase, sp.realizations, loads.len(), profile, origin)?;
@@ -600,109 +601,4 @@ fn resolve_loads(loads: &Loads, field: &str, origin: &str) -> Result<Vec<f64>, C
         }
     }
     Ok(values)
-}
-
-/// A study's spectrum checked: 0 < H < 1 and λ_l/λ_s > 1; returns λ_l/λ_s.
-fn checked_spectrum(study: &Study, base: &str, origin: &str) -> Result<f64, ConfigError> {
-    let invalid = |field: String, value: f64, allowed: String| ConfigError::Invalid {
-        path: origin.to_string(),
-        field,
-        value: value.to_string(),
-        allowed,
-    };
-    if !(study.hurst.is_finite() && study.hurst > 0.0 && study.hurst < 1.0) {
-        return Err(invalid(
-            format!("{base}.hurst"),
-            study.hurst,
-            "the Hurst exponent must lie in the open interval (0, 1)".into(),
-        ));
-    }
-    let ratio = study.lambda_l_over_lambda_s;
-    if !(ratio.is_finite() && ratio > 1.0) {
-        return Err(invalid(
-            format!("{base}.lambda_l_over_lambda_s"),
-            ratio,
-            "λ_l/λ_s must be finite and > 1 (λ_l > λ_s)".into(),
-        ));
-    }
-    Ok(ratio)
-}
-
-/// A study's sizes in one profile checked (roll-off, tolerance, λ_s/Δl, L/λ_l, realizations)
-/// and its grid side n = (L/λ_l)·(λ_l/λ_s)·(λ_s/Δl), an even integer in [4, MAX_N].
-fn checked_grid_side(
-    study: &Study,
-    sp: &StudyProfile,
-    ratio: f64,
-    base: &str,
-    pbase: &str,
-    origin: &str,
-) -> Result<usize, ConfigError> {
-    let invalid = |field: String, value: f64, allowed: String| ConfigError::Invalid {
-        path: origin.to_string(),
-        field,
-        value: value.to_string(),
-        allowed,
-    };
-    if let Some(r) = study.rolloff_over_lambda_l {
-        if !(r.is_finite() && r > 1.0 && r <= sp.l_over_lambda_l) {
-            return Err(invalid(
-                format!("{base}.rolloff_over_lambda_l"),
-                r,
-                format!("λ_r/λ_l must lie in (1, L/λ_l = {}]", sp.l_over_lambda_l),
-            ));
-        }
-    }
-    if let Some(tol) = sp.tolerance {
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(invalid(
-                format!("{pbase}.tolerance"),
-                tol,
-                "must lie in (0, 1), or be left out to use solver.tolerance".into(),
-            ));
-        }
-    }
-    let res = sp.lambda_s_over_dl;
-    if !(res.is_finite() && res >= 2.0) {
-        return Err(invalid(
-            format!("{pbase}.lambda_s_over_dl"),
-            res,
-            "λ_s/Δl must be ≥ 2: the smallest wavelength needs at least two grid spacings (Nyquist)".into(),
-        ));
-    }
-    let box_ratio = sp.l_over_lambda_l;
-    if !(box_ratio.is_finite() && box_ratio >= 1.0) {
-        return Err(invalid(
-            format!("{pbase}.l_over_lambda_l"),
-            box_ratio,
-            "L/λ_l must be ≥ 1: the largest wavelength cannot exceed the box".into(),
-        ));
-    }
-    if sp.realizations == 0 {
-        return Err(invalid(
-            format!("{pbase}.realizations"),
-            0.0,
-            "must be ≥ 1".into(),
-        ));
-    }
-    let n_real = box_ratio * ratio * res;
-    let n = n_real.round();
-    if (n_real - n).abs() > 1e-9 * n_real.max(1.0) {
-        return Err(invalid(
-            format!("{pbase}.l_over_lambda_l"),
-            box_ratio,
-            format!(
-                "the grid L/Δl = (L/λ_l)·(λ_l/λ_s)·(λ_s/Δl) = {box_ratio}·{ratio}·{res} = {n_real} is not an integer; choose ratios whose product is an even integer"
-            ),
-        ));
-    }
-    let n = n as usize;
-    if !n.is_multiple_of(2) || !(4..=MAX_N).contains(&n) {
-        return Err(invalid(
-            format!("{pbase}.l_over_lambda_l"),
-            box_ratio,
-            format!("the grid L/Δl = {n} must be an even integer in [4, {MAX_N}]"),
-        ));
-    }
-    Ok(n)
 }
