@@ -141,9 +141,25 @@ impl RasterPlot {
             BitMapElement::<(i32, i32)>::with_owned_buffer((xr.start, yr.start), (pw, ph), buffer)
                 .ok_or_else(|| anyhow::anyhow!("raster buffer has the wrong size"))?;
         root.draw(&element).map_err(plot_err)?;
-        // Legend entries beside the image: a coloured square and its label, or text alone.
-        let x = w as i32 - 150;
-        let mut y = yr.start;
+        self.draw_legend(root, w as i32 - 150, yr.start)?;
+        if let Some(bar) = &self.colorbar {
+            let below = (main.dim_in_pixel().1 as i32 - yr.end).max(0);
+            draw_colorbar(root, &side, bar, (yr.start, below))?;
+        }
+        Ok(())
+    }
+}
+
+impl RasterPlot {
+    /// Legend entries beside the image from `(x, y0)` down: a coloured square and its label,
+    /// or text alone.
+    fn draw_legend<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        x: i32,
+        y0: i32,
+    ) -> DrawResult {
+        let mut y = y0;
         for (label, color) in &self.legend {
             if let Some((r, g, b)) = color {
                 let square = [(x, y), (x + 18, y + 18)];
@@ -162,48 +178,57 @@ impl RasterPlot {
             )?;
             y += 30;
         }
-        if let Some(bar) = &self.colorbar {
-            let mut cb = ChartBuilder::on(&side);
-            cb.margin_top(yr.start)
-                .margin_bottom((main.dim_in_pixel().1 as i32 - yr.end).max(0))
-                .margin_right(10)
-                .y_label_area_size(0)
-                .right_y_label_area_size(100);
-            let mut chart = cb
-                .build_cartesian_2d(0.0..1.0, bar.lo..bar.hi)
-                .map_err(plot_err)?;
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .disable_x_axis()
-                .y_labels(8)
-                .y_label_formatter(&|v| number(snap_zero(*v, bar.hi - bar.lo)))
-                .label_style(("sans-serif", LEGEND_PX))
-                .draw()
-                .map_err(plot_err)?;
-            let (_, sy) = chart.plotting_area().get_pixel_range();
-            let (sx, _) = side.get_pixel_range();
-            text::draw(
-                root,
-                &bar.label,
-                (sx.end - base.0 - 24, (sy.start + sy.end) / 2 - base.1),
-                Align::Middle,
-                TextLook {
-                    upwards: true,
-                    ..TextLook::new(AXIS_LABEL_PX * 0.9)
-                },
-            )?;
-            let steps = 256;
-            let span = bar.hi - bar.lo;
-            chart
-                .draw_series((0..steps).map(|i| {
-                    let a = bar.lo + span * i as f64 / steps as f64;
-                    let b = bar.lo + span * (i + 1) as f64 / steps as f64;
-                    let (r, g, bl) = viridis((i as f64 + 0.5) / steps as f64);
-                    Rectangle::new([(0.0, a), (1.0, b)], RGBColor(r, g, bl).filled())
-                }))
-                .map_err(plot_err)?;
-        }
         Ok(())
     }
+}
+
+/// The colour bar in `side`, its scale `(top, bottom)` margins aligned with the image's.
+fn draw_colorbar<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    side: &DrawingArea<DB, Shift>,
+    bar: &ColorBar,
+    margins: (i32, i32),
+) -> DrawResult {
+    let base = root.get_base_pixel();
+    let mut cb = ChartBuilder::on(side);
+    cb.margin_top(margins.0)
+        .margin_bottom(margins.1)
+        .margin_right(10)
+        .y_label_area_size(0)
+        .right_y_label_area_size(100);
+    let mut chart = cb
+        .build_cartesian_2d(0.0..1.0, bar.lo..bar.hi)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_labels(8)
+        .y_label_formatter(&|v| number(snap_zero(*v, bar.hi - bar.lo)))
+        .label_style(("sans-serif", LEGEND_PX))
+        .draw()
+        .map_err(plot_err)?;
+    let (_, sy) = chart.plotting_area().get_pixel_range();
+    let (sx, _) = side.get_pixel_range();
+    text::draw(
+        root,
+        &bar.label,
+        (sx.end - base.0 - 24, (sy.start + sy.end) / 2 - base.1),
+        Align::Middle,
+        TextLook {
+            upwards: true,
+            ..TextLook::new(AXIS_LABEL_PX * 0.9)
+        },
+    )?;
+    let steps = 256;
+    let span = bar.hi - bar.lo;
+    chart
+        .draw_series((0..steps).map(|i| {
+            let a = bar.lo + span * i as f64 / steps as f64;
+            let b = bar.lo + span * (i + 1) as f64 / steps as f64;
+            let (r, g, bl) = viridis((i as f64 + 0.5) / steps as f64);
+            Rectangle::new([(0.0, a), (1.0, b)], RGBColor(r, g, bl).filled())
+        }))
+        .map_err(plot_err)?;
+    Ok(())
 }
