@@ -238,6 +238,21 @@ pub fn label(
     cols: usize,
     connectivity: Connectivity,
 ) -> Result<Labelling, ClusterError> {
+    check_shape(contact, rows, cols)?;
+    let eight = connectivity == Connectivity::Eight;
+    let (runs, row_start) = find_runs(contact, rows, cols);
+    let (mut forest, pairs) = join_runs(&runs, &row_start, rows, cols, eight);
+    let (labels, clusters) = collect_clusters(&runs, &mut forest, &pairs, rows, cols);
+    Ok(Labelling {
+        rows,
+        cols,
+        labels,
+        clusters,
+    })
+}
+
+/// The map's shape checked: not empty, `rows × cols` values, labels that fit in `u32`.
+fn check_shape(contact: &[bool], rows: usize, cols: usize) -> Result<(), ClusterError> {
     if rows == 0 || cols == 0 {
         return Err(ClusterError::Empty { rows, cols });
     }
@@ -251,8 +266,20 @@ pub fn label(
     if (rows * cols) as u64 >= u32::MAX as u64 {
         return Err(ClusterError::TooLarge { rows, cols });
     }
-    let eight = connectivity == Connectivity::Eight;
-    let (runs, row_start) = find_runs(contact, rows, cols);
+    Ok(())
+}
+
+/// The union–find over runs: runs of consecutive rows joined where they touch (overlap, or
+/// also touch at a corner for 8-connectivity), across the periodic edges with the shift of
+/// the periodic copy; and per run its adjacent pixel pairs (4-neighbour edges inside
+/// contact), for perimeters.
+fn join_runs(
+    runs: &[Run],
+    row_start: &[usize],
+    rows: usize,
+    cols: usize,
+    eight: bool,
+) -> (ShiftForest, Vec<u64>) {
     let last_col = (cols - 1) as u32;
     let mut forest = ShiftForest::new(runs.len());
     // Adjacent pixel pairs (4-neighbour edges inside contact) per run, for perimeters.
@@ -311,6 +338,19 @@ pub fn label(
     }
     join_rows(rows - 1, 0, 1, &mut forest);
 
+    (forest, pairs)
+}
+
+/// The clusters from the joined runs, ids in order of first appearance (runs are in
+/// row-major order): the label map, and per cluster its area, perimeter, unwrapped extents
+/// and whether it wraps.
+fn collect_clusters(
+    runs: &[Run],
+    forest: &mut ShiftForest,
+    pairs: &[u64],
+    rows: usize,
+    cols: usize,
+) -> (Vec<u32>, Vec<Cluster>) {
     // Clusters: ids in order of first appearance (runs are in row-major order).
     let mut cluster_of_root = vec![0u32; runs.len()];
     let mut clusters: Vec<Cluster> = Vec::new();
@@ -360,10 +400,5 @@ pub fn label(
             (b[3] - b[2] + 1) as u32
         };
     }
-    Ok(Labelling {
-        rows,
-        cols,
-        labels,
-        clusters,
-    })
+    (labels, clusters)
 }
