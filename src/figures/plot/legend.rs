@@ -50,6 +50,34 @@ impl LegendBox {
         )
     }
 
+    /// Draw the entries at `spot` inside the plotting area `plot`, or else centred in the
+    /// strip `below` the axes in its number of columns.
+    pub(super) fn draw_placed<DB: DrawingBackend>(
+        &self,
+        plot: &DrawingArea<DB, Shift>,
+        spot: Option<(i32, i32)>,
+        below: Option<(DrawingArea<DB, Shift>, usize)>,
+        entries: &[&Series],
+        marker_r: i32,
+    ) -> DrawResult {
+        match (spot, below) {
+            (Some(at), _) => self.draw(plot, &entries, 1, at, marker_r)?,
+            (None, Some((strip, columns))) => {
+                let (sw, _) = strip.dim_in_pixel();
+                let (lw, _) = self.size(entries.len(), columns);
+                self.draw(
+                    &strip,
+                    &entries,
+                    columns,
+                    ((sw as i32 - lw) / 2, 0),
+                    marker_r,
+                )?
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
     /// Draw the entries in `columns` columns, box's top-left corner at `at` of `area`.
     pub(super) fn draw<DB: DrawingBackend>(
         &self,

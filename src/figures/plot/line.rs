@@ -17,6 +17,13 @@ use super::{
     DATA_COLUMNS, LEGEND_PX, SIZE_PX, TICK_PX, TITLE_PX,
 };
 
+/// Curves, marks and bands of a plot in pixels of its plotting area.
+type PixelPaths = (
+    Vec<Vec<(i32, i32)>>,
+    Vec<Vec<(i32, i32)>>,
+    Vec<Vec<(i32, i32)>>,
+);
+
 impl LinePlot {
     /// Finite points (positive on logarithmic axes) of every series, as drawn.
     fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
@@ -154,19 +161,7 @@ impl LinePlot {
         Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
         let px = |v: f64| (v * scale).round().max(1.0) as i32;
-        let (w, _) = area.dim_in_pixel();
-        let title_h = if self.title.is_empty() {
-            px(12.0)
-        } else {
-            text::draw(
-                area,
-                &self.title,
-                (w as i32 / 2, px(10.0)),
-                Align::Middle,
-                TextLook::new(TITLE_PX * scale),
-            )?;
-            px(TITLE_PX * 1.9)
-        };
+        let title_h = self.draw_title(area, scale)?;
         let (_, body) = area.split_vertically(title_h);
         let entries: Vec<&Series> = self.series.iter().filter(|s| !s.label.is_empty()).collect();
         let legend = LegendBox::measure(area, &entries, scale);
@@ -183,75 +178,18 @@ impl LinePlot {
                 .build_cartesian_2d(x(), y())
                 .map_err(plot_err)
         };
-        let keep = finite_on(self.x_log, self.y_axis);
         let marker_r = px(4.0).max(2);
         let margin = px(10.0);
-        // Curves in pixels of the plotting area.
+        // Curves, marks and bands in pixels of the plotting area.
         let curves_of = |chart: &ChartContext<DB, Cartesian2d<X, Y>>| {
-            let base = chart.plotting_area().strip_coord_spec().get_base_pixel();
-            let to_px = |p: &(f64, f64)| {
-                let (a, b) = chart.backend_coord(p);
-                (a - base.0, b - base.1)
-            };
-            let curves: Vec<Vec<(i32, i32)>> = self
-                .series
-                .iter()
-                .map(|s| {
-                    s.points
-                        .iter()
-                        .map(|&p| self.drawn_at(p))
-                        .filter(|p| keep(p))
-                        .map(|p| to_px(&p))
-                        .collect()
-                })
-                .collect();
-            // Each band as a polygon: its upper edge forward, its lower edge back; a low
-            // end off a logarithmic axis is drawn at the axis' bottom.
-            let bands: Vec<Vec<(i32, i32)>> = self
-                .series
-                .iter()
-                .map(|s| {
-                    let on_axis = |(x, y): (f64, f64)| {
-                        if keep(&(x, y)) {
-                            Some((x, y))
-                        } else if x.is_finite() && y.is_finite() && (!self.x_log || x > 0.0) {
-                            Some((x, y_span.0))
-                        } else {
-                            None
-                        }
-                    };
-                    let upper = s.band.iter().filter_map(|&(x, _, hi)| on_axis((x, hi)));
-                    let lower: Vec<(f64, f64)> = s
-                        .band
-                        .iter()
-                        .filter_map(|&(x, lo, _)| on_axis((x, lo)))
-                        .collect();
-                    upper
-                        .chain(lower.into_iter().rev())
-                        .map(|p| to_px(&p))
-                        .collect()
-                })
-                .collect();
-            let xs = x().range();
-            let marks: Vec<Vec<(i32, i32)>> = self
-                .x_marks
-                .iter()
-                .map(|&xm| vec![to_px(&(xm, y_span.0)), to_px(&(xm, y_span.1))])
-                .chain(
-                    self.y_marks
-                        .iter()
-                        .chain(&self.y_floor)
-                        .map(|&ym| vec![to_px(&(xs.start, ym)), to_px(&(xs.end, ym))]),
-                )
-                .collect();
-            (curves, marks, bands)
+            self.pixel_paths(chart, x().range(), y_span)
         };
         // The legend inside the axes where it covers nothing, else below them.
         let spot = if entries.is_empty() || self.legend == LegendAt::Below {
             None
         } else {
             let probe = build(&body)?;
-            let (curves, marks, bands) = curves_of(&probe);
+            let (curves, marks, bands) = curves_of(&probe)?;
             let all: Vec<Vec<(i32, i32)>> = curves.into_iter().chain(marks).chain(bands).collect();
             let pixels = covered_pixels(&all, 2.0);
             let (pw, ph) = probe.plotting_area().dim_in_pixel();
@@ -308,7 +246,128 @@ impl LinePlot {
             BLACK.stroke_width(1),
         ))
         .map_err(plot_err)?;
-        let (curves, marks, bands) = curves_of(&chart);
+        let (curves, marks, bands) = curves_of(&chart)?;
+        self.draw_paths(&plot, (curves, marks, bands), scale, marker_r)?;
+        self.draw_notes(&chart, &plot, scale)?;
+        // Axis labels, outside the tick labels.
+        let base = area.get_base_pixel();
+        let (prx, pry) = plot.get_pixel_range();
+        self.draw_axis_labels(area, (&prx, &pry), chart_area.get_pixel_range(), scale)?;
+        legend.draw_placed(&plot, spot, below, &entries, marker_r)?;
+        Ok((
+            prx.start - base.0,
+            pry.start - base.1,
+            prx.end - base.0,
+            pry.end - base.1,
+        ))
+    }
+
+    /// The title, centred at the top; the height it takes.
+    fn draw_title<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        scale: f64,
+    ) -> anyhow::Result<i32> {
+        let px = |v: f64| (v * scale).round().max(1.0) as i32;
+        let (w, _) = area.dim_in_pixel();
+        Ok(if self.title.is_empty() {
+            px(12.0)
+        } else {
+            text::draw(
+                area,
+                &self.title,
+                (w as i32 / 2, px(10.0)),
+                Align::Middle,
+                TextLook::new(TITLE_PX * scale),
+            )?;
+            px(TITLE_PX * 1.9)
+        })
+    }
+
+    /// The curves (points kept on the axes), the marks (`x_marks`, then `y_marks` and the
+    /// floor across `xs`) and the bands (polygons: the upper edge forward, the lower back; a
+    /// low end off a logarithmic axis drawn at the axis' bottom), in pixels of the plotting
+    /// area of `chart`, whose y axis spans `y_span`.
+    fn pixel_paths<DB, X, Y>(
+        &self,
+        chart: &ChartContext<DB, Cartesian2d<X, Y>>,
+        xs: std::ops::Range<f64>,
+        y_span: (f64, f64),
+    ) -> anyhow::Result<PixelPaths>
+    where
+        DB: DrawingBackend,
+        X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let keep = finite_on(self.x_log, self.y_axis);
+        let base = chart.plotting_area().strip_coord_spec().get_base_pixel();
+        let to_px = |p: &(f64, f64)| {
+            let (a, b) = chart.backend_coord(p);
+            (a - base.0, b - base.1)
+        };
+        let curves: Vec<Vec<(i32, i32)>> = self
+            .series
+            .iter()
+            .map(|s| {
+                s.points
+                    .iter()
+                    .map(|&p| self.drawn_at(p))
+                    .filter(|p| keep(p))
+                    .map(|p| to_px(&p))
+                    .collect()
+            })
+            .collect();
+        // Each band as a polygon: its upper edge forward, its lower edge back; a low
+        // end off a logarithmic axis is drawn at the axis' bottom.
+        let bands: Vec<Vec<(i32, i32)>> = self
+            .series
+            .iter()
+            .map(|s| {
+                let on_axis = |(x, y): (f64, f64)| {
+                    if keep(&(x, y)) {
+                        Some((x, y))
+                    } else if x.is_finite() && y.is_finite() && (!self.x_log || x > 0.0) {
+                        Some((x, y_span.0))
+                    } else {
+                        None
+                    }
+                };
+                let upper = s.band.iter().filter_map(|&(x, _, hi)| on_axis((x, hi)));
+                let lower: Vec<(f64, f64)> = s
+                    .band
+                    .iter()
+                    .filter_map(|&(x, lo, _)| on_axis((x, lo)))
+                    .collect();
+                upper
+                    .chain(lower.into_iter().rev())
+                    .map(|p| to_px(&p))
+                    .collect()
+            })
+            .collect();
+        let marks: Vec<Vec<(i32, i32)>> = self
+            .x_marks
+            .iter()
+            .map(|&xm| vec![to_px(&(xm, y_span.0)), to_px(&(xm, y_span.1))])
+            .chain(
+                self.y_marks
+                    .iter()
+                    .chain(&self.y_floor)
+                    .map(|&ym| vec![to_px(&(xs.start, ym)), to_px(&(xs.end, ym))]),
+            )
+            .collect();
+        Ok((curves, marks, bands))
+    }
+
+    /// The bands (shaded), the marks (dashed, the floor dotted) lettered by
+    /// `x_mark_labels`, then each curve's line and markers, on the plotting area `plot`.
+    fn draw_paths<DB: DrawingBackend>(
+        &self,
+        plot: &DrawingArea<DB, Shift>,
+        (curves, marks, bands): PixelPaths,
+        scale: f64,
+        marker_r: i32,
+    ) -> DrawResult {
+        let px = |v: f64| (v * scale).round().max(1.0) as i32;
         for (s, band) in self.series.iter().zip(bands) {
             if band.len() > 3 {
                 plot.draw(&Polygon::new(
@@ -323,7 +382,7 @@ impl LinePlot {
             for (m, name) in marks.iter().zip(&self.x_mark_labels) {
                 let top = m.iter().map(|p| p.1).min().unwrap_or(0).max(0);
                 text::draw(
-                    &plot,
+                    plot,
                     name,
                     (m[0].0 + px(4.0), top + px(3.0)),
                     Align::Start,
@@ -341,43 +400,33 @@ impl LinePlot {
             } else {
                 Dash::Dotted
             };
-            draw_path(&plot, m, dash, RGBColor(150, 150, 150).stroke_width(1))?;
+            draw_path(plot, m, dash, RGBColor(150, 150, 150).stroke_width(1))?;
         }
         for (s, pts) in self.series.iter().zip(curves) {
             let color = s.rgb_color();
             if s.width > 0 && pts.len() > 1 {
-                draw_path(&plot, pts.clone(), s.dash, color.stroke_width(s.width))?;
+                draw_path(plot, pts.clone(), s.dash, color.stroke_width(s.width))?;
             }
             if let Some(m) = s.marker {
                 for &p in &pts {
-                    draw_marker(&plot, m, p, marker_r, color)?;
+                    draw_marker(plot, m, p, marker_r, color)?;
                 }
             }
         }
-        if !self.notes.is_empty() {
-            let base = chart.plotting_area().strip_coord_spec().get_base_pixel();
-            for (at, note) in &self.notes {
-                let p = self.drawn_at(*at);
-                if !keep(&p) {
-                    continue;
-                }
-                let (a, b) = chart.backend_coord(&p);
-                text::draw(
-                    &plot,
-                    note,
-                    (a - base.0 + px(7.0), b - base.1 - px(16.0)),
-                    Align::Start,
-                    TextLook {
-                        color: RGBColor(90, 90, 90),
-                        ..TextLook::new(LEGEND_PX * 0.85 * scale)
-                    },
-                )?;
-            }
-        }
-        // Axis labels, outside the tick labels.
+        Ok(())
+    }
+
+    /// The axis labels outside the tick labels: x centred under the plotting area (`prx`,
+    /// `pry`), y upwards at the left of the chart's area (`ax`, `ay`).
+    fn draw_axis_labels<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        (prx, pry): (&std::ops::Range<i32>, &std::ops::Range<i32>),
+        (ax, ay): (std::ops::Range<i32>, std::ops::Range<i32>),
+        scale: f64,
+    ) -> DrawResult {
+        let px = |v: f64| (v * scale).round().max(1.0) as i32;
         let base = area.get_base_pixel();
-        let (prx, pry) = plot.get_pixel_range();
-        let (ax, ay) = chart_area.get_pixel_range();
         let label_px = AXIS_LABEL_PX * scale;
         text::draw(
             area,
@@ -402,27 +451,45 @@ impl LinePlot {
                 ..TextLook::new(label_px)
             },
         )?;
-        match (spot, below) {
-            (Some(at), _) => legend.draw(&plot, &entries, 1, at, marker_r)?,
-            (None, Some((strip, columns))) => {
-                let (sw, _) = strip.dim_in_pixel();
-                let (lw, _) = legend.size(entries.len(), columns);
-                legend.draw(
-                    &strip,
-                    &entries,
-                    columns,
-                    ((sw as i32 - lw) / 2, 0),
-                    marker_r,
-                )?
+        Ok(())
+    }
+
+    /// The notes written beside their points (grey, smaller), on the plotting area `plot`
+    /// of `chart`.
+    fn draw_notes<DB, X, Y>(
+        &self,
+        chart: &ChartContext<DB, Cartesian2d<X, Y>>,
+        plot: &DrawingArea<DB, Shift>,
+        scale: f64,
+    ) -> DrawResult
+    where
+        DB: DrawingBackend,
+        X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let px = |v: f64| (v * scale).round().max(1.0) as i32;
+        let keep = finite_on(self.x_log, self.y_axis);
+        if !self.notes.is_empty() {
+            let base = chart.plotting_area().strip_coord_spec().get_base_pixel();
+            for (at, note) in &self.notes {
+                let p = self.drawn_at(*at);
+                if !keep(&p) {
+                    continue;
+                }
+                let (a, b) = chart.backend_coord(&p);
+                text::draw(
+                    plot,
+                    note,
+                    (a - base.0 + px(7.0), b - base.1 - px(16.0)),
+                    Align::Start,
+                    TextLook {
+                        color: RGBColor(90, 90, 90),
+                        ..TextLook::new(LEGEND_PX * 0.85 * scale)
+                    },
+                )?;
             }
-            _ => {}
         }
-        Ok((
-            prx.start - base.0,
-            pry.start - base.1,
-            prx.end - base.0,
-            pry.end - base.1,
-        ))
+        Ok(())
     }
 
     /// Rows `panel, series, x, y` of the plotted data.
