@@ -61,13 +61,13 @@ impl LegendBox {
         marker_r: i32,
     ) -> DrawResult {
         match (spot, below) {
-            (Some(at), _) => self.draw(plot, &entries, 1, at, marker_r)?,
+            (Some(at), _) => self.draw(plot, entries, 1, at, marker_r)?,
             (None, Some((strip, columns))) => {
                 let (sw, _) = strip.dim_in_pixel();
                 let (lw, _) = self.size(entries.len(), columns);
                 self.draw(
                     &strip,
-                    &entries,
+                    entries,
                     columns,
                     ((sw as i32 - lw) / 2, 0),
                     marker_r,
