@@ -168,11 +168,8 @@ impl FigureDecl {
 
     /// The fields its kind requires are given, and no other.
     fn check_fields(&self, name: &str, origin: &str) -> Result<(), ConfigError> {
-        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
-            path: origin.to_string(),
-            field: format!("figures.{name}{field}"),
-            value,
-            allowed,
+        let invalid = |field: &str, value: String, allowed: String| {
+            invalid_field(origin, name, field, value, allowed)
         };
         use FigureKind::*;
         let (study, list, fig3, pair) = match self.kind {
@@ -222,11 +219,8 @@ impl FigureDecl {
     /// The kinds that draw chosen loads list them, the others none; each in (0, max].
     fn check_loads(&self, name: &str, origin: &str) -> Result<(), ConfigError> {
         use FigureKind::*;
-        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
-            path: origin.to_string(),
-            field: format!("figures.{name}{field}"),
-            value,
-            allowed,
+        let invalid = |field: &str, value: String, allowed: String| {
+            invalid_field(origin, name, field, value, allowed)
         };
         let wants_loads = matches!(self.kind, Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2);
         if wants_loads && self.loads.is_empty() {
@@ -269,11 +263,8 @@ impl FigureDecl {
         studies: &BTreeMap<String, super::Study>,
         profiles: &BTreeMap<String, String>,
     ) -> Result<(), ConfigError> {
-        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
-            path: origin.to_string(),
-            field: format!("figures.{name}{field}"),
-            value,
-            allowed,
+        let invalid = |field: &str, value: String, allowed: String| {
+            invalid_field(origin, name, field, value, allowed)
         };
         if self.profiles.is_empty() {
             return Err(invalid(
@@ -323,11 +314,8 @@ impl FigureDecl {
     /// studies it names, and enough studies left in each profile for its kind.
     fn check_lists(&self, name: &str, origin: &str) -> Result<(), ConfigError> {
         use FigureKind::*;
-        let invalid = |field: &str, value: String, allowed: String| ConfigError::Invalid {
-            path: origin.to_string(),
-            field: format!("figures.{name}{field}"),
-            value,
-            allowed,
+        let invalid = |field: &str, value: String, allowed: String| {
+            invalid_field(origin, name, field, value, allowed)
         };
         for (field, list) in [
             (".studies", &self.studies),
@@ -385,6 +373,22 @@ impl FigureDecl {
             }
         }
         Ok(())
+    }
+}
+
+/// The error for field `figures.<name><field>` of `origin`: its value and what is allowed.
+fn invalid_field(
+    origin: &str,
+    name: &str,
+    field: &str,
+    value: String,
+    allowed: String,
+) -> ConfigError {
+    ConfigError::Invalid {
+        path: origin.to_string(),
+        field: format!("figures.{name}{field}"),
+        value,
+        allowed,
     }
 }
 

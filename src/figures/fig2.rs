@@ -23,9 +23,7 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     let df = &df;
     let w = f64_column(df, "w_over_w0")?;
     let dn = f64_column(df, "dn_dac_per_ls2")?;
-    let realizations = inputs.of(0, "statistics")?.results["realizations"]
-        .as_u64()
-        .ok_or_else(|| anyhow::anyhow!("statistics results lack 'realizations'"))?;
+    let realizations = super::realizations_of(inputs, 0)?;
     let ensemble = format!("mean of {realizations} realizations, shaded: 95 % band");
     // One panel per quantity (they differ by three decades and have different units).
     let panel = |title: &str, y_label: &str, column: &str, color: usize| {

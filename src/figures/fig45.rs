@@ -132,9 +132,7 @@ pub fn fig45(inputs: &Inputs, lambda_l_over_lambda_s: f64) -> anyhow::Result<Vec
     let mut kk = per_threshold(wear, "k_upscaled_pooled", "𝒦", false)?;
     kk.extend(per_threshold(model, "k_upscaled_pl", "𝒦_{PL} fit", true)?);
     let mut rate = per_threshold(wear, "wear_rate_over_l2_mean", "R/L^2", false)?;
-    let realizations = inputs.of(0, "statistics")?.results["realizations"]
-        .as_u64()
-        .ok_or_else(|| anyhow::anyhow!("statistics results lack 'realizations'"))?;
+    let realizations = super::realizations_of(inputs, 0)?;
     let key = |what: &str| {
         Series::band_key(format!(
             "{what} {realizations} realizations; shaded: 95 % band of their mean"

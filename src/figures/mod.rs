@@ -32,6 +32,13 @@ pub fn pick_loads(loads: &[(u32, f64)], targets: &[f64]) -> Vec<(u32, f64)> {
     out
 }
 
+/// The number of realizations a statistics instance (input `i`) pooled.
+pub fn realizations_of(inputs: &Inputs, i: usize) -> anyhow::Result<u64> {
+    inputs.of(i, "statistics")?.results["realizations"]
+        .as_u64()
+        .ok_or_else(|| anyhow::anyhow!("statistics results lack 'realizations'"))
+}
+
 /// Rows of `df` at load `load_index`.
 pub fn rows_at(df: &DataFrame, load_index: u32) -> anyhow::Result<Vec<usize>> {
     Ok(u32_column(df, "load_index")?

@@ -189,7 +189,7 @@ impl LinePlot {
             None
         } else {
             let probe = build(&body)?;
-            let (curves, marks, bands) = curves_of(&probe)?;
+            let (curves, marks, bands) = curves_of(&probe);
             let all: Vec<Vec<(i32, i32)>> = curves.into_iter().chain(marks).chain(bands).collect();
             let pixels = covered_pixels(&all, 2.0);
             let (pw, ph) = probe.plotting_area().dim_in_pixel();
@@ -246,7 +246,7 @@ impl LinePlot {
             BLACK.stroke_width(1),
         ))
         .map_err(plot_err)?;
-        let (curves, marks, bands) = curves_of(&chart)?;
+        let (curves, marks, bands) = curves_of(&chart);
         self.draw_paths(&plot, (curves, marks, bands), scale, marker_r)?;
         self.draw_notes(&chart, &plot, scale)?;
         // Axis labels, outside the tick labels.
@@ -293,7 +293,7 @@ impl LinePlot {
         chart: &ChartContext<DB, Cartesian2d<X, Y>>,
         xs: std::ops::Range<f64>,
         y_span: (f64, f64),
-    ) -> anyhow::Result<PixelPaths>
+    ) -> PixelPaths
     where
         DB: DrawingBackend,
         X: Ranged<ValueType = f64> + ValueFormatter<f64>,
@@ -355,7 +355,7 @@ impl LinePlot {
                     .map(|&ym| vec![to_px(&(xs.start, ym)), to_px(&(xs.end, ym))]),
             )
             .collect();
-        Ok((curves, marks, bands))
+        (curves, marks, bands)
     }
 
     /// The bands (shaded), the marks (dashed, the floor dotted) lettered by
