@@ -26,6 +26,12 @@ start)
         echo "campaign $profile already running (pid $(cat "$pidfile")); log $root/run.log"
         exit 0
     fi
+    # The binary is frozen under its commit's name: it must be built from that commit.
+    if [[ -n $(git -C "$repo" status --porcelain --untracked-files=no) ]]; then
+        echo "campaign.sh: $repo has uncommitted changes, and the binary is named by its" \
+            "commit: commit them, or start from a clean checkout (git worktree add)" >&2
+        exit 2
+    fi
     (cd "$repo" && CARGO_TARGET_DIR=$target cargo build --release --locked --quiet)
     commit=$(git -C "$repo" rev-parse --short=12 HEAD)
     bin=$root/bin/wearcoef-$commit
