@@ -44,16 +44,21 @@ pub struct SolveArgs {
     pub no_extension: bool,
     /// Deflate the preconditioner by the loads of blocks of this many nodes per side once
     /// the contact set has settled and covers at least 2 % of the box (a multiple of 16,
-    /// used on boxes of at least 4 blocks per side, so by default on 4096² and larger; 0:
-    /// never; docs/BENCHMARKS.md).
+    /// used on large boxes, see --large-box, that it divides into at least 2 blocks per
+    /// side; 0: never; docs/BENCHMARKS.md).
     #[arg(long, default_value_t = 1024, conflicts_with_all = ["plain_cg", "no_extension"])]
     pub coarse_block: usize,
-    /// On boxes of 4096² and more, let a node off the contact set join the free set only
-    /// where it interpenetrates by more than this times the current error times the
-    /// heights' standard deviation (in [0, 1]; 0: every interpenetrating node joins, as on
-    /// smaller boxes; docs/BENCHMARKS.md).
+    /// On large boxes, let a node off the contact set join the free set only where it
+    /// interpenetrates by more than this times the current error times the heights'
+    /// standard deviation (in [0, 1]; 0: every interpenetrating node joins, as on smaller
+    /// boxes; docs/BENCHMARKS.md).
     #[arg(long, default_value_t = 0.1, conflicts_with_all = ["plain_cg", "no_extension"])]
     pub entry_margin: f64,
+    /// The smallest grid side, in nodes, that counts as a large box: the extension's far
+    /// term, the block deflation and the entry margin are used from it on (the same
+    /// solution either way; docs/BENCHMARKS.md).
+    #[arg(long, default_value_t = 4096, conflicts_with_all = ["plain_cg", "no_extension"])]
+    pub large_box: usize,
     /// Restore the load after each projection by rescaling every pressure instead of the
     /// default's uniform offset of the contact pressures (the same solution in about 1.1
     /// times the iterations; docs/BENCHMARKS.md).
@@ -438,6 +443,7 @@ fn check_solve_args(args: &SolveArgs) -> anyhow::Result<wearcoef::contact::solve
     })?;
     Ok(Extension {
         coarse_block: args.coarse_block,
+        large_box: args.large_box,
         ..margin
     })
 }

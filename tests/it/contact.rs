@@ -727,8 +727,9 @@ fn near_term_saves_iterations_on_a_settled_contact_set() {
     );
 }
 
-/// The extension's far term, on a box of at least FAR_BOX_SIGMAS σ_far (here σ_far = 16
-/// nodes on 16² cells, so that a 256² box holds it), changes the iteration but not the
+/// The extension's far term, on a box declared large (here σ_far = 16 nodes on 16² cells,
+/// and the 256² box large, without the entry margin that comes with it), changes the
+/// iteration but not the
 /// solution: the same contact pixels at every load, pressures within the tolerance's reach,
 /// the load exact and the complementarity recomputed independently (`compare_sweeps`); and
 /// the pressures are not bit for bit those without it, so the term is in use.
@@ -737,7 +738,8 @@ fn far_term_keeps_the_solution() {
     use wearcoef::contact::solver::Extension;
     // σ_far = 16 nodes on 16² cells.
     let mut small_far = Extension::default();
-    (small_far.far_sigma, small_far.far_cell) = (16.0, 16);
+    (small_far.far_sigma, small_far.far_cell, small_far.large_box) = (16.0, 16, 256);
+    small_far.entry_margin = 0.0;
     let without = Extension {
         far_weight: 0.0,
         ..small_far
@@ -747,13 +749,17 @@ fn far_term_keeps_the_solution() {
 }
 
 /// The deflation by the blocks' loads once the contact set has settled (on blocks of 64
-/// nodes, so that a 256² box holds 4 × 4 of them) changes the iteration but not the
-/// solution (`compare_sweeps`, as above), and not the bits between 1 and 2 threads.
+/// nodes, so that the 256² box, declared large without the far term and the entry margin,
+/// holds 4 × 4 of them) changes the iteration but not the solution (`compare_sweeps`, as
+/// above), and not the bits between 1 and 2 threads.
 #[test]
 fn coarse_deflation_keeps_the_solution_and_the_bits() {
     use wearcoef::contact::solver::Extension;
     let deflated = Extension {
         coarse_block: 64,
+        large_box: 256,
+        far_weight: 0.0,
+        entry_margin: 0.0,
         ..Extension::default()
     };
     let without = Extension {
@@ -763,17 +769,18 @@ fn coarse_deflation_keeps_the_solution_and_the_bits() {
     keeps_the_solution_and_the_bits(deflated, without, "the deflation");
 }
 
-/// The free set's entry margin (forced on the 256² box, whose side is below its default
-/// `entry_box`) changes the iteration but not the solution (`compare_sweeps`: the same
-/// contact pixels, pressures within the tolerance's reach, complementarity recomputed
-/// independently), and not the bits between 1 and 2 threads.
+/// The free set's entry margin (forced on the 256² box by declaring it large, without the
+/// far term that comes with large boxes) changes the iteration but not the solution
+/// (`compare_sweeps`: the same contact pixels, pressures within the tolerance's reach,
+/// complementarity recomputed independently), and not the bits between 1 and 2 threads.
 #[test]
 fn entry_margin_keeps_the_solution_and_the_bits() {
     use wearcoef::contact::solver::Extension;
     let default = Extension::default();
-    assert!(default.entry_margin > 0.0 && default.entry_box > 256);
+    assert!(default.entry_margin > 0.0 && default.large_box > 256);
     let margin = Extension {
-        entry_box: 0,
+        large_box: 256,
+        far_weight: 0.0,
         ..default
     };
     let without = Extension {

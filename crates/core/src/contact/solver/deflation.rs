@@ -30,7 +30,8 @@
 use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
-use super::level::{free, Level, OffBlock};
+use super::constraint::Constraint;
+use super::level::{Level, OffBlock};
 use crate::contact::elastic::ElasticOperator;
 use crate::spectral::{Fft2, Fft2Scratch};
 
@@ -148,11 +149,12 @@ pub(super) struct Deflation {
 
 impl Deflation {
     /// The deflation for `op`'s grid with blocks of `block` nodes and extension cells of
-    /// `half` nodes, when the box holds at least 4 blocks per side and both divide it.
+    /// `half` nodes, when the box holds at least 2 blocks per side and both divide it (the
+    /// extension builds it on large boxes only, [`super::Extension::large_box`]).
     pub(super) fn new(op: &ElasticOperator, block: usize, half: usize) -> Option<Self> {
         let n = op.grid().n();
         let cell = 2 * half;
-        if block == 0 || !block.is_multiple_of(cell) || !n.is_multiple_of(block) || n / block < 4 {
+        if block == 0 || !block.is_multiple_of(cell) || !n.is_multiple_of(block) || n / block < 2 {
             return None;
         }
         let m = n / cell;
@@ -235,11 +237,11 @@ impl Deflation {
     /// Before the preconditioner's input pass: the interpolation weights of F, the density,
     /// `y = E⁻¹ Z̃ᵀ g` (E built first in a new settled phase) and the coarse deflection of
     /// `Z̃ y`, and the cell sums of the corrected input for the extension's values.
-    pub(super) fn prepare(
+    pub(super) fn prepare<C: Constraint>(
         &mut self,
         p: &[f64],
         w: &[f64],
-        level: Level,
+        level: Level<C>,
         sum_g: &[f64],
         count: &[f64],
     ) {
@@ -349,7 +351,7 @@ impl Deflation {
     /// Stored in single precision without rounding for the committed cells: a node's
     /// weights are multiples of 1/(2·2c) = 1/32, their products multiples of 1/1024, and a
     /// cell's sums of at most 64 of them need 16 bits of the mantissa's 24.
-    fn gather_weights(&mut self, p: &[f64], w: &[f64], level: Level) {
+    fn gather_weights<C: Constraint>(&mut self, p: &[f64], w: &[f64], level: Level<C>) {
         let (n, half) = (self.n, self.half);
         let bilinear = &self.bilinear;
         self.weights
@@ -363,7 +365,7 @@ impl Deflation {
                     for (cj, cell) in cells.iter_mut().enumerate() {
                         let (mut k, mut kb) = (0.0, 0.0);
                         for j in cj * half..(cj + 1) * half {
-                            if free(pr[j], wr[j], level) {
+                            if level.free(pr[j], wr[j]) {
                                 k += 1.0;
                                 kb += bilinear.col_weight[j];
                             }
@@ -462,7 +464,14 @@ impl Deflation {
     }
 
     /// One row of the preconditioner's input on F less the correction `W̃ y` there.
-    pub(super) fn subtract_row(&self, i: usize, o: &mut [f32], p: &[f64], w: &[f64], level: Level) {
+    pub(super) fn subtract_row<C: Constraint>(
+        &self,
+        i: usize,
+        o: &mut [f32],
+        p: &[f64],
+        w: &[f64],
+        level: Level<C>,
+    ) {
         let b = &self.bilinear;
         let m = b.m;
         let (r0, a) = Bilinear::split(b.cell, m, i);
@@ -471,7 +480,7 @@ impl Deflation {
             &self.field[b.next(r0) * m..(b.next(r0) + 1) * m],
         );
         for (j, o) in o.iter_mut().enumerate() {
-            if free(p[j], w[j], level) {
+            if level.free(p[j], w[j]) {
                 let (c0, c1, t) = (b.col_cell[j], b.next(b.col_cell[j]), b.col_weight[j]);
                 let top = v0[c0] + t * (v0[c1] - v0[c0]);
                 let bottom = v1[c0] + t * (v1[c1] - v1[c0]);
@@ -482,14 +491,14 @@ impl Deflation {
     }
 
     /// Adds the restriction of one output row on F to its block's model rows.
-    pub(super) fn restrict_row(
+    pub(super) fn restrict_row<C: Constraint>(
         bilinear: &Bilinear,
         block: &mut OffBlock,
         i: usize,
         row: &[f32],
         p: &[f64],
         w: &[f64],
-        level: Level,
+        level: Level<C>,
     ) {
         let (m, half) = (bilinear.m, bilinear.cell / 2);
         let (first, a) = Bilinear::unwrapped(bilinear.cell, i);
@@ -503,7 +512,7 @@ impl Deflation {
         {
             let (mut s, mut sb) = (0.0, 0.0);
             for (o, ((&y, &pv), &wv)) in yc.iter().zip(pc).zip(wc).enumerate() {
-                if free(pv, wv, level) {
+                if level.free(pv, wv) {
                     s += y as f64;
                     sb += y as f64 * bilinear.col_weight[jc * half + o];
                 }

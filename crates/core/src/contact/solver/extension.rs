@@ -17,8 +17,8 @@
 //! gradient across the clusters' edges, where `M` alone jumps from the gradient to zero. A
 //! third, far term (σ = 512 nodes, γ = 0.2) smooths on coarser cells (64 × 64 nodes, sums of
 //! the 8² cells, so `S_far = U_f G U_fᵀ / c_f²` has the same form): it carries modulations
-//! over many λ_l, which only boxes much larger than σ_far hold, so it is built on boxes of at
-//! least [`FAR_BOX_SIGMAS`] σ_far.
+//! over many λ_l, which only boxes much larger than σ_far hold, so it is built on large boxes
+//! only ([`Extension::large_box`]).
 //! Any extension gives `Eᵀ K⁻¹ E ≥ (P K P)⁻¹` on F, with equality for the one of least
 //! elastic energy, so the closer `E` comes to it the fewer iterations; but while the contact
 //! set still moves, the near term makes it oscillate, so it is used only once the set has
@@ -32,9 +32,69 @@
 
 use rayon::prelude::*;
 
+use super::constraint::Constraint;
 use super::deflation::{Bilinear, Deflation};
 use super::level::{Level, OffBlock};
+use super::preconditioner::{Coefficients, Fields, PreconditionSums, Preconditioner};
+use super::restricted::Restricted;
 use crate::contact::elastic::ElasticOperator;
+
+/// The preconditioner `P Eᵀ K⁻¹ E P`: the restricted one's passes with the extension's
+/// rows (its input `E g`, its sums off F, its correction on F), the near and far terms and
+/// the deflation switched as the contact set settles.
+pub(super) struct Extended {
+    restricted: Restricted,
+    coarse: Coarse,
+}
+
+impl Extended {
+    /// The extension with `settings` on `op`'s grid, deflated where the box is large enough.
+    pub(super) fn new(op: &ElasticOperator, settings: Extension) -> Self {
+        let mut coarse = Coarse::new(op.grid().n(), op.rows_per_block(), settings);
+        coarse.deflate(op);
+        Self {
+            restricted: Restricted::new(op),
+            coarse,
+        }
+    }
+}
+
+impl<C: Constraint> Preconditioner<C> for Extended {
+    fn settle(&mut self, changes: Option<(usize, f64)>) -> bool {
+        self.coarse.settle(changes)
+    }
+
+    fn entry_margin(&self, error_scale: f64) -> f64 {
+        self.coarse.entry_margin(error_scale)
+    }
+
+    /// `K⁻¹ E g` on F: the cells' sums gathered first, the input rows `E g`, the values off F
+    /// summed per cell in the output pass for the correction `Σ γ S D⁻¹ (1 − 1_F) y` that
+    /// the direction pass adds on F.
+    fn precondition(&mut self, fields: &mut Fields<'_>, level: Level<C>) -> PreconditionSums {
+        self.coarse
+            .gather(fields.pressure, fields.separation, level);
+        let coarse = &self.coarse;
+        Restricted::input(fields, |i, row, p, w| coarse.input_row(i, row, p, w, level));
+        let (cell, m, bilinear, blocks) = self.coarse.output_parts();
+        let sums = self.restricted.output(
+            fields,
+            level,
+            blocks.par_iter_mut(),
+            |block, r, row, p, w| Coarse::output_row(cell, m, bilinear, block, r, row, p, w, level),
+        );
+        let (sum_b, sum_gb) = self.coarse.finish(sums[0]);
+        PreconditionSums::new(sums, sum_b, sum_gb)
+    }
+
+    fn direction(&mut self, fields: &mut Fields<'_>, coefficients: Coefficients) -> f64 {
+        let (coarse, c) = (&self.coarse, self.coarse.cell());
+        self.restricted
+            .transformed_direction(fields, |i, t, row, z| {
+                dispatch_direction(c, coarse.back_row(i), coefficients, t, row, z)
+            })
+    }
+}
 
 /// Settings of the preconditioner's free-set extension.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,7 +118,7 @@ pub struct Extension {
     /// moves it makes the iteration oscillate; docs/BENCHMARKS.md).
     pub settled_fraction: f64,
     /// Standard deviation of the far term's Gaussian, in grid nodes (Δl); the term is built
-    /// on boxes of at least [`FAR_BOX_SIGMAS`] times this.
+    /// on large boxes only ([`Self::large_box`]).
     pub far_sigma: f64,
     /// Weight γ_far of the far term (0: none).
     pub far_weight: f64,
@@ -71,8 +131,8 @@ pub struct Extension {
     pub far_fraction: f64,
     /// Side of the blocks whose loads deflate the preconditioner once the contact set has
     /// settled (module `deflation`), in grid nodes: 0 (never) or a multiple of twice
-    /// `cell`, used on boxes of at least 4 blocks per side that it divides (the default,
-    /// 1024: boxes of 4096² and more). Measured on the paper's spectrum
+    /// `cell`, used on large boxes ([`Self::large_box`]) that it divides into at least 2
+    /// blocks per side (the default, 1024, gives 4 or more). Measured on the paper's spectrum
     /// (docs/BENCHMARKS.md): 1024 takes 13 % of the iterations of four loads near W/W0 =
     /// 0.05 away at 8192², 5 % at 4096² (512: 7 % and 1 %; 256 is not safe), but adds half
     /// again to a cold first load at W/W0 = 0.001 (hence [`Self::coarse_fraction`]).
@@ -88,18 +148,16 @@ pub struct Extension {
     /// tenth of the deepest interpenetration, which the error contains, so the converged
     /// solution meets the same tolerance. 0: none.
     pub entry_margin: f64,
-    /// Smallest box side, in nodes, on which the entry margin is used. On the paper's
-    /// spectrum it saves 5 % of the 8192² sweeps' iterations, 3 % at 4096² and 2 % at 2048²,
-    /// and costs 1 % at 1024² (docs/BENCHMARKS.md); from 4096², like the far term and the
-    /// deflation, so that smaller boxes keep their bits.
-    pub entry_box: usize,
+    /// The one definition of a large box: the smallest side, in nodes, on which the far
+    /// term, the deflation and the entry margin are used. Each pays only on large boxes
+    /// (docs/BENCHMARKS.md): the far term's Gaussian (σ_far = 512 nodes) spans a smaller box,
+    /// where a field centred on F smoothed over the box is about zero (the same iterations
+    /// at 1024², 0.7 % fewer at 2048², 3.7 % and 4.9 % fewer at 4096² and 8192²); the
+    /// deflation by blocks of 1024 nodes needs 4 blocks per side (1 % fewer at 4096², 6 % at
+    /// 8192²); the entry margin saves 5 % at 8192², 3 % at 4096² and 2 % at 2048², and
+    /// costs 1 % at 1024². From 4096², so that smaller boxes keep their bits.
+    pub large_box: usize,
 }
-
-/// The far term is built on boxes of at least this many `far_sigma` per side: on smaller ones
-/// its Gaussian spans the box, and a field centred on F smoothed over the box is about zero
-/// (measured: the same iterations at 1024², 0.7 % fewer at 2048², 3.7 % and 4.9 % fewer at
-/// 4096² and 8192²; docs/BENCHMARKS.md).
-pub const FAR_BOX_SIGMAS: f64 = 8.0;
 
 impl Default for Extension {
     /// The settings measured on the paper's spectrum and the bench surfaces at 1024²–4096²
@@ -132,7 +190,7 @@ impl Default for Extension {
             coarse_block: 1024,
             coarse_fraction: 0.02,
             entry_margin: 0.1,
-            entry_box: 4096,
+            large_box: 4096,
         }
     }
 }
@@ -282,7 +340,7 @@ pub(super) struct Coarse {
     /// The long term (σ = `settings.sigma`) and the near term (`settings.near_sigma`).
     long: Term,
     near: Term,
-    /// The far term, on boxes of at least [`FAR_BOX_SIGMAS`] σ_far.
+    /// The far term, on large boxes ([`Extension::large_box`]).
     far: Option<Term>,
     /// Whether the near term is in use (see [`Extension::settled_fraction`]).
     near_on: bool,
@@ -345,7 +403,10 @@ impl Coarse {
     /// Adds the coarse-space deflation for `op`'s grid, when the box is large enough
     /// ([`Extension::coarse_block`]).
     pub(super) fn deflate(&mut self, op: &ElasticOperator) {
-        self.deflation = Deflation::new(op, self.settings.coarse_block, self.cell);
+        self.deflation = self
+            .large()
+            .then(|| Deflation::new(op, self.settings.coarse_block, self.cell))
+            .flatten();
         if let Some(d) = &self.deflation {
             // Every block but the last holds the same number of rows.
             let rows = self.blocks.get(1).map_or(self.n, |b| b.first_row);
@@ -358,10 +419,16 @@ impl Coarse {
         }
     }
 
+    /// Whether the box is large ([`Extension::large_box`]): the far term, the deflation and
+    /// the entry margin are used.
+    fn large(&self) -> bool {
+        self.n >= self.settings.large_box
+    }
+
     /// The free set's entry margin for an iteration whose error times σ_h is `error_scale`
-    /// (0 on boxes below [`Extension::entry_box`]).
+    /// (0 below a large box).
     pub(super) fn entry_margin(&self, error_scale: f64) -> f64 {
-        if self.n >= self.settings.entry_box {
+        if self.large() {
             self.settings.entry_margin * error_scale
         } else {
             0.0
@@ -397,7 +464,7 @@ impl Coarse {
     /// The cell sums of `g = w − level` and of `1_F` over F, then each term's `D` and the
     /// extension's values. One pass over `p` and `w`, in parallel over rows of cells (each
     /// summed in node order, so the same bits whatever the number of threads).
-    pub(super) fn gather(&mut self, p: &[f64], w: &[f64], level: Level) {
+    pub(super) fn gather<C: Constraint>(&mut self, p: &[f64], w: &[f64], level: Level<C>) {
         let (n, c, m) = (self.n, self.cell, self.m);
         self.sum_g
             .par_chunks_mut(m)
@@ -446,7 +513,14 @@ impl Coarse {
 
     /// One row of the preconditioner's input `E g`: `g` on F, the cell's extension value off
     /// it, in single precision.
-    pub(super) fn input_row(&self, i: usize, o: &mut [f32], p: &[f64], w: &[f64], level: Level) {
+    pub(super) fn input_row<C: Constraint>(
+        &self,
+        i: usize,
+        o: &mut [f32],
+        p: &[f64],
+        w: &[f64],
+        level: Level<C>,
+    ) {
         let (c, m) = (self.cell, self.m);
         let values = &self.value[(i / c) * m..(i / c + 1) * m];
         dispatch_input(c, values, level, o, p, w);
@@ -457,7 +531,7 @@ impl Coarse {
 
     /// Adds one row of `K⁻¹ E g` off F to its block's cell sums.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn output_row(
+    pub(super) fn output_row<C: Constraint>(
         cell: usize,
         m: usize,
         bilinear: Option<&Bilinear>,
@@ -466,7 +540,7 @@ impl Coarse {
         row: &[f32],
         p: &[f64],
         w: &[f64],
-        level: Level,
+        level: Level<C>,
     ) {
         let i = block.first_row + r;
         if r == 0 {
@@ -545,12 +619,12 @@ impl Coarse {
     }
 }
 
-/// The far term's cells in shared cells per side, when the box (n nodes) holds at least
-/// [`FAR_BOX_SIGMAS`] σ_far, the weight is positive and its cells tile the shared ones.
+/// The far term's cells in shared cells per side, on a large box (n nodes) when the weight
+/// is positive and its cells tile the shared ones.
 fn far_merge(n: usize, cell: usize, m: usize, settings: &Extension) -> Option<usize> {
     let merge = settings.far_cell / cell;
     (settings.far_weight > 0.0
-        && n as f64 >= FAR_BOX_SIGMAS * settings.far_sigma
+        && n >= settings.large_box
         && merge >= 1
         && m.is_multiple_of(merge)
         && m / merge >= 2)
@@ -559,8 +633,7 @@ fn far_merge(n: usize, cell: usize, m: usize, settings: &Extension) -> Option<us
 
 mod rows;
 
-pub(super) use rows::dispatch_direction;
-use rows::{dispatch_cell_sums, dispatch_input, dispatch_off_sums, smooth};
+use rows::{dispatch_cell_sums, dispatch_direction, dispatch_input, dispatch_off_sums, smooth};
 
 #[cfg(test)]
 mod tests;

@@ -12,6 +12,8 @@
 //! below the change between loads.
 
 use half::bf16;
+
+use super::constraint::Constraint;
 use rayon::prelude::*;
 
 /// The largest load ratio `r` extrapolated over: beyond twice the last step the secant
@@ -42,9 +44,16 @@ impl History {
 
     /// Turn the last solution `p` (mean `mean`, converged) into the start for the mean
     /// `target`, extrapolated from the solution before it if there is one and the load
-    /// ratio is in `(0, MAX_LOAD_RATIO]`, and keep `p` as the solution before the next.
-    /// Returns whether `p` changed (it then needs an exact deflection).
-    pub(super) fn advance(&mut self, p: &mut [f64], mean: f64, target: f64) -> bool {
+    /// ratio is in `(0, MAX_LOAD_RATIO]` (projected by `constraint`: clipped at 0), and keep
+    /// `p` as the solution before the next. Returns whether `p` changed (it then needs an
+    /// exact deflection).
+    pub(super) fn advance<C: Constraint>(
+        &mut self,
+        constraint: C,
+        p: &mut [f64],
+        mean: f64,
+        target: f64,
+    ) -> bool {
         if self.pressure.len() != p.len() {
             self.pressure = crate::pages::filled(p.len(), bf16::ZERO);
             self.mean = None;
@@ -59,7 +68,7 @@ impl History {
                 .zip(self.pressure.par_iter_mut())
                 .for_each(|(p, kept)| {
                     let last = *p;
-                    *p = (last + r * (last - kept.to_f64())).max(0.0);
+                    *p = constraint.project(last + r * (last - kept.to_f64()));
                     *kept = bf16::from_f64(last);
                 }),
             None => p
@@ -74,6 +83,7 @@ impl History {
 
 #[cfg(test)]
 mod tests {
+    use super::super::constraint::NonNegative;
     use super::*;
 
     /// The secant through two states, checked node by node against the formula; the kept
@@ -84,11 +94,11 @@ mod tests {
         let last = [0.0, 1.5, 2.2, 0.2, 0.3];
         let mut history = History::new();
         let mut p = before.to_vec();
-        assert!(!history.advance(&mut p, 0.7, 0.84));
+        assert!(!history.advance(NonNegative, &mut p, 0.7, 0.84));
         assert_eq!(p, before, "no history: the solution is left to be scaled");
         p.copy_from_slice(&last);
         // Means 0.7 then 0.84: the next load 0.98 is one step further, r = 1.
-        assert!(history.advance(&mut p, 0.84, 0.98));
+        assert!(history.advance(NonNegative, &mut p, 0.84, 0.98));
         for i in 0..5 {
             let expected = (last[i] + (last[i] - before[i])).max(0.0);
             assert!(
@@ -102,9 +112,9 @@ mod tests {
         }
         let start = p.clone();
         // The next load below the last: no extrapolation, the last solution kept.
-        assert!(!history.advance(&mut p, 0.98, 0.9));
+        assert!(!history.advance(NonNegative, &mut p, 0.98, 0.9));
         assert_eq!(p, start);
         history.forget();
-        assert!(!history.advance(&mut p, 0.98, 1.1));
+        assert!(!history.advance(NonNegative, &mut p, 0.98, 1.1));
     }
 }

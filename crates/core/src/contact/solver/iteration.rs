@@ -3,13 +3,24 @@
 //! after a step. `solve` itself reads as the algorithm; each part here is one step of it, in
 //! the order `solve` calls them, with exactly the operations it always did.
 
+use super::constraint::Constraint;
 use super::level::Level;
+use super::parts;
 use super::passes::UpdateTotals;
+use super::preconditioner::Fields;
 use super::rows::GradientStats;
-use super::{
-    extension, SolveReport, Solver, SolverConfig, Status, DESCENT_FRACTION, MAX_SPARSE,
-    RESTART_FRACTION,
-};
+use super::{SolveReport, Solver, SolverConfig, Status};
+
+/// The preconditioned iteration keeps its conjugate direction unless more than this
+/// fraction of the contact set left or entered it in the last step (restarting at every
+/// change, as the plain iteration does, costs 28 % more iterations on the paper's spectrum at
+/// 1024²; docs/BENCHMARKS.md).
+pub(super) const RESTART_FRACTION: f64 = 0.03;
+
+/// A kept conjugate direction must descend at least this fraction as steeply as the
+/// preconditioned gradient, `⟨g, t⟩ ≥ DESCENT_FRACTION ⟨g, z⟩`; otherwise the iteration
+/// restarts.
+pub(super) const DESCENT_FRACTION: f64 = 0.5;
 
 /// What one iteration of [`Solver::solve`] hands to the next.
 pub(super) struct Iteration {
@@ -96,51 +107,51 @@ impl Iteration {
     }
 }
 
-impl Solver<'_> {
-    /// Fields and parts a solve with `cfg` needs: the preconditioned gradient's field, and the
-    /// extension's coarse space, made anew when its settings changed.
+impl<C: Constraint> Solver<'_, C> {
+    /// The preconditioner a solve with `cfg` uses ([`parts::choose`]), chosen anew
+    /// only when the settings that choose it changed: a sweep keeps its part, and the state
+    /// of the part's layers, from load to load.
     pub(super) fn prepare_parts(&mut self, cfg: &SolverConfig) {
-        let len = self.pressure.len();
-        if cfg.preconditioned && self.preconditioned.len() != len {
-            self.preconditioned = crate::pages::filled(len, 0.0);
-        }
-        match cfg.extension.filter(|_| cfg.preconditioned) {
-            Some(settings) => {
-                if self.coarse.as_ref().map(|c| c.settings) != Some(settings) {
-                    let n = self.op.grid().n();
-                    let mut coarse = extension::Coarse::new(n, self.op.rows_per_block(), settings);
-                    coarse.deflate(self.op);
-                    self.coarse = Some(coarse);
-                }
-            }
-            None => self.coarse = None,
+        let choice = parts::choice(cfg);
+        if self.choice != Some(choice) {
+            self.preconditioner = parts::choose(cfg, self.op);
+            self.choice = Some(choice);
         }
     }
 
-    /// The start of a load after a converged one: extrapolated from the last two solutions
-    /// ([`SolverConfig::extrapolate_start`]), else the history is forgotten (and
-    /// [`Solver::start`] scales the last solution).
-    pub(super) fn warm_start(&mut self, target: f64, cfg: &SolverConfig) {
-        if cfg.extrapolate_start && self.has_solution && self.separation_exact {
-            if self
-                .history
-                .advance(&mut self.pressure, self.solved_mean, target)
-            {
-                self.separation_exact = false;
-            }
+    /// The exact line search's step `⟨g, t⟩ / ⟨t, K t⟩`; where that is not a finite positive
+    /// ratio (a direction of no curvature), the Jacobi step `1 / K_ii`.
+    pub(super) fn step_length(&self, denominator: f64, numerator: f64) -> f64 {
+        if denominator > 0.0 && denominator.is_finite() && numerator.is_finite() {
+            numerator / denominator
         } else {
-            self.history.forget();
+            1.0 / self.op.self_influence()
         }
+    }
+
+    /// After a step that projected all pressure away: the uniform pressure `target`, its
+    /// exact deflection, and a fresh direction.
+    pub(super) fn restart_uniform(
+        &mut self,
+        target: f64,
+        it: &mut Iteration,
+        report: &mut SolveReport,
+    ) -> GradientStats {
+        self.pressure.fill(target);
+        let stats = self.exact_deflection(1.0, it.shift);
+        report.convolutions += 1;
+        (it.exact, it.restart, it.changes) = (true, true, None);
+        stats
     }
 
     /// The search direction from the gradient at `level` (mean of `w` on the contact set;
-    /// `g_norm` its `⟨g, g⟩`): preconditioned on the free set when `cfg` says so, conjugate to
+    /// `g_norm` its `⟨g, g⟩`): preconditioned on the free set when the solve has a
+    /// preconditioner ([`Solver::prepare_parts`]), conjugate to
     /// the last one unless the iteration restarts or it would barely descend
     /// ([`DESCENT_FRACTION`]), then transformed. Returns `(⟨t, K t⟩, ⟨g, t⟩)` for the exact
     /// line search.
     pub(super) fn search_direction(
         &mut self,
-        cfg: &SolverConfig,
         level: f64,
         error: f64,
         g_norm: f64,
@@ -148,20 +159,31 @@ impl Solver<'_> {
         report: &mut SolveReport,
     ) -> (f64, f64) {
         // ⟨g, z⟩ replaces ⟨g, g⟩ in β when preconditioned.
-        let preconditioned = if cfg.preconditioned {
-            // The extension's near term is used once the contact set has settled; the
-            // direction restarts when the preconditioner changes. On large boxes a node
-            // joins F only below the level less a margin that falls with the error.
-            let mut entry = level;
-            if let Some(coarse) = self.coarse.as_mut() {
-                it.restart |= coarse.settle(it.changes);
-                entry -= coarse.entry_margin(error * self.height_std);
-            }
-            report.convolutions += 1;
-            Some(self.precondition(Level { mean: level, entry }))
-        } else {
-            None
+        let (height_std, constraint) = (self.height_std, self.constraint);
+        let mut fields = Fields {
+            op: self.op,
+            ws: &mut self.ws,
+            chunk: self.chunk,
+            pressure: &self.pressure,
+            separation: &self.separation,
+            direction: &mut self.direction,
         };
+        let mut preconditioner = self.preconditioner.as_deref_mut();
+        let preconditioned = preconditioner.as_mut().map(|part| {
+            // The part may switch its layers as the contact set settles; the direction
+            // restarts when it does. A node joins F below the level less the part's margin.
+            it.restart |= part.settle(it.changes);
+            let entry = level - part.entry_margin(error * height_std);
+            report.convolutions += 1;
+            part.precondition(
+                &mut fields,
+                Level {
+                    mean: level,
+                    entry,
+                    constraint,
+                },
+            )
+        });
         let g_dot = preconditioned.map_or(g_norm, |sums| sums.g_dot_z);
         let mut beta = if it.restart || it.g_norm_old <= 0.0 {
             0.0
@@ -184,51 +206,13 @@ impl Solver<'_> {
                 if conjugate(beta) < DESCENT_FRACTION * sums.g_dot_z {
                     beta = 0.0;
                 }
+                let part = preconditioner.expect("a preconditioner made the sums");
                 (
-                    self.preconditioned_direction_and_transform(sums.z_mean, beta, direction_mean),
+                    part.direction(&mut fields, [sums.z_mean, beta, direction_mean]),
                     conjugate(beta),
                 )
             }
             None => self.direction_and_transform(level, beta, it.direction_mean),
-        }
-    }
-
-    /// After a step that left the load `totals.sum_p > 0`: the load `target` per node restored,
-    /// by a uniform offset of the pressures where the step changed many nodes (`u = K p`
-    /// recomputed: one convolution, as a correction of that many changes would take), else
-    /// by a rescaling with `u` updated linearly or exactly; the next gradient's statistics.
-    /// When the load is below the rounding of the largest pressures (W/W0 ≈ 1e-20) the
-    /// offset's sum cancels to zero, and the rescaling restores it instead.
-    pub(super) fn restore_load(
-        &mut self,
-        cfg: &SolverConfig,
-        totals: &UpdateTotals,
-        linear_stats: GradientStats,
-        target: f64,
-        it: &mut Iteration,
-        report: &mut SolveReport,
-    ) -> GradientStats {
-        let total = totals.sum_p;
-        let load = target * self.pressure.len() as f64;
-        let offset = (cfg.preconditioned
-            && cfg.offset_to_load
-            && totals.changed > MAX_SPARSE
-            && total > load)
-            .then(|| self.load_offset(load, total, totals.contact_nodes))
-            .filter(|&(_, shifted)| shifted > 0.0);
-        if let Some((offset, shifted)) = offset {
-            report.convolutions += 1;
-            it.linear_steps = 0;
-            self.offset_deflection(offset, load / shifted, it.shift)
-        } else {
-            self.next_deflection(
-                totals,
-                linear_stats,
-                load / total,
-                it.shift,
-                &mut it.linear_steps,
-                report,
-            )
         }
     }
 }

@@ -3,8 +3,21 @@
 
 use rayon::prelude::*;
 
+use super::constraint::Constraint;
 use super::rows::*;
-use super::{SolveReport, Solver, MAX_SPARSE, RESYNC};
+use super::update::{dispatch_update, UpdateAcc, UpdateArgs};
+use super::Solver;
+
+/// When at most this many nodes leave or re-enter the contact set in an iteration, the
+/// deflection is corrected by direct summation (all nodes' kernel rows added row by row, in
+/// the same pass as the next gradient statistics) instead of a new convolution. Limits of
+/// 32–128 save 10–20 % of the convolutions but cost as much in summation
+/// (docs/BENCHMARKS.md).
+pub(super) const MAX_SPARSE: usize = 6;
+
+/// The change lists hold up to one node in `CHANGES_PER_NODE` of each block; an update that
+/// changes more recomputes `u = K p` instead of correcting it.
+pub(super) const CHANGES_PER_NODE: usize = 16;
 
 /// Totals of one update pass ([`Solver::update_from_transform`]).
 #[derive(Debug, Default, Clone, Copy)]
@@ -21,7 +34,7 @@ pub(super) struct UpdateTotals {
     pub changed: usize,
 }
 
-impl Solver<'_> {
+impl<C: Constraint> Solver<'_, C> {
     /// Sum of `f(p_i)` over all nodes with fixed chunking.
     pub(super) fn chunked_sum(&mut self, f: impl Fn(f64) -> f64 + Sync) -> f64 {
         self.pressure
@@ -31,49 +44,10 @@ impl Solver<'_> {
         self.lane_sums.iter().map(|p| p[0]).sum()
     }
 
-    /// `Σ max(p + c, 0)` and the number of nodes where `p + c > 0`, reduced over the fixed
-    /// blocks.
-    fn shifted_sum(&mut self, c: f64) -> (f64, f64) {
-        self.pressure
-            .par_chunks(self.chunk)
-            .zip(self.offset_acc.par_iter_mut())
-            .for_each(|(pc, [sums, counts])| {
-                *sums = [0.0; LANES];
-                *counts = [0.0; LANES];
-                dispatch_offset_sums(c, pc, sums, counts);
-            });
-        self.offset_acc
-            .iter()
-            .fold((0.0, 0.0), |(s, k), [sums, counts]| {
-                (s + sums.iter().sum::<f64>(), k + counts.iter().sum::<f64>())
-            })
-    }
-
-    /// The offset `c ≤ 0` for which `Σ max(p + c, 0)` is `load`, for pressures summing to
-    /// `total > load` on `count` positive nodes, and that sum (`load` up to rounding):
-    /// Newton's method on the convex, piecewise linear `Σ max(p + c, 0)`, which from
-    /// `c = 0` approaches the root from above and is exact once a step keeps the same nodes
-    /// positive (one to three passes over `p` in 95 % of the paper 1024² sweep's offsets). `p` is not changed.
-    pub(super) fn load_offset(&mut self, load: f64, total: f64, count: f64) -> (f64, f64) {
-        let (mut c, mut sum, mut count) = (0.0f64, total, count);
-        for _ in 0..64 {
-            if sum <= load || count <= 0.0 {
-                break;
-            }
-            let next = c - (sum - load) / count;
-            let (next_sum, next_count) = self.shifted_sum(next);
-            let same_piece = next_count == count;
-            (c, sum, count) = (next, next_sum, next_count);
-            if same_piece {
-                break;
-            }
-        }
-        (c, sum)
-    }
-
     /// `u ← s (u + K Δ)` for the changed nodes gathered in `self.sparse` (direct summation,
     /// row by row), `p ← s p`, and the gradient statistics ([`gradient_row`]) in the same pass.
     pub(super) fn sparse_update(&mut self, scale: f64, shift: f64) -> GradientStats {
+        let constraint = self.constraint;
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         let (op, loads) = (self.op, &self.sparse);
         self.pressure
@@ -92,6 +66,7 @@ impl Solver<'_> {
                 {
                     dispatch_sparse(
                         op,
+                        constraint,
                         b * (chunk / n) + r,
                         loads,
                         shift,
@@ -129,12 +104,13 @@ impl Solver<'_> {
         scale: f64,
         shift: f64,
     ) -> GradientStats {
+        let constraint = self.constraint;
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         self.op.start_rows(
             self.pressure.par_chunks(chunk),
             |rows: &mut &[f64], r, buf| {
                 for (b, &p) in buf.iter_mut().zip(&rows[r * n..(r + 1) * n]) {
-                    *b = (p + offset).max(0.0);
+                    *b = constraint.project(p + offset);
                 }
             },
             &mut self.ws,
@@ -154,6 +130,7 @@ impl Solver<'_> {
         scale: f64,
         shift: f64,
     ) -> GradientStats {
+        let constraint = self.constraint;
         let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
         let blocks = self
             .pressure
@@ -173,13 +150,13 @@ impl Solver<'_> {
                     for (w, k) in w.iter_mut().zip(kx) {
                         *w += k;
                     }
-                    dispatch_gradient(shift, Some(scale), p, w, h, &mut acc.grad);
+                    dispatch_gradient(constraint, shift, Some(scale), p, w, h, &mut acc.grad);
                 } else {
                     if let Some(c) = offset {
-                        p.iter_mut().for_each(|p| *p = (*p + c).max(0.0));
+                        p.iter_mut().for_each(|p| *p = constraint.project(*p + c));
                     }
                     dispatch_exact(scale, p, w, kx, h);
-                    dispatch_gradient(shift, None, p, w, h, &mut acc.grad);
+                    dispatch_gradient(constraint, shift, None, p, w, h, &mut acc.grad);
                 }
             },
             &mut self.ws,
@@ -202,6 +179,7 @@ impl Solver<'_> {
         beta: f64,
         direction_mean: f64,
     ) -> (f64, f64) {
+        let constraint = self.constraint;
         let (n, chunk) = (self.op.grid().n(), self.chunk);
         let blocks = self
             .direction
@@ -217,6 +195,7 @@ impl Solver<'_> {
                 }
                 let at = r * n..(r + 1) * n;
                 dispatch_direction(
+                    constraint,
                     level,
                     beta,
                     direction_mean,
@@ -252,6 +231,7 @@ impl Solver<'_> {
             level,
             next_shift,
             readmit,
+            constraint: self.constraint,
         };
         let blocks = self
             .pressure
@@ -352,66 +332,5 @@ impl Solver<'_> {
             .par_iter()
             .copied()
             .reduce(|| f64::INFINITY, f64::min);
-    }
-}
-
-avx2_dispatch! {
-    /// Adds `max(p + c, 0)` and `[p + c > 0]` over `p` to the lane sums `sums` and `counts`
-    /// (the load of an offset pressure, [`Solver::load_offset`]).
-    fn dispatch_offset_sums(
-        c: f64,
-        p: &[f64],
-        sums: &mut [f64; LANES],
-        counts: &mut [f64; LANES],
-    ) {
-        let mut blocks = p.chunks_exact(LANES);
-        for x in &mut blocks {
-            for k in 0..LANES {
-                let v = x[k] + c;
-                sums[k] += if v > 0.0 { v } else { 0.0 };
-                counts[k] += if v > 0.0 { 1.0 } else { 0.0 };
-            }
-        }
-        for (k, &x) in blocks.remainder().iter().enumerate() {
-            let v = x + c;
-            sums[k] += if v > 0.0 { v } else { 0.0 };
-            counts[k] += if v > 0.0 { 1.0 } else { 0.0 };
-        }
-    }
-}
-
-impl Solver<'_> {
-    /// The deflection after an update pass, the cheapest way that stays exact: the linear
-    /// update itself when no node changed, a direct correction for a few changed nodes, an
-    /// FFT correction for more, or an exact recomputation (every [`RESYNC`] steps, and when
-    /// a block changed more nodes than its list holds). `linear_steps` counts the updates
-    /// since the last exact one (0 after one).
-    pub(super) fn next_deflection(
-        &mut self,
-        totals: &UpdateTotals,
-        linear_stats: GradientStats,
-        scale: f64,
-        shift: f64,
-        linear_steps: &mut usize,
-        report: &mut SolveReport,
-    ) -> GradientStats {
-        let linear = *linear_steps + 1 < RESYNC;
-        let stats = if totals.changed == 0 && linear {
-            // Nothing left or entered the set: p and u are both exact linear updates and
-            // the load is preserved (Σ_S t = 0) up to rounding, corrected at the next exact
-            // step.
-            linear_stats
-        } else if totals.changed <= MAX_SPARSE && linear && self.gather_changes() {
-            self.sparse_update(scale, shift)
-        } else if linear && self.changes_listed() {
-            report.convolutions += 1;
-            self.fft_correction(scale, shift)
-        } else {
-            report.convolutions += 1;
-            *linear_steps = 0;
-            return self.exact_deflection(scale, shift);
-        };
-        *linear_steps += 1;
-        stats
     }
 }

@@ -25,6 +25,19 @@ pub struct SolveReport {
 }
 
 impl SolveReport {
+    /// A solve of `mean_pressure` not yet begun: converged in 0 iterations until the
+    /// iteration says otherwise, its history sized for up to `max_iterations`.
+    pub(super) fn new(mean_pressure: f64, max_iterations: usize) -> Self {
+        Self {
+            status: Status::Converged,
+            iterations: 0,
+            error: 0.0,
+            error_history: Vec::with_capacity(max_iterations.min(4096) + 2),
+            convolutions: 0,
+            mean_pressure,
+        }
+    }
+
     pub fn converged(&self) -> bool {
         self.status == Status::Converged
     }

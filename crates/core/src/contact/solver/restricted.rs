@@ -1,78 +1,91 @@
-//! The preconditioner `z = P K⁻¹ P g` and the preconditioned direction.
+//! The restricted preconditioner `z = P K⁻¹ P g` (`P`: zero off the free set F, centred on
+//! it), its passes, and the preconditioned direction: the part every other preconditioner
+//! builds on ([`Restricted::input`], [`Restricted::output`],
+//! [`Restricted::transformed_direction`] take the rows a layer changes).
 
 // Lane loops index several fixed-size arrays in lockstep; iterator chains would hide the
 // structure the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use rayon::iter::Either;
 use rayon::prelude::*;
 
-use super::level::{free, Level};
+use super::constraint::Constraint;
+use super::level::Level;
+use super::preconditioner::{Coefficients, Fields, PreconditionSums, Preconditioner};
 use super::rows::{avx2_dispatch, lanes, padded, LANES};
-use super::Solver;
+use crate::contact::elastic::ElasticOperator;
 
-impl Solver<'_> {
-    /// The preconditioned gradient `z = P K⁻¹ P g` on the free set
-    /// `F = {p > 0} ∪ {p = 0, u − h < entry}` (the contact set and the nodes that
-    /// interpenetrate, [`Level`]; `g = u − h − mean`, `mean` that of `u − h` over the
-    /// contact set; `P`: zero off
-    /// F, centred on F). Each row of `K⁻¹ P g` is stored raw in `self.preconditioned` as it
-    /// leaves the inverse FFT, and summed over F in the same pass: `Σ z`, `|F|`, `Σ g z`,
-    /// `Σ g`, `Σ g t_old`, `Σ t_old`. The centring is left to the direction pass, which
-    /// subtracts the mean. Summed in a fixed order (four lanes per block, then the blocks
-    /// in order), so bit-identical whatever the number of threads. With the free-set
-    /// extension (module `extension`) the input is `E g` instead of `P g`, and the values
-    /// of `K⁻¹ E g` off F are summed per cell for the correction `Σ γ S D⁻¹ (1 − 1_F) y` that
-    /// the direction pass adds on F.
-    pub(super) fn precondition(&mut self, level: Level) -> PreconditionSums {
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
-        let rows = self.op.rows_per_block();
-        let mut coarse = self.coarse.take();
-        if let Some(c) = coarse.as_mut() {
-            c.gather(&self.pressure, &self.separation, level);
+/// `z = P K⁻¹ P g`: the preconditioned gradient, and the per-block sums of its output pass.
+pub(super) struct Restricted {
+    /// `K⁻¹ P g` on F, in single precision like the transform that makes it, NaN off F
+    /// ([`OFF_FREE_SET`]), so that the direction pass reads F from `z` alone.
+    z: Vec<f32>,
+    /// Per block: the lane sums of the output pass (see [`Restricted::output`]).
+    acc: Vec<[[f64; LANES]; 6]>,
+}
+
+impl Restricted {
+    /// `z` and the sums for `op`'s grid (n²/2 doubles' worth for `z`).
+    pub(super) fn new(op: &ElasticOperator) -> Self {
+        let n = op.grid().n();
+        let blocks = n.div_ceil(op.rows_per_block());
+        Self {
+            z: crate::pages::filled(n * n, 0.0),
+            acc: vec![[[0.0; LANES]; 6]; blocks],
         }
-        {
-            let coarse = coarse.as_ref();
-            let produce = self
-                .pressure
-                .par_chunks(chunk)
-                .zip(self.separation.par_chunks(chunk))
-                .enumerate();
-            self.op.start_rows_inverse(
-                produce,
-                |(b, (pc, wc)), r, row| {
-                    let at = r * n..(r + 1) * n;
-                    let (p, w) = (&pc[at.clone()], &wc[at]);
-                    match coarse {
-                        Some(c) => c.input_row(*b * rows + r, row, p, w, level),
-                        None => dispatch_precondition_input(level, row, p, w),
-                    }
-                },
-                &mut self.ws,
-            );
-        }
-        let blocks = self.precondition_acc.len();
-        let (extension, off_blocks) = match coarse.as_mut() {
-            Some(c) => {
-                let (cell, m, bilinear, off) = c.output_parts();
-                (
-                    Some((cell, m, bilinear)),
-                    Either::Left(off.par_iter_mut().map(Some)),
-                )
-            }
-            None => (
-                None,
-                Either::Right((0..blocks).into_par_iter().map(|_| None)),
-            ),
-        };
-        self.op.finish_rows_inverse(
-            self.preconditioned
+    }
+
+    /// Starts the inverse convolution of the preconditioner's input, each row `o` made by
+    /// `make(i, o, p, w)` from row `i` of `p` and `w` (`P g` here; a layer's `E g`).
+    pub(super) fn input<M>(fields: &mut Fields<'_>, make: M)
+    where
+        M: Fn(usize, &mut [f32], &[f64], &[f64]) + Sync,
+    {
+        let (n, chunk) = (fields.op.grid().n(), fields.chunk);
+        let rows = fields.op.rows_per_block();
+        let produce = fields
+            .pressure
+            .par_chunks(chunk)
+            .zip(fields.separation.par_chunks(chunk))
+            .enumerate();
+        fields.op.start_rows_inverse(
+            produce,
+            |(b, (pc, wc)), r, row| {
+                let at = r * n..(r + 1) * n;
+                make(*b * rows + r, row, &pc[at.clone()], &wc[at]);
+            },
+            fields.ws,
+        );
+    }
+
+    /// Finishes the inverse convolution: each row of `K⁻¹ x` stored raw in `z` on F (NaN
+    /// off it) as it leaves the transform and summed over F in the same pass: `Σ z`, `|F|`,
+    /// `Σ g z`, `Σ g`, `Σ g t_old`, `Σ t_old`, returned in that order. The centring is left
+    /// to the direction pass, which subtracts the mean. Each row is then handed to
+    /// `after(block, r, row, p, w)` with its block's item of `blocks` (a layer's sums off
+    /// F). Summed in a fixed order (four lanes per block, then the blocks in order), so
+    /// bit-identical whatever the number of threads.
+    pub(super) fn output<C: Constraint, B, I, A>(
+        &mut self,
+        fields: &mut Fields<'_>,
+        level: Level<C>,
+        blocks: I,
+        after: A,
+    ) -> [f64; 6]
+    where
+        B: Send,
+        I: IndexedParallelIterator<Item = B>,
+        A: Fn(&mut B, usize, &[f32], &[f64], &[f64]) + Sync,
+    {
+        let (n, chunk) = (fields.op.grid().n(), fields.chunk);
+        fields.op.finish_rows_inverse(
+            self.z
                 .par_chunks_mut(chunk)
-                .zip(self.pressure.par_chunks(chunk))
-                .zip(self.separation.par_chunks(chunk))
-                .zip(self.direction.par_chunks(chunk))
-                .zip(self.precondition_acc.par_iter_mut())
-                .zip(off_blocks),
+                .zip(fields.pressure.par_chunks(chunk))
+                .zip(fields.separation.par_chunks(chunk))
+                .zip(fields.direction.par_chunks(chunk))
+                .zip(self.acc.par_iter_mut())
+                .zip(blocks),
             |(((((zc, pc), wc), tc), acc), block), r, row| {
                 if r == 0 {
                     **acc = [[0.0; LANES]; 6];
@@ -80,25 +93,12 @@ impl Solver<'_> {
                 let at = r * n..(r + 1) * n;
                 let (p, w) = (&pc[at.clone()], &wc[at.clone()]);
                 dispatch_precondition_output(level, row, &mut zc[at.clone()], p, w, &tc[at], acc);
-                if let (Some((cell, m, bilinear)), Some(block)) = (extension, block) {
-                    super::extension::Coarse::output_row(
-                        cell, m, bilinear, block, r, row, p, w, level,
-                    );
-                }
+                after(block, r, row, p, w);
             },
-            &mut self.ws,
+            fields.ws,
         );
-        let sums = self.output_sums();
-        let (sum_b, sum_gb) = coarse.as_mut().map_or((0.0, 0.0), |c| c.finish(sums[0]));
-        self.coarse = coarse;
-        PreconditionSums::new(sums, sum_b, sum_gb)
-    }
-
-    /// The sums of the output pass over the blocks in order: `Σ_F z`, `|F|`, `Σ_F g z`,
-    /// `Σ_F g`, `Σ_F g t`, `Σ_F t`.
-    fn output_sums(&self) -> [f64; 6] {
         let mut sums = [0.0; 6];
-        for acc in &self.precondition_acc {
+        for acc in &self.acc {
             for (s, lanes) in sums.iter_mut().zip(acc) {
                 *s += lanes.iter().sum::<f64>();
             }
@@ -106,69 +106,54 @@ impl Solver<'_> {
         sums
     }
 
-    /// [`Self::direction_and_transform`] with the preconditioned gradient:
-    /// `t ← (z − z̄_F) + β (t − t̄_F)` on the free set F, 0 elsewhere (`z` raw from
-    /// [`Self::precondition`] on F and marked off it, so that F is read from `z` alone;
-    /// `z̄_F = z_mean`, `t̄_F = direction_mean`), each row handed to the forward FFT as it is
-    /// made. Returns `⟨t, K t⟩`.
-    pub(super) fn preconditioned_direction_and_transform(
-        &mut self,
-        z_mean: f64,
-        beta: f64,
-        direction_mean: f64,
-    ) -> f64 {
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
-        if let Some(coarse) = &self.coarse {
-            let rows = self.op.rows_per_block();
-            let c = coarse.cell();
-            let blocks = self
-                .direction
-                .par_chunks_mut(chunk)
-                .zip(self.preconditioned.par_chunks(chunk))
-                .enumerate();
-            return self.op.start_rows(
-                blocks,
-                |(b, (tc, zc)), r, row| {
-                    let at = r * n..(r + 1) * n;
-                    let back = coarse.back_row(*b * rows + r);
-                    super::extension::dispatch_direction(
-                        c,
-                        back,
-                        [z_mean, beta, direction_mean],
-                        &mut tc[at.clone()],
-                        row,
-                        &zc[at],
-                    );
-                },
-                &mut self.ws,
-            );
-        }
-        let blocks = self
+    /// The direction made row by row from `z` by `make(i, t, row, z)` (row `i` of `t`
+    /// updated and copied into the FFT's input `row`; `z` NaN off F), handed to the forward
+    /// FFT of `K t`. Returns `⟨t, K t⟩`.
+    pub(super) fn transformed_direction<M>(&self, fields: &mut Fields<'_>, make: M) -> f64
+    where
+        M: Fn(usize, &mut [f64], &mut [f64], &[f32]) + Sync,
+    {
+        let (n, chunk) = (fields.op.grid().n(), fields.chunk);
+        let rows = fields.op.rows_per_block();
+        let blocks = fields
             .direction
             .par_chunks_mut(chunk)
-            .zip(self.preconditioned.par_chunks(chunk));
-        self.op.start_rows(
+            .zip(self.z.par_chunks(chunk))
+            .enumerate();
+        fields.op.start_rows(
             blocks,
-            |(tc, zc), r, row| {
+            |(b, (tc, zc)), r, row| {
                 let at = r * n..(r + 1) * n;
-                dispatch_preconditioned_direction(
-                    [z_mean, beta, direction_mean],
-                    &mut tc[at.clone()],
-                    row,
-                    &zc[at],
-                );
+                make(*b * rows + r, &mut tc[at.clone()], row, &zc[at]);
             },
-            &mut self.ws,
+            fields.ws,
         )
+    }
+}
+
+impl<C: Constraint> Preconditioner<C> for Restricted {
+    fn precondition(&mut self, fields: &mut Fields<'_>, level: Level<C>) -> PreconditionSums {
+        Self::input(fields, |_, row, p, w| {
+            dispatch_precondition_input(level, row, p, w)
+        });
+        let blocks = (0..self.acc.len()).into_par_iter().map(|_| ());
+        let sums = self.output(fields, level, blocks, |_, _, _, _, _| {});
+        PreconditionSums::new(sums, 0.0, 0.0)
+    }
+
+    fn direction(&mut self, fields: &mut Fields<'_>, coefficients: Coefficients) -> f64 {
+        self.transformed_direction(fields, |_, t, row, z| {
+            dispatch_preconditioned_direction(coefficients, t, row, z)
+        })
     }
 }
 
 avx2_dispatch! {
     /// One row of the preconditioner's input, with AVX2 where available:
     /// `o = w − level.mean` on the free set F, 0 elsewhere, rounded to single precision.
-    fn dispatch_precondition_input(level: Level, o: &mut [f32], p: &[f64], w: &[f64]) {
+    fn dispatch_precondition_input<C: Constraint>(level: Level<C>, o: &mut [f32], p: &[f64], w: &[f64]) {
         for ((o, &p), &w) in o.iter_mut().zip(p).zip(w) {
-            *o = if free(p, w, level) { (w - level.mean) as f32 } else { 0.0 };
+            *o = if level.free(p, w) { (w - level.mean) as f32 } else { 0.0 };
         }
     }
 }
@@ -177,8 +162,8 @@ avx2_dispatch! {
     /// [`precondition_output_row`], with AVX2 intrinsics where the processor has them
     /// ([`precondition_output_avx2`]: one pass over the row instead of two, the sums kept in
     /// registers). Same operations in the same order, so the same bits either way.
-    fn dispatch_precondition_output = precondition_output_row / precondition_output_avx2(
-        level: Level,
+    fn dispatch_precondition_output<C: Constraint> = precondition_output_row / precondition_output_avx2(
+        level: Level<C>,
         row: &[f32],
         z: &mut [f32],
         p: &[f64],
@@ -195,8 +180,8 @@ avx2_dispatch! {
 /// AVX2 must be present (the slices' lengths are checked).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn precondition_output_avx2(
-    level: Level,
+unsafe fn precondition_output_avx2<C: Constraint>(
+    level: Level<C>,
     row: &[f32],
     z: &mut [f32],
     p: &[f64],
@@ -229,11 +214,9 @@ unsafe fn precondition_output_avx2(
                 _mm256_loadu_pd(t.as_ptr().add(i)),
             )
         };
-        // `free`: p > 0 || w < entry.
-        let on = _mm256_or_pd(
-            _mm256_cmp_pd::<_CMP_GT_OQ>(pv, zero),
-            _mm256_cmp_pd::<_CMP_LT_OQ>(wv, entry_v),
-        );
+        // `Level::free`, through the constraint's AVX2 form.
+        // SAFETY: AVX2 is present (this function's contract).
+        let on = unsafe { level.constraint.free_avx2(pv, wv, entry_v) };
         // z on F (v, exactly the f32 value), NaN off it.
         let stored = _mm256_cvtpd_ps(_mm256_blendv_pd(off, v, on));
         // SAFETY: as for the loads.
@@ -270,8 +253,8 @@ unsafe fn precondition_output_avx2(
 /// `Σ g z`, `Σ g`, `Σ g t`, `Σ t` over F added to `acc` (lane `k mod LANES` takes node `k`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn precondition_output_row(
-    level: Level,
+fn precondition_output_row<C: Constraint>(
+    level: Level<C>,
     row: &[f32],
     z: &mut [f32],
     p: &[f64],
@@ -280,7 +263,7 @@ fn precondition_output_row(
     acc: &mut [[f64; LANES]; 6],
 ) {
     for (((z, &v), &p), &w) in z.iter_mut().zip(row).zip(p).zip(w) {
-        *z = if free(p, w, level) { v } else { OFF_FREE_SET };
+        *z = if level.free(p, w) { v } else { OFF_FREE_SET };
     }
     let n = row.len();
     let whole = n - n % LANES;
@@ -321,8 +304,8 @@ fn widened(slice: &[f32]) -> [f64; LANES] {
 
 /// [`dispatch_precondition_output`]'s sums for one block of [`LANES`] nodes.
 #[inline(always)]
-fn precondition_sums(
-    level: Level,
+fn precondition_sums<C: Constraint>(
+    level: Level<C>,
     z: &[f64; LANES],
     p: &[f64; LANES],
     w: &[f64; LANES],
@@ -330,7 +313,7 @@ fn precondition_sums(
     acc: &mut [[f64; LANES]; 6],
 ) {
     for k in 0..LANES {
-        let on = free(p[k], w[k], level);
+        let on = level.free(p[k], w[k]);
         let g = if on { w[k] - level.mean } else { 0.0 };
         let zk = if on { z[k] } else { 0.0 };
         acc[0][k] += zk;
@@ -368,43 +351,6 @@ avx2_dispatch! {
 /// non-finite state ends the solve as `Stalled` before a direction is made from it).
 const OFF_FREE_SET: f32 = f32::NAN;
 
-/// The sums of [`Solver::precondition`] over the free set `F`.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct PreconditionSums {
-    /// Mean of `z` over F.
-    pub z_mean: f64,
-    /// `⟨g, z − z̄⟩_F`, the preconditioned gradient's norm.
-    pub g_dot_z: f64,
-    /// `Σ_F g t_old`.
-    pub g_dot_t_old: f64,
-    /// `Σ_F g`.
-    pub g_sum: f64,
-    /// Mean of the previous direction over F.
-    pub t_old_mean: f64,
-}
-
-impl PreconditionSums {
-    /// From the output pass's sums ([`Solver::output_sums`]) with the extension's correction
-    /// `b` on F (`Σ_F b`, `Σ_F g b`; 0 without it).
-    fn new(sums: [f64; 6], sum_b: f64, sum_gb: f64) -> Self {
-        let [sz, count, sgz, sg, sgt, st] = sums;
-        let (sz, sgz) = (sz + sum_b, sgz + sum_gb);
-        let (z_mean, t_mean) = if count > 0.0 {
-            (sz / count, st / count)
-        } else {
-            (0.0, 0.0)
-        };
-        // Σ_F g (z − z̄) = Σ_F g z − z̄ Σ_F g.
-        Self {
-            z_mean,
-            g_dot_z: sgz - z_mean * sg,
-            g_dot_t_old: sgt,
-            g_sum: sg,
-            t_old_mean: t_mean,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::test_support::{require_vector_path, sequence};
@@ -432,6 +378,7 @@ mod tests {
             let level = Level {
                 mean: 0.1,
                 entry: -0.2,
+                constraint: super::super::constraint::NonNegative,
             };
             let run = |vector: bool| {
                 let mut z = vec![0.0f32; len];

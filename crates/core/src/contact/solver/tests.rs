@@ -157,32 +157,40 @@ fn load_offset_matches_a_sorted_projection() {
     }
 }
 
-/// `z = M x` for `x` on the contact set `contact` (the preconditioner with `settings`,
-/// settled), through the solver's own passes.
+/// `z = M x` for `x` on the contact set `contact` (the extended preconditioner with
+/// `settings`, settled), through its own passes.
 fn preconditioned(
     op: &ElasticOperator,
     settings: Extension,
     contact: &[bool],
     x: &[f64],
 ) -> Vec<f64> {
+    use super::preconditioner::{Fields, Preconditioner};
     let n = op.grid().n();
     let heights = vec![0.0; n * n];
     let mut solver = Solver::new(op, &heights).unwrap();
-    solver.preconditioned = crate::pages::filled(n * n, 0.0);
     for i in 0..n * n {
         (solver.pressure[i], solver.separation[i]) =
             if contact[i] { (1.0, x[i]) } else { (0.0, 1e3) };
     }
-    let mut coarse = extension::Coarse::new(n, op.rows_per_block(), settings);
-    coarse.deflate(op);
+    let mut part = extension::Extended::new(op, settings);
     let count = contact.iter().filter(|&&c| c).count();
-    coarse.settle(Some((0, count as f64)));
-    solver.coarse = Some(coarse);
-    let sums = solver.precondition(super::level::Level {
+    Preconditioner::<NonNegative>::settle(&mut part, Some((0, count as f64)));
+    let mut fields = Fields {
+        op,
+        ws: &mut solver.ws,
+        chunk: solver.chunk,
+        pressure: &solver.pressure,
+        separation: &solver.separation,
+        direction: &mut solver.direction,
+    };
+    let level = super::level::Level {
         mean: 0.0,
         entry: 0.0,
-    });
-    solver.preconditioned_direction_and_transform(sums.z_mean, 0.0, 0.0);
+        constraint: NonNegative,
+    };
+    let sums = part.precondition(&mut fields, level);
+    Preconditioner::<NonNegative>::direction(&mut part, &mut fields, [sums.z_mean, 0.0, 0.0]);
     solver.direction.clone()
 }
 
@@ -226,8 +234,12 @@ fn deflated_preconditioner_is_symmetric() {
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
     let mut outputs = Vec::new();
     for block in [0, 32] {
+        // The box declared large for the deflation, without the far term that comes with
+        // it (on 2 × 2 far cells it is not symmetric to 1e-5).
         let settings = Extension {
             coarse_block: block,
+            large_box: n,
+            far_weight: 0.0,
             ..Extension::default()
         };
         let z1 = preconditioned(&op, settings, &contact, &x1);

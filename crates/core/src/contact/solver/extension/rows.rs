@@ -3,16 +3,17 @@
 
 use rayon::prelude::*;
 
-use super::super::level::{free, Level};
+use super::super::constraint::Constraint;
+use super::super::level::Level;
 use super::super::rows::avx2_dispatch;
 
 avx2_dispatch! {
     /// Adds one row's sums of `g = w − level` and of `1_F` over each cell's nodes in F to
     /// `sum_g` and `count` (nodes in order within a cell; AVX2 where available, the same
     /// operations).
-    pub(in super::super) fn dispatch_cell_sums(
+    pub(in super::super) fn dispatch_cell_sums<C: Constraint>(
         cell: usize,
-        level: Level,
+        level: Level<C>,
         sum_g: &mut [f64],
         count: &mut [f64],
         p: &[f64],
@@ -26,7 +27,7 @@ avx2_dispatch! {
         {
             let (mut s, mut k) = (0.0, 0.0);
             for (&pv, &wv) in pc.iter().zip(wc) {
-                if free(pv, wv, level) {
+                if level.free(pv, wv) {
                     s += wv - level.mean;
                     k += 1.0;
                 }
@@ -40,10 +41,10 @@ avx2_dispatch! {
 avx2_dispatch! {
     /// One row of `E g`: `g = w − level` on F, the cell's value off it, in single precision
     /// (AVX2 where available; a selection, so the same bits either way).
-    pub(in super::super) fn dispatch_input(
+    pub(in super::super) fn dispatch_input<C: Constraint>(
         cell: usize,
         values: &[f64],
-        level: Level,
+        level: Level<C>,
         o: &mut [f32],
         p: &[f64],
         w: &[f64],
@@ -56,7 +57,7 @@ avx2_dispatch! {
         {
             let v = v as f32;
             for ((o, &pv), &wv) in oc.iter_mut().zip(pc).zip(wc) {
-                *o = if free(pv, wv, level) {
+                *o = if level.free(pv, wv) {
                     (wv - level.mean) as f32
                 } else {
                     v
@@ -69,9 +70,9 @@ avx2_dispatch! {
 avx2_dispatch! {
     /// Adds `Σ y` over the nodes of each cell of a row that are off F to `sums` (nodes in
     /// order within a cell).
-    pub(in super::super) fn dispatch_off_sums(
+    pub(in super::super) fn dispatch_off_sums<C: Constraint>(
         cell: usize,
-        level: Level,
+        level: Level<C>,
         sums: &mut [f64],
         row: &[f32],
         p: &[f64],
@@ -85,7 +86,7 @@ avx2_dispatch! {
         {
             let mut acc = 0.0;
             for ((&y, &pv), &wv) in yc.iter().zip(pc).zip(wc) {
-                if !free(pv, wv, level) {
+                if !level.free(pv, wv) {
                     acc += y as f64;
                 }
             }

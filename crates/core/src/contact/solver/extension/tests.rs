@@ -40,12 +40,12 @@ fn far_smoothing_on_merged_cells_is_symmetric_and_conservative() {
     }
 }
 
-/// The far term is built on boxes of at least FAR_BOX_SIGMAS σ_far, with a positive
-/// weight, and its cells must tile the shared ones.
+/// The far term is built on large boxes only, with a positive weight, and its cells must
+/// tile the shared ones.
 #[test]
 fn far_term_only_on_boxes_that_hold_it() {
     let settings = Extension::default();
-    let n_min = (FAR_BOX_SIGMAS * settings.far_sigma) as usize;
+    let n_min = settings.large_box;
     let built = Coarse::new(n_min, 64, settings);
     assert_eq!(
         built.far.as_ref().map(|t| t.smoothing.merge),
@@ -114,11 +114,12 @@ fn far_term_follows_the_contact_set_before_the_near_term() {
     let settings = Extension {
         far_sigma: 16.0,
         far_cell: 16,
+        large_box: 128,
         ..Extension::default()
     };
     assert!(settings.settled_fraction < settings.far_fraction);
     let mut coarse = Coarse::new(128, 8, settings);
-    assert!(coarse.far.is_some(), "a box of 8 σ_far holds the far term");
+    assert!(coarse.far.is_some(), "a large box holds the far term");
     let contact = 10_000.0;
     let far = (settings.far_fraction * contact) as usize;
     let settled = (settings.settled_fraction * contact) as usize;
@@ -161,8 +162,8 @@ fn check_operator(m: usize, mut apply: impl FnMut(&[f64], &mut [f64])) {
     assert!(ga.iter().all(|&v| (v - 1.0).abs() < 1e-14));
 }
 
-/// The deflation is built only on boxes of at least 4 blocks per side and used with the
-/// near term, once the contact set covers the coarse fraction of the box; switching it
+/// The deflation is built only on large boxes of at least 2 blocks per side and used with
+/// the near term, once the contact set covers the coarse fraction of the box; switching it
 /// alone is reported too (the direction restarts).
 #[test]
 fn deflation_follows_the_settled_and_dense_contact_set() {
@@ -171,18 +172,29 @@ fn deflation_follows_the_settled_and_dense_contact_set() {
         crate::contact::elastic::ElasticOperator::new(crate::grid::Grid::unit(n).unwrap(), 1.0);
     let settings = Extension {
         coarse_block: 32,
+        large_box: n,
         ..Extension::default()
     };
-    let mut small = Coarse::new(
-        n,
-        8,
-        Extension {
-            coarse_block: 64,
-            ..settings
-        },
-    );
-    small.deflate(&op);
-    assert!(small.deflation.is_none(), "2 blocks per side");
+    for (small, why) in [
+        (
+            Extension {
+                large_box: 2 * n,
+                ..settings
+            },
+            "not a large box",
+        ),
+        (
+            Extension {
+                coarse_block: n,
+                ..settings
+            },
+            "1 block per side",
+        ),
+    ] {
+        let mut small = Coarse::new(n, 8, small);
+        small.deflate(&op);
+        assert!(small.deflation.is_none(), "{why}");
+    }
     let mut coarse = Coarse::new(n, 8, settings);
     coarse.deflate(&op);
     let on = |c: &Coarse| c.deflation.as_ref().unwrap().on;
