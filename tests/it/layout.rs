@@ -76,6 +76,160 @@ fn no_source_file_is_over_700_lines() {
     assert!(long.is_empty(), "split these: {long:?}");
 }
 
+/// `text` with comments, string literals and character literals blanked (newlines kept), so
+/// that the braces left are the code's.
+fn code_only(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let blank = |s: &str, out: &mut String| {
+        out.extend(s.chars().map(|c| if c == '\n' { '\n' } else { ' ' }));
+    };
+    let mut i = 0;
+    while i < b.len() {
+        let rest = &text[i..];
+        let end = if rest.starts_with("//") {
+            rest.find('\n').unwrap_or(rest.len())
+        } else if rest.starts_with("/*") {
+            rest.find("*/").map_or(rest.len(), |e| e + 2)
+        } else if let Some(hashes) = rest
+            .strip_prefix('r')
+            .filter(|r| r.starts_with('"') || r.starts_with("#\""))
+            .map(|r| r.len() - r.trim_start_matches('#').len())
+            .filter(|_| i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'))
+        {
+            let close = format!("\"{}", "#".repeat(hashes));
+            let open = 2 + hashes;
+            rest[open..]
+                .find(&close)
+                .map_or(rest.len(), |e| open + e + close.len())
+        } else if rest.starts_with('"') {
+            let mut j = 1;
+            while j < rest.len() && rest.as_bytes()[j] != b'"' {
+                j += if rest.as_bytes()[j] == b'\\' { 2 } else { 1 };
+            }
+            j + 1
+        } else if rest.starts_with('\'') {
+            // A character literal ('x', '\n', '\u{7b}'), not a lifetime ('a).
+            let body = &rest[1..];
+            let len = if body.starts_with('\\') {
+                body.find('\'').map(|e| e + 2)
+            } else {
+                body.chars()
+                    .next()
+                    .map(|c| c.len_utf8())
+                    .filter(|&n| body[n..].starts_with('\''))
+                    .map(|n| n + 2)
+            };
+            len.unwrap_or(0)
+        } else {
+            0
+        };
+        if end > 0 {
+            blank(&rest[..end.min(rest.len())], &mut out);
+            i += end.min(rest.len());
+        } else {
+            let c = rest.chars().next().unwrap();
+            out.push(c);
+            i += c.len_utf8();
+        }
+    }
+    out
+}
+
+/// Every function with a body in `text`: its name, first line (1-based) and length in lines,
+/// from the `fn` line to its closing brace.
+fn function_lengths(text: &str) -> Vec<(String, usize, usize)> {
+    let code = code_only(text);
+    let line_of = |at: usize| code[..at].matches('\n').count() + 1;
+    let mut found = Vec::new();
+    let mut from = 0;
+    while let Some(k) = code[from..].find("fn ") {
+        let at = from + k;
+        from = at + 3;
+        let word_start = at == 0
+            || !code.as_bytes()[at - 1].is_ascii_alphanumeric() && code.as_bytes()[at - 1] != b'_';
+        let name: String = code[at + 3..]
+            .trim_start()
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if !word_start || name.is_empty() {
+            continue;
+        }
+        // The body's brace, unless a `;` outside brackets ends a declaration first.
+        let (mut depth, mut open) = (0i32, None);
+        for (j, c) in code[at..].char_indices() {
+            match c {
+                '(' | '[' => depth += 1,
+                ')' | ']' => depth -= 1,
+                ';' if depth == 0 => break,
+                '{' => {
+                    open = Some(at + j);
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let Some(open) = open else { continue };
+        let mut braces = 0;
+        for (j, c) in code[open..].char_indices() {
+            match c {
+                '{' => braces += 1,
+                '}' => braces -= 1,
+                _ => continue,
+            }
+            if braces == 0 {
+                found.push((name, line_of(at), line_of(open + j) - line_of(at) + 1));
+                break;
+            }
+        }
+    }
+    found
+}
+
+/// No function in `src/` or any crate under `crates/` is over 120 lines (CONTRIBUTING.md:
+/// functions fit on a screen or two; most are under 60).
+#[test]
+fn no_function_is_over_120_lines() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    rust_files(&root().join("crates"), &mut files);
+    let mut long = Vec::new();
+    let mut count = 0;
+    for f in &files {
+        for (name, line, lines) in function_lengths(&std::fs::read_to_string(f).unwrap()) {
+            count += 1;
+            if lines > 120 {
+                long.push(format!("{}:{line} {name} ({lines} lines)", f.display()));
+            }
+        }
+    }
+    assert!(
+        count > 500,
+        "only {count} functions found: the scan is broken"
+    );
+    assert!(long.is_empty(), "split these: {long:?}");
+}
+
+/// The function scan measures a function from its `fn` line to its closing brace, whatever
+/// braces its strings, characters and comments hold, and skips bodiless declarations.
+#[test]
+fn the_function_scan_measures_a_fixture() {
+    let body: String = (0..125)
+        .map(|k| format!("    let x{k} = '{{';\n"))
+        .collect();
+    let text = format!(
+        "trait T {{\n    fn declared(&self, x: [f64; 4]);\n}}\n\
+         /// A doc comment with a brace {{\n\
+         pub(super) fn long<'a>(a: &'a str) -> usize {{\n\
+         {body}    let s = \"}} {{ }}\"; // }}\n    let r = r#\"}}\"#;\n    s.len()\n}}\n\
+         fn short() {{ /* }} */ }}\n"
+    );
+    let found = function_lengths(&text);
+    let names: Vec<(&str, usize)> = found.iter().map(|(n, _, l)| (n.as_str(), *l)).collect();
+    assert_eq!(names, [("long", 125 + 5), ("short", 1)], "{found:?}");
+}
+
 /// The module path of a library file (`src/pipeline/plan.rs` → `pipeline::plan`).
 fn module_of(file: &Path, src: &Path) -> String {
     let rel = file.strip_prefix(src).unwrap().with_extension("");
