@@ -108,9 +108,8 @@ fn code_only(text: &str) -> String {
                 j += if rest.as_bytes()[j] == b'\\' { 2 } else { 1 };
             }
             j + 1
-        } else if rest.starts_with('\'') {
+        } else if let Some(body) = rest.strip_prefix('\'') {
             // A character literal ('x', '\n', '\u{7b}'), not a lifetime ('a).
-            let body = &rest[1..];
             let len = if body.starts_with('\\') {
                 body.find('\'').map(|e| e + 2)
             } else {
