@@ -32,7 +32,7 @@ use rustfft::num_complex::Complex;
 
 use super::constraint::Constraint;
 use super::level::{Level, OffBlock};
-use crate::contact::elastic::ElasticOperator;
+use super::operator::Operator;
 use crate::spectral::{Fft2, Fft2Scratch};
 
 /// The bilinear interpolation between the centres of the model cells (2c × 2c nodes, `m`
@@ -151,7 +151,7 @@ impl Deflation {
     /// The deflation for `op`'s grid with blocks of `block` nodes and extension cells of
     /// `half` nodes, when the box holds at least 2 blocks per side and both divide it (the
     /// extension builds it on large boxes only, [`super::Extension::large_box`]).
-    pub(super) fn new(op: &ElasticOperator, block: usize, half: usize) -> Option<Self> {
+    pub(super) fn new<O: Operator>(op: &O, block: usize, half: usize) -> Option<Self> {
         let n = op.grid().n();
         let cell = 2 * half;
         if block == 0 || !block.is_multiple_of(cell) || !n.is_multiple_of(block) || n / block < 2 {
@@ -580,7 +580,7 @@ impl Deflation {
 /// `Π K Π` on cells of `cell` nodes as a multiplier of the coarse grid's unnormalised FFT
 /// pair: `(1/(c² n²)) Σ K̂(q) |D(q)|²` over the fine wavevectors `q` that alias to the
 /// coarse one, `D` the transform of a cell's indicator.
-fn cell_multiplier(op: &ElasticOperator, cell: usize) -> Vec<f64> {
+fn cell_multiplier<O: Operator>(op: &O, cell: usize) -> Vec<f64> {
     let grid = op.grid();
     let n = grid.n();
     let m = n / cell;

@@ -35,9 +35,9 @@ use rayon::prelude::*;
 use super::constraint::Constraint;
 use super::deflation::{Bilinear, Deflation};
 use super::level::{Level, OffBlock};
+use super::operator::Operator;
 use super::preconditioner::{Coefficients, Fields, PreconditionSums, Preconditioner};
 use super::restricted::Restricted;
-use crate::contact::elastic::ElasticOperator;
 
 /// The preconditioner `P Eᵀ K⁻¹ E P`: the restricted one's passes with the extension's
 /// rows (its input `E g`, its sums off F, its correction on F), the near and far terms and
@@ -49,7 +49,7 @@ pub(super) struct Extended {
 
 impl Extended {
     /// The extension with `settings` on `op`'s grid, deflated where the box is large enough.
-    pub(super) fn new(op: &ElasticOperator, settings: Extension) -> Self {
+    pub(super) fn new<O: Operator>(op: &O, settings: Extension) -> Self {
         let mut coarse = Coarse::new(op.grid().n(), op.rows_per_block(), settings);
         coarse.deflate(op);
         Self {
@@ -59,7 +59,7 @@ impl Extended {
     }
 }
 
-impl<C: Constraint> Preconditioner<C> for Extended {
+impl<C: Constraint, O: Operator> Preconditioner<C, O> for Extended {
     fn settle(&mut self, changes: Option<(usize, f64)>) -> bool {
         self.coarse.settle(changes)
     }
@@ -71,7 +71,7 @@ impl<C: Constraint> Preconditioner<C> for Extended {
     /// `K⁻¹ E g` on F: the cells' sums gathered first, the input rows `E g`, the values off F
     /// summed per cell in the output pass for the correction `Σ γ S D⁻¹ (1 − 1_F) y` that
     /// the direction pass adds on F.
-    fn precondition(&mut self, fields: &mut Fields<'_>, level: Level<C>) -> PreconditionSums {
+    fn precondition(&mut self, fields: &mut Fields<'_, O>, level: Level<C>) -> PreconditionSums {
         self.coarse
             .gather(fields.pressure, fields.separation, level);
         let coarse = &self.coarse;
@@ -87,7 +87,7 @@ impl<C: Constraint> Preconditioner<C> for Extended {
         PreconditionSums::new(sums, sum_b, sum_gb)
     }
 
-    fn direction(&mut self, fields: &mut Fields<'_>, coefficients: Coefficients) -> f64 {
+    fn direction(&mut self, fields: &mut Fields<'_, O>, coefficients: Coefficients) -> f64 {
         let (coarse, c) = (&self.coarse, self.coarse.cell());
         self.restricted
             .transformed_direction(fields, |i, t, row, z| {
@@ -402,7 +402,7 @@ impl Coarse {
 
     /// Adds the coarse-space deflation for `op`'s grid, when the box is large enough
     /// ([`Extension::coarse_block`]).
-    pub(super) fn deflate(&mut self, op: &ElasticOperator) {
+    pub(super) fn deflate<O: Operator>(&mut self, op: &O) {
         self.deflation = self
             .large()
             .then(|| Deflation::new(op, self.settings.coarse_block, self.cell))

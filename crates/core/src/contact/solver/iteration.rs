@@ -5,6 +5,7 @@
 
 use super::constraint::Constraint;
 use super::level::Level;
+use super::operator::Operator;
 use super::parts;
 use super::passes::UpdateTotals;
 use super::preconditioner::Fields;
@@ -107,7 +108,7 @@ impl Iteration {
     }
 }
 
-impl<C: Constraint> Solver<'_, C> {
+impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// The preconditioner a solve with `cfg` uses ([`parts::choose`]), chosen anew
     /// only when the settings that choose it changed: a sweep keeps its part, and the state
     /// of the part's layers, from load to load.

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::constraint::Constraint;
 use super::iteration::Iteration;
+use super::operator::Operator;
 use super::passes::{UpdateTotals, MAX_SPARSE};
 use super::rows::*;
 use super::{SolveReport, Solver, SolverConfig};
@@ -14,7 +15,7 @@ use super::{SolveReport, Solver, SolverConfig};
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub(super) const RESYNC: usize = 32;
 
-impl<C: Constraint> Solver<'_, C> {
+impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// After a step that left the load `totals.sum_p > 0`: the load `target` per node restored,
     /// by a uniform offset of the pressures where the step changed many nodes (`u = K p`
     /// recomputed: one convolution, as a correction of that many changes would take), else

@@ -22,9 +22,10 @@
 //! linearly and gathers the next gradient's statistics; and the load restored (`load.rs`:
 //! a uniform offset of the pressures or a rescaling, then the cheapest exact deflection).
 //!
-//! **Parts.** A [`Constraint`] (`constraint.rs`) says what the projection keeps and which
-//! nodes are in contact. A preconditioner (`preconditioner.rs`, chosen in one place from
-//! [`SolverConfig`]) is none (the plain iteration), `P K⁻¹ P` on the free set
+//! **Parts.** An [`Operator`] (`operator.rs`) is `K`: today the periodic half-space,
+//! [`ElasticOperator`]. A [`Constraint`] (`constraint.rs`) says what the projection keeps and
+//! which nodes are in contact. A preconditioner (`preconditioner.rs`, chosen in one place,
+//! `parts.rs`, from [`SolverConfig`]) is none (the plain iteration), `P K⁻¹ P` on the free set
 //! (`restricted.rs`), or that extended off the free set by the smoothed gradient with its near
 //! and far terms and the block deflation as layers (`extension.rs`, `deflation.rs`); the far
 //! term, the deflation and the free set's entry margin are used on large boxes only
@@ -61,6 +62,7 @@ mod history;
 mod iteration;
 mod level;
 mod load;
+mod operator;
 mod parts;
 mod passes;
 mod preconditioner;
@@ -74,10 +76,11 @@ mod test_support;
 mod tests;
 mod update;
 
-use super::elastic::{ElasticOperator, OperatorWorkspace};
+use super::elastic::ElasticOperator;
 pub use constraint::{Constraint, NonNegative};
 pub use extension::Extension;
 use iteration::Iteration;
+pub use operator::Operator;
 use passes::{CHANGES_PER_NODE, MAX_SPARSE};
 pub use report::{SolveReport, Status};
 use rows::{GradientStats, LANES};
@@ -149,17 +152,17 @@ pub enum ContactError {
     BadConfig(String),
 }
 
-/// A solver bound to one operator, one surface and one constraint on the pressure
-/// ([`NonNegative`] unless given); it keeps its fields between solves so that a load sweep
+/// A solver bound to one operator ([`ElasticOperator`] unless given), one surface and one
+/// constraint on the pressure ([`NonNegative`] unless given); it keeps its fields between solves so that a load sweep
 /// warm-starts each step from the previous solutions (extrapolated to the new load, or
 /// scaled to it).
-pub struct Solver<'a, C: Constraint = NonNegative> {
-    op: &'a ElasticOperator,
+pub struct Solver<'a, C: Constraint = NonNegative, O: Operator = ElasticOperator> {
+    op: &'a O,
     constraint: C,
     heights: &'a [f64],
     height_std: f64,
     flat: bool,
-    ws: OperatorWorkspace,
+    ws: O::Workspace,
     pressure: Vec<f64>,
     /// `w = u − h`, the deflection minus the heights (the gap up to the rigid-body shift),
     /// stored instead of `u` so that the passes of an iteration need not read `h`.
@@ -187,7 +190,7 @@ pub struct Solver<'a, C: Constraint = NonNegative> {
     sparse: Vec<(usize, f64)>,
     /// The preconditioner (module `preconditioner`; none for the plain iteration), chosen
     /// at the first solve and again only when the settings that choose it change.
-    preconditioner: Option<Box<dyn preconditioner::Preconditioner<C>>>,
+    preconditioner: Option<Box<dyn preconditioner::Preconditioner<C, O>>>,
     choice: Option<parts::Choice>,
     has_solution: bool,
     /// The mean pressure of the last solution (when `has_solution`).
@@ -206,14 +209,14 @@ impl<'a> Solver<'a> {
     }
 }
 
-impl<'a, C: Constraint> Solver<'a, C> {
+impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
     /// Check the surface and allocate every buffer: 4 n² doubles (the transform's rows, `p`,
     /// `w`, `t`), n²/8 for the lists of changed nodes, and n²/2 more at the first
     /// preconditioned solve (`z`, single precision), n²/4 at a sweep's second load (the
     /// solution before the last, bfloat16); besides the heights and the operator's
     /// kernel (n²/2).
     pub fn with_constraint(
-        op: &'a ElasticOperator,
+        op: &'a O,
         heights: &'a [f64],
         constraint: C,
     ) -> Result<Self, ContactError> {

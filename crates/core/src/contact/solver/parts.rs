@@ -2,10 +2,10 @@
 
 use super::constraint::Constraint;
 use super::extension::Extended;
+use super::operator::Operator;
 use super::preconditioner::Preconditioner;
 use super::restricted::Restricted;
 use super::{Extension, SolverConfig};
-use crate::contact::elastic::ElasticOperator;
 
 /// The settings that decide a solve's preconditioner: it is chosen anew only when they
 /// change, so that a sweep keeps its part (and the state of its layers) from load to load.
@@ -18,10 +18,10 @@ pub(super) fn choice(cfg: &SolverConfig) -> Choice {
 
 /// The preconditioner a solve with `cfg` uses on `op`'s grid: none (the plain iteration),
 /// `P K⁻¹ P`, or that extended off the free set.
-pub(super) fn choose<C: Constraint>(
+pub(super) fn choose<C: Constraint, O: Operator>(
     cfg: &SolverConfig,
-    op: &ElasticOperator,
-) -> Option<Box<dyn Preconditioner<C>>> {
+    op: &O,
+) -> Option<Box<dyn Preconditioner<C, O>>> {
     match choice(cfg) {
         (false, _) => None,
         (true, None) => Some(Box::new(Restricted::new(op))),

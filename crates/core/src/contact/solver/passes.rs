@@ -4,6 +4,7 @@
 use rayon::prelude::*;
 
 use super::constraint::Constraint;
+use super::operator::Operator;
 use super::rows::*;
 use super::update::{dispatch_update, UpdateAcc, UpdateArgs};
 use super::Solver;
@@ -34,7 +35,7 @@ pub(super) struct UpdateTotals {
     pub changed: usize,
 }
 
-impl<C: Constraint> Solver<'_, C> {
+impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// Sum of `f(p_i)` over all nodes with fixed chunking.
     pub(super) fn chunked_sum(&mut self, f: impl Fn(f64) -> f64 + Sync) -> f64 {
         self.pressure

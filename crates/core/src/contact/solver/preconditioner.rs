@@ -12,13 +12,13 @@
 
 use super::constraint::Constraint;
 use super::level::Level;
-use crate::contact::elastic::{ElasticOperator, OperatorWorkspace};
+use super::operator::Operator;
 
 /// The solver's fields a preconditioner reads, and the direction it writes, lent for one
 /// call.
-pub(super) struct Fields<'f> {
-    pub op: &'f ElasticOperator,
-    pub ws: &'f mut OperatorWorkspace,
+pub(super) struct Fields<'f, O: Operator> {
+    pub op: &'f O,
+    pub ws: &'f mut O::Workspace,
     /// Values per work block (the operator's fixed row blocks; every reduction sums over
     /// them in order, so that the bits do not depend on the thread count).
     pub chunk: usize,
@@ -34,7 +34,7 @@ pub(super) struct Fields<'f> {
 pub(super) type Coefficients = [f64; 3];
 
 /// A preconditioner of the constrained conjugate gradient.
-pub(super) trait Preconditioner<C: Constraint>: Send {
+pub(super) trait Preconditioner<C: Constraint, O: Operator>: Send {
     /// Called before each iteration with the last iteration's change to the contact set
     /// (`(nodes changed, contact nodes)`; `None` before a load's first iteration), so that a
     /// preconditioner may switch its layers as the set settles. Returns whether `M` changed,
@@ -51,11 +51,11 @@ pub(super) trait Preconditioner<C: Constraint>: Send {
 
     /// `z = M g` on `F = {p > 0} ∪ {p = 0, w < level.entry}` with `g = w − level.mean`, kept
     /// for [`Self::direction`], and its sums over F. One inverse convolution.
-    fn precondition(&mut self, fields: &mut Fields<'_>, level: Level<C>) -> PreconditionSums;
+    fn precondition(&mut self, fields: &mut Fields<'_, O>, level: Level<C>) -> PreconditionSums;
 
     /// The direction from the last [`Self::precondition`]: `t ← (z − z̄) + β (t − t̄)` on F,
     /// 0 elsewhere, each row handed to the forward FFT of `K t`. Returns `⟨t, K t⟩`.
-    fn direction(&mut self, fields: &mut Fields<'_>, coefficients: Coefficients) -> f64;
+    fn direction(&mut self, fields: &mut Fields<'_, O>, coefficients: Coefficients) -> f64;
 }
 
 /// The sums of [`Preconditioner::precondition`] over the free set `F`.

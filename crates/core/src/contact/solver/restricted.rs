@@ -11,9 +11,9 @@ use rayon::prelude::*;
 
 use super::constraint::Constraint;
 use super::level::Level;
+use super::operator::Operator;
 use super::preconditioner::{Coefficients, Fields, PreconditionSums, Preconditioner};
 use super::rows::{avx2_dispatch, lanes, padded, LANES};
-use crate::contact::elastic::ElasticOperator;
 
 /// `z = P K⁻¹ P g`: the preconditioned gradient, and the per-block sums of its output pass.
 pub(super) struct Restricted {
@@ -26,7 +26,7 @@ pub(super) struct Restricted {
 
 impl Restricted {
     /// `z` and the sums for `op`'s grid (n²/2 doubles' worth for `z`).
-    pub(super) fn new(op: &ElasticOperator) -> Self {
+    pub(super) fn new<O: Operator>(op: &O) -> Self {
         let n = op.grid().n();
         let blocks = n.div_ceil(op.rows_per_block());
         Self {
@@ -37,7 +37,7 @@ impl Restricted {
 
     /// Starts the inverse convolution of the preconditioner's input, each row `o` made by
     /// `make(i, o, p, w)` from row `i` of `p` and `w` (`P g` here; a layer's `E g`).
-    pub(super) fn input<M>(fields: &mut Fields<'_>, make: M)
+    pub(super) fn input<O: Operator, M>(fields: &mut Fields<'_, O>, make: M)
     where
         M: Fn(usize, &mut [f32], &[f64], &[f64]) + Sync,
     {
@@ -65,9 +65,9 @@ impl Restricted {
     /// `after(block, r, row, p, w)` with its block's item of `blocks` (a layer's sums off
     /// F). Summed in a fixed order (four lanes per block, then the blocks in order), so
     /// bit-identical whatever the number of threads.
-    pub(super) fn output<C: Constraint, B, I, A>(
+    pub(super) fn output<C: Constraint, O: Operator, B, I, A>(
         &mut self,
-        fields: &mut Fields<'_>,
+        fields: &mut Fields<'_, O>,
         level: Level<C>,
         blocks: I,
         after: A,
@@ -109,7 +109,11 @@ impl Restricted {
     /// The direction made row by row from `z` by `make(i, t, row, z)` (row `i` of `t`
     /// updated and copied into the FFT's input `row`; `z` NaN off F), handed to the forward
     /// FFT of `K t`. Returns `⟨t, K t⟩`.
-    pub(super) fn transformed_direction<M>(&self, fields: &mut Fields<'_>, make: M) -> f64
+    pub(super) fn transformed_direction<O: Operator, M>(
+        &self,
+        fields: &mut Fields<'_, O>,
+        make: M,
+    ) -> f64
     where
         M: Fn(usize, &mut [f64], &mut [f64], &[f32]) + Sync,
     {
@@ -131,8 +135,8 @@ impl Restricted {
     }
 }
 
-impl<C: Constraint> Preconditioner<C> for Restricted {
-    fn precondition(&mut self, fields: &mut Fields<'_>, level: Level<C>) -> PreconditionSums {
+impl<C: Constraint, O: Operator> Preconditioner<C, O> for Restricted {
+    fn precondition(&mut self, fields: &mut Fields<'_, O>, level: Level<C>) -> PreconditionSums {
         Self::input(fields, |_, row, p, w| {
             dispatch_precondition_input(level, row, p, w)
         });
@@ -141,7 +145,7 @@ impl<C: Constraint> Preconditioner<C> for Restricted {
         PreconditionSums::new(sums, 0.0, 0.0)
     }
 
-    fn direction(&mut self, fields: &mut Fields<'_>, coefficients: Coefficients) -> f64 {
+    fn direction(&mut self, fields: &mut Fields<'_, O>, coefficients: Coefficients) -> f64 {
         self.transformed_direction(fields, |_, t, row, z| {
             dispatch_preconditioned_direction(coefficients, t, row, z)
         })

@@ -5,8 +5,8 @@
 // structure the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use super::super::elastic::ElasticOperator;
 use super::constraint::Constraint;
+use super::operator::Operator;
 
 /// Independent accumulators per reduction (breaks floating-point dependency chains; the
 /// summation order stays fixed).
@@ -155,48 +155,48 @@ impl GradientStats {
 /// Define `$name`, which runs `$body` compiled with AVX2 where the processor has it and as
 /// is elsewhere. IEEE arithmetic without fused multiply-add gives the same bits either way.
 macro_rules! avx2_dispatch {
-    // Each form below, generic over one type parameter (a constraint): the inner functions
-    // declare it again and are called with it.
-    ($(#[$attr:meta])* $vis:vis fn $name:ident<$g:ident: $bound:path>($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
+    // Each form below, generic over type parameters (a constraint, an operator): the inner
+    // functions declare them again and are called with them.
+    ($(#[$attr:meta])* $vis:vis fn $name:ident<$($g:ident: $bound:path),+>($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
         $(#[$attr])*
         #[allow(clippy::too_many_arguments)]
-        $vis fn $name<$g: $bound>($($arg: $ty),*) {
+        $vis fn $name<$($g: $bound),+>($($arg: $ty),*) {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
-            fn body<$g: $bound>($($arg: $ty),*) $body
+            fn body<$($g: $bound),+>($($arg: $ty),*) $body
             #[cfg(target_arch = "x86_64")]
             {
                 #[target_feature(enable = "avx2")]
                 #[allow(clippy::too_many_arguments)]
-                unsafe fn avx2<$g: $bound>($($arg: $ty),*) {
-                    body::<$g>($($arg),*)
+                unsafe fn avx2<$($g: $bound),+>($($arg: $ty),*) {
+                    body::<$($g),+>($($arg),*)
                 }
                 if std::is_x86_feature_detected!("avx2") {
                     // SAFETY: the processor supports AVX2 (checked just above).
-                    unsafe { avx2::<$g>($($arg),*) };
+                    unsafe { avx2::<$($g),+>($($arg),*) };
                     return;
                 }
             }
-            body::<$g>($($arg),*)
+            body::<$($g),+>($($arg),*)
         }
     };
-    ($(#[$attr:meta])* $vis:vis fn $name:ident<$g:ident: $bound:path> = $scalar:ident / $avx2:ident($($arg:ident: $ty:ty),* $(,)?);) => {
+    ($(#[$attr:meta])* $vis:vis fn $name:ident<$($g:ident: $bound:path),+> = $scalar:ident / $avx2:ident($($arg:ident: $ty:ty),* $(,)?);) => {
         $(#[$attr])*
         #[allow(clippy::too_many_arguments)]
-        $vis fn $name<$g: $bound>($($arg: $ty),*) {
+        $vis fn $name<$($g: $bound),+>($($arg: $ty),*) {
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") {
                 // SAFETY: the processor supports AVX2 (checked just above).
-                unsafe { $avx2::<$g>($($arg),*) };
+                unsafe { $avx2::<$($g),+>($($arg),*) };
                 return;
             }
-            $scalar::<$g>($($arg),*)
+            $scalar::<$($g),+>($($arg),*)
         }
     };
-    ($(#[$attr:meta])* $vis:vis fn $name:ident<$g:ident: $bound:path> = $body:ident($($arg:ident: $ty:ty),* $(,)?);) => {
+    ($(#[$attr:meta])* $vis:vis fn $name:ident<$($g:ident: $bound:path),+> = $body:ident($($arg:ident: $ty:ty),* $(,)?);) => {
         avx2_dispatch! {
             $(#[$attr])*
-            $vis fn $name<$g: $bound>($($arg: $ty),*) { $body::<$g>($($arg),*) }
+            $vis fn $name<$($g: $bound),+>($($arg: $ty),*) { $body::<$($g),+>($($arg),*) }
         }
     };
     ($(#[$attr:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $body:block) => {
@@ -284,8 +284,8 @@ avx2_dispatch! {
 avx2_dispatch! {
     /// One row of [`Solver::sparse_update`], with AVX2 where available: the point loads,
     /// then [`gradient_row`].
-    pub(super) fn dispatch_sparse<C: Constraint>(
-        op: &ElasticOperator,
+    pub(super) fn dispatch_sparse<C: Constraint, O: Operator>(
+        op: &O,
         constraint: C,
         iy: usize,
         loads: &[(usize, f64)],

@@ -5,10 +5,11 @@
 use rayon::prelude::*;
 
 use super::constraint::Constraint;
+use super::operator::Operator;
 use super::rows::GradientStats;
 use super::{SolveReport, Solver, SolverConfig};
 
-impl<C: Constraint> Solver<'_, C> {
+impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// The start of a load after a converged one: extrapolated from the last two solutions
     /// ([`SolverConfig::extrapolate_start`]), else the history is forgotten (and
     /// [`Solver::start`] scales the last solution).

@@ -175,7 +175,7 @@ fn preconditioned(
     }
     let mut part = extension::Extended::new(op, settings);
     let count = contact.iter().filter(|&&c| c).count();
-    Preconditioner::<NonNegative>::settle(&mut part, Some((0, count as f64)));
+    Preconditioner::<NonNegative, ElasticOperator>::settle(&mut part, Some((0, count as f64)));
     let mut fields = Fields {
         op,
         ws: &mut solver.ws,
@@ -190,7 +190,11 @@ fn preconditioned(
         constraint: NonNegative,
     };
     let sums = part.precondition(&mut fields, level);
-    Preconditioner::<NonNegative>::direction(&mut part, &mut fields, [sums.z_mean, 0.0, 0.0]);
+    Preconditioner::<NonNegative, ElasticOperator>::direction(
+        &mut part,
+        &mut fields,
+        [sums.z_mean, 0.0, 0.0],
+    );
     solver.direction.clone()
 }
 

@@ -1,4 +1,5 @@
 use super::*;
+use crate::contact::elastic::ElasticOperator;
 use crate::grid::Grid;
 
 /// The coarse convolution is `Π K Π`: the fine operator applied to a load constant on
