@@ -256,6 +256,53 @@ fn solve_command_scale_start_gives_the_same_maps_in_more_iterations() {
     );
 }
 
+/// `--large-box N` declares boxes of N nodes per side and more large: on this 128² surface
+/// `--large-box 128` turns on the extension's far term and the entry margin, which changes
+/// the pressures' bits but not the solution (the same contact maps at every load), while a
+/// gate above the box (256, as the default 4096) gives the default's bits exactly.
+#[test]
+fn solve_command_large_box_sets_where_the_large_box_layers_act() {
+    let dir = tempfile::tempdir().unwrap();
+    write_surface(dir.path(), 128);
+    let solve = |extra: &[&str], name: &str| {
+        let (maps, pressures) = (format!("c_{name}.npy"), format!("p_{name}.npy"));
+        let mut args = vec![
+            "solve",
+            "--surface",
+            "h.npy",
+            "--loads",
+            "0.02,0.04,0.08",
+            "--tol",
+            "1e-10",
+            "--contact-out",
+            &maps,
+            "--pressure-out",
+            &pressures,
+        ];
+        args.extend_from_slice(extra);
+        let out = run_in(dir.path(), &args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+        (read(&maps), read(&pressures))
+    };
+    let default = solve(&[], "default");
+    let above = solve(&["--large-box", "256"], "above");
+    let large = solve(&["--large-box", "128"], "large");
+    assert_eq!(above, default, "a gate above the box changed the bits");
+    assert_ne!(
+        large.1, default.1,
+        "--large-box 128 left every pressure bit unchanged"
+    );
+    assert_eq!(
+        large.0, default.0,
+        "--large-box 128 changed the contact maps"
+    );
+}
+
 #[test]
 fn solve_command_fails_loudly_when_a_load_does_not_converge() {
     let dir = tempfile::tempdir().unwrap();
