@@ -332,7 +332,7 @@ impl Smoothing {
 
 /// The coarse-grid state of the extension for one grid and settings.
 pub(super) struct Coarse {
-    pub(super) settings: Extension,
+    settings: Extension,
     n: usize,
     cell: usize,
     /// Cells per side.
@@ -356,7 +356,7 @@ pub(super) struct Coarse {
     back: Vec<f64>,
     /// Working values on the cells.
     work: [Vec<f64>; 3],
-    pub(super) blocks: Vec<OffBlock>,
+    blocks: Vec<OffBlock>,
     /// The coarse-space deflation, on boxes large enough for it.
     deflation: Option<Deflation>,
 }
