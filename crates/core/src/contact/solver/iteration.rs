@@ -192,8 +192,8 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             g_dot / it.g_norm_old
         };
         it.g_norm_old = g_dot;
-        match preconditioned {
-            Some(sums) => {
+        match preconditioned.zip(preconditioner) {
+            Some((sums, part)) => {
                 // The old direction is centred on the current free set.
                 it.direction_mean = sums.t_old_mean;
                 let direction_mean = it.direction_mean;
@@ -207,7 +207,6 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
                 if conjugate(beta) < DESCENT_FRACTION * sums.g_dot_z {
                     beta = 0.0;
                 }
-                let part = preconditioner.expect("a preconditioner made the sums");
                 (
                     part.direction(&mut fields, [sums.z_mean, beta, direction_mean]),
                     conjugate(beta),
