@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use wearcoef::clusters::{label, Connectivity};
 use wearcoef::contact::elastic::ElasticOperator;
-use wearcoef::contact::solver::SolverConfig;
+use wearcoef::contact::solver::{NonNegative, SolverConfig};
 use wearcoef::contact::sweep::sweep;
 use wearcoef::grid::Grid;
 use wearcoef::powerlaw::fit_plateau_power_law;
@@ -86,7 +86,7 @@ pub fn ours(h: &[f64], n: usize, loads: &[f64], tolerance: f64) -> Sweep {
     };
     let mut clusters = Vec::new();
     let start = Instant::now();
-    let results = sweep(&op, h, slope, loads, &cfg, |_, solver, _| {
+    let results = sweep(&op, h, slope, loads, &cfg, NonNegative, |_, solver, _| {
         let map: Vec<bool> = solver.pressure().iter().map(|&p| p > 0.0).collect();
         clusters.push(clusters_of(&map, n));
         Ok(())

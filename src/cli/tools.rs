@@ -10,7 +10,7 @@ use super::{check_memory, check_outputs, write_atomically, InputError};
 use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
 use wearcoef::contact::solver::SolverConfig;
-use wearcoef::contact::sweep::{sweep_heights, MAX_W_OVER_W0};
+use wearcoef::contact::sweep::{sweep_heights_with_hardness, MAX_W_OVER_W0};
 use wearcoef::grid::Grid;
 use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceParams};
@@ -33,6 +33,11 @@ pub struct SolveArgs {
     /// Effective modulus E* (pressures are written in its unit).
     #[arg(long, default_value_t = 1.0)]
     pub e_star: f64,
+    /// Perfectly plastic interface: the pressure saturates at the hardness 𝓗, given in
+    /// units of E*·rms slope like the loads (so p̄/𝓗 = (W/W0)/hardness; every load must be
+    /// ≤ it). Absent (or inf): elastic contact.
+    #[arg(long)]
+    pub hardness: Option<f64>,
     /// Use the plain Polonsky–Keer conjugate gradient instead of the default preconditioned
     /// one (same solution; more iterations on large grids, one convolution each).
     #[arg(long)]
@@ -340,12 +345,13 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
     let mut pressures = Vec::new();
     let mut contacts = Vec::new();
-    let (_, results) = sweep_heights(
+    let (_, results) = sweep_heights_with_hardness(
         &heights,
         n,
         args.e_star,
         &args.loads,
         &cfg,
+        args.hardness,
         |_, pressure, _| {
             if keep_fields {
                 pressures.extend_from_slice(pressure);
@@ -408,6 +414,21 @@ fn check_solve_args(args: &SolveArgs) -> anyhow::Result<wearcoef::contact::solve
             i + 1
         ))
         .into());
+    }
+    if let Some(h) = args.hardness {
+        if h.is_nan() || h <= 0.0 {
+            return Err(InputError(format!(
+                "--hardness {h} must be > 0 (in units of E*·rms slope, as the loads; omit it, or give inf, for elastic contact)"
+            ))
+            .into());
+        }
+        if let Some((i, w)) = args.loads.iter().enumerate().find(|(_, w)| **w > h) {
+            return Err(InputError(format!(
+                "--loads: load {} is {w}, above --hardness {h}: a pressure capped at the hardness cannot carry a mean above it",
+                i + 1
+            ))
+            .into());
+        }
     }
     if !(args.e_star.is_finite() && args.e_star > 0.0) {
         return Err(InputError(format!("--e-star {} must be finite and > 0", args.e_star)).into());
@@ -516,7 +537,7 @@ fn json_rows(results: &[wearcoef::contact::sweep::LoadResult]) -> Vec<serde_json
     results
         .iter()
         .map(|r| {
-            json!({
+            let mut row = json!({
                 "w_over_w0": r.w_over_w0,
                 "mean_pressure": r.mean_pressure,
                 "area_fraction": r.area_fraction,
@@ -527,7 +548,11 @@ fn json_rows(results: &[wearcoef::contact::sweep::LoadResult]) -> Vec<serde_json
                 "converged": r.report.converged(),
                 "seconds": r.seconds,
                 "peak_rss_bytes": wearcoef::machine::peak_rss_bytes(),
-            })
+            });
+            if let Some(saturated) = r.n_saturated_px {
+                row["n_saturated_px"] = json!(saturated);
+            }
+            row
         })
         .collect()
 }

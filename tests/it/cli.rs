@@ -303,6 +303,92 @@ fn solve_command_large_box_sets_where_the_large_box_layers_act() {
     );
 }
 
+/// `--hardness`: `inf` is elastic contact with its exact bits; a finite hardness caps every
+/// pressure at `hardness·E*·rms slope` (the same units as the loads), reached at some nodes
+/// and reported as `n_saturated_px`, with the mean pressure unchanged; a load above the
+/// hardness, or a hardness that is not > 0, is refused before any work, naming the flag.
+#[test]
+fn solve_command_hardness_caps_the_pressure() {
+    let dir = tempfile::tempdir().unwrap();
+    write_surface(dir.path(), 64);
+    let solve = |extra: &[&str], name: &str| {
+        let pressures = format!("p_{name}.npy");
+        let mut args = vec![
+            "solve",
+            "--surface",
+            "h.npy",
+            "--loads",
+            "0.02,0.05",
+            "--tol",
+            "1e-10",
+            "--pressure-out",
+            &pressures,
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let out = run_in(dir.path(), &args);
+        (out, dir.path().join(pressures))
+    };
+    let read =
+        |path: &std::path::Path| -> ndarray::Array3<f64> { ndarray_npy::read_npy(path).unwrap() };
+    let (elastic, elastic_p) = solve(&[], "elastic");
+    let (infinite, infinite_p) = solve(&["--hardness", "inf"], "inf");
+    assert!(elastic.status.success() && infinite.status.success());
+    assert_eq!(
+        read(&elastic_p),
+        read(&infinite_p),
+        "--hardness inf changed the bits"
+    );
+    assert!(stdout_json(&infinite)[0].get("n_saturated_px").is_none());
+
+    let (capped, capped_p) = solve(&["--hardness", "0.1"], "capped");
+    assert!(
+        capped.status.success(),
+        "{}",
+        String::from_utf8_lossy(&capped.stderr)
+    );
+    let rows = stdout_json(&capped);
+    let pressures = read(&capped_p);
+    for (k, row) in rows.as_array().unwrap().iter().enumerate() {
+        let (w, mean) = (
+            row["w_over_w0"].as_f64().unwrap(),
+            row["mean_pressure"].as_f64().unwrap(),
+        );
+        // mean = W/W0·E*·slope, so the hardness is 0.1 · mean / (W/W0) in pressure units.
+        let ceiling = 0.1 * mean / w;
+        let field = pressures.index_axis(ndarray::Axis(0), k);
+        let top = field.iter().fold(0.0f64, |m, &p| m.max(p));
+        assert!(
+            (top - ceiling).abs() <= 1e-12 * ceiling,
+            "load {k}: peak {top} vs {ceiling}"
+        );
+        let at_top = field.iter().filter(|&&p| p == top).count();
+        assert_eq!(row["n_saturated_px"].as_u64().unwrap() as usize, at_top);
+        assert!(at_top > 0);
+        let got = field.mean().unwrap();
+        assert!(
+            (got - mean).abs() <= 1e-12 * mean,
+            "load {k}: mean {got} vs {mean}"
+        );
+    }
+
+    let (above, above_p) = solve(&["--hardness", "0.03"], "above");
+    assert_eq!(above.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&above.stderr);
+    assert!(
+        err.contains("--hardness 0.03") && err.contains("0.05"),
+        "{err}"
+    );
+    assert!(!above_p.exists());
+    for bad in ["0", "-1", "nan"] {
+        let flag = format!("--hardness={bad}");
+        let (out, path) = solve(&[&flag], "bad");
+        assert_eq!(out.status.code(), Some(2), "--hardness {bad}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--hardness"));
+        assert!(!path.exists());
+    }
+}
+
 #[test]
 fn solve_command_fails_loudly_when_a_load_does_not_converge() {
     let dir = tempfile::tempdir().unwrap();

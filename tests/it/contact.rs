@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use wearcoef::contact::elastic::ElasticOperator;
 use wearcoef::contact::reference::{Hertz, Westergaard};
-use wearcoef::contact::solver::{ContactError, Solver, SolverConfig, Status};
+use wearcoef::contact::solver::{Ceiling, ContactError, Solver, SolverConfig, Status};
 use wearcoef::grid::Grid;
 use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceParams};
@@ -212,6 +212,65 @@ fn westergaard_full_contact_is_exact() {
             );
         }
         assert_eq!(solver.contact_count(), n * n);
+    }
+}
+
+/// Westergaard's sinusoid in full contact under a ceiling `p_max` below its elastic peak
+/// (docs/VALIDATION.md, a sinusoid with a ceiling): the crest saturates and
+/// `p(x) = p_max − p_W(x − λ/2)`, with `p_W` Westergaard's partial-contact pressure of mean
+/// `p_max − p̄` centred on the trough, valid while `p_max ≥ 2 √(p* (p_max − p̄))` (no node
+/// leaves contact). The saturated arc is `λ − 2a`, `a` Westergaard's half-width. Tolerances
+/// as for the partial-contact case, whose discretisation error this shares.
+#[test]
+fn westergaard_full_contact_under_a_ceiling() {
+    let w = Westergaard {
+        amplitude: 0.01,
+        wavelength: 1.0,
+        e_star: 1.0,
+    };
+    let p_star = w.full_contact_pressure();
+    for pre in VARIANTS {
+        for (n, max, mean) in [(256usize, 1.0, 0.9), (256, 1.5, 1.0), (512, 2.0, 1.9)] {
+            let (max, mean) = (max * p_star, mean * p_star);
+            assert!(max >= 2.0 * (p_star * (max - mean)).sqrt());
+            let h = westergaard_surface(n, w.amplitude);
+            let op = ElasticOperator::new(Grid::unit(n).unwrap(), w.e_star);
+            let mut solver = Solver::with_constraint(&op, &h, Ceiling::new(max).unwrap()).unwrap();
+            let report = solver.solve(mean, &cfgp(pre, 1e-12)).unwrap();
+            assert!(report.converged(), "{report:?}");
+            let p = &solver.pressure()[..n];
+            for row in 1..n {
+                assert_eq!(
+                    &solver.pressure()[row * n..(row + 1) * n],
+                    p,
+                    "rows must agree"
+                );
+            }
+            let dx = 1.0 / n as f64;
+            let exact: Vec<f64> = (0..n)
+                .map(|j| max - w.pressure(j as f64 * dx - 0.5, max - mean))
+                .collect();
+            let (mut num, mut den) = (0.0, 0.0);
+            for (pj, e) in p.iter().zip(&exact) {
+                num += (pj - e).powi(2);
+                den += (max - e).powi(2);
+            }
+            let l2 = (num / den).sqrt();
+            assert!(l2 <= 0.006, "N = {n}, p_max/p* = {}: L2 {l2}", max / p_star);
+            let saturated = p.iter().filter(|&&v| v == max).count() as f64 * dx;
+            let exact_saturated = 1.0 - 2.0 * w.half_width(max - mean);
+            assert!(
+                (saturated - exact_saturated).abs() <= 2.0 * dx,
+                "N = {n}: saturated arc {saturated} vs {exact_saturated}"
+            );
+            assert_eq!(solver.contact_count(), n * n, "full contact");
+            let lowest = p.iter().cloned().fold(f64::INFINITY, f64::min);
+            let exact_lowest = max - w.pressure(0.0, max - mean);
+            assert!(
+                (lowest / exact_lowest - 1.0).abs() <= 2e-3,
+                "trough {lowest} vs {exact_lowest}"
+            );
+        }
     }
 }
 

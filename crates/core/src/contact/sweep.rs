@@ -3,7 +3,9 @@
 //! two, the first warm step scaled from the last one).
 
 use super::elastic::ElasticOperator;
-use super::solver::{ContactError, SolveReport, Solver, SolverConfig};
+use super::solver::{
+    Ceiling, Constraint, ContactError, NonNegative, SolveReport, Solver, SolverConfig,
+};
 use crate::grid::{Grid, GridError};
 
 /// One solved load.
@@ -17,6 +19,10 @@ pub struct LoadResult {
     pub area_fraction: f64,
     /// Number of nodes with p > 0.
     pub n_contact_px: usize,
+    /// Under a hardness: the number of nodes at the hardness (saturated); absent when
+    /// elastic.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_saturated_px: Option<usize>,
     pub report: SolveReport,
     /// Wall time of this solve.
     pub seconds: f64,
@@ -35,6 +41,12 @@ pub enum SweepError {
         iterations: usize,
         error: f64,
         tolerance: f64,
+    },
+    #[error("load {index}: W/W0 = {} is above the hardness {}: no pressure capped at the hardness carries a mean pressure above it (lower the load or raise the hardness)", Num(*w_over_w0), Num(*hardness))]
+    AboveHardness {
+        index: usize,
+        w_over_w0: f64,
+        hardness: f64,
     },
     #[error("load {index}: W/W0 = {} must be finite and in [0, {MAX_W_OVER_W0}] (past W/W0 ≈ 10 the contact is complete; larger loads only lose digits to rounding)", Num(*value))]
     BadLoad { index: usize, value: f64 },
@@ -55,8 +67,40 @@ pub fn sweep_heights(
     e_star: f64,
     loads: &[f64],
     cfg: &SolverConfig,
+    on_load: impl FnMut(usize, &[f64], &LoadResult) -> Result<(), String>,
+) -> Result<(f64, Vec<LoadResult>), SweepError> {
+    sweep_heights_with_hardness(heights, n, e_star, loads, cfg, None, on_load)
+}
+
+/// [`sweep_heights`] under a perfectly plastic interface when `hardness` is given: the
+/// pressure is capped at `𝓗 = hardness·E*·rms slope` (hardness in the units of W/W0, so that
+/// `p̄/𝓗 = (W/W0)/hardness`); a load above the hardness is refused before any work.
+/// `None` (or `+∞`) is elastic contact, with exactly the elastic solver's bits.
+pub fn sweep_heights_with_hardness(
+    heights: &[f64],
+    n: usize,
+    e_star: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    hardness: Option<f64>,
     mut on_load: impl FnMut(usize, &[f64], &LoadResult) -> Result<(), String>,
 ) -> Result<(f64, Vec<LoadResult>), SweepError> {
+    let hardness = hardness.filter(|h| *h != f64::INFINITY);
+    if let Some(h) = hardness {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(ContactError::BadConfig(format!(
+                "hardness {h} must be > 0 (in units of E*·rms slope, as W/W0; absent or inf is elastic)"
+            ))
+            .into());
+        }
+        if let Some((index, &w)) = loads.iter().enumerate().find(|(_, &w)| w > h) {
+            return Err(SweepError::AboveHardness {
+                index,
+                w_over_w0: w,
+                hardness: h,
+            });
+        }
+    }
     if heights.len() != n * n {
         return Err(ContactError::BadLength {
             expected: n * n,
@@ -100,19 +144,44 @@ pub fn sweep_heights(
     };
     let op = ElasticOperator::new(grid, e_star / to_e);
     let mut pressure = Vec::new();
-    let mut results = sweep(&op, &scaled, slope / to_h, loads, cfg, |i, solver, r| {
+    let mut pass_on = |i, solved: &[f64], r: &LoadResult| {
         let r = LoadResult {
             mean_pressure: r.mean_pressure * to_p,
             ..r.clone()
         };
         if to_p == 1.0 {
-            on_load(i, solver.pressure(), &r)
+            on_load(i, solved, &r)
         } else {
             pressure.clear();
-            pressure.extend(solver.pressure().iter().map(|p| p * to_p));
+            pressure.extend(solved.iter().map(|p| p * to_p));
             on_load(i, &pressure, &r)
         }
-    })?;
+    };
+    let slope_solved = slope / to_h;
+    let mut results = match hardness {
+        None => sweep(
+            &op,
+            &scaled,
+            slope_solved,
+            loads,
+            cfg,
+            NonNegative,
+            |i, s, r| pass_on(i, s.pressure(), r),
+        )?,
+        Some(h) => {
+            // In the solved units: p_max = hardness·E*·slope, E* and slope both scaled.
+            let ceiling = Ceiling::new(h * op.e_star() * slope_solved)?;
+            sweep(
+                &op,
+                &scaled,
+                slope_solved,
+                loads,
+                cfg,
+                ceiling,
+                |i, s, r| pass_on(i, s.pressure(), r),
+            )?
+        }
+    };
     for r in &mut results {
         r.mean_pressure *= to_p;
         r.report.mean_pressure *= to_p;
@@ -164,13 +233,15 @@ pub fn check_rms_slope(rms_slope: f64) -> Result<(), SweepError> {
 /// Solve every load of `loads` (W/W0) on `heights` with rms slope `rms_slope`. After each
 /// converged load, `on_load(index, solver, result)` may store fields; the first load that
 /// does not converge stops the sweep with an error (nothing is passed on for it).
-pub fn sweep(
+#[allow(clippy::too_many_arguments)]
+pub fn sweep<C: Constraint>(
     op: &ElasticOperator,
     heights: &[f64],
     rms_slope: f64,
     loads: &[f64],
     cfg: &SolverConfig,
-    mut on_load: impl FnMut(usize, &Solver, &LoadResult) -> Result<(), String>,
+    constraint: C,
+    mut on_load: impl FnMut(usize, &Solver<C>, &LoadResult) -> Result<(), String>,
 ) -> Result<Vec<LoadResult>, SweepError> {
     if let Some((index, &value)) = loads
         .iter()
@@ -180,7 +251,7 @@ pub fn sweep(
         return Err(SweepError::BadLoad { index, value });
     }
     check_rms_slope(rms_slope)?;
-    let mut solver = Solver::new(op, heights)?;
+    let mut solver = Solver::with_constraint(op, heights, constraint)?;
     let nodes = heights.len() as f64;
     let mut out = Vec::with_capacity(loads.len());
     for (index, &w) in loads.iter().enumerate() {
@@ -204,6 +275,7 @@ pub fn sweep(
             mean_pressure,
             area_fraction: n_contact_px as f64 / nodes,
             n_contact_px,
+            n_saturated_px: C::BOUNDED.then(|| solver.saturated_count()),
             report,
             seconds,
         };

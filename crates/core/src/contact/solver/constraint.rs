@@ -4,11 +4,10 @@
 //! The solver is generic over it ([`super::Solver`]`<C>`): every pass that projects a
 //! pressure or asks whether a node is in contact calls its methods, which inline into the
 //! scalar and AVX2 row kernels alike, so a constraint costs nothing at run time and
-//! [`NonNegative`] gives exactly the bits the solver always had. A new constraint (the
-//! perfectly plastic ceiling `0 ≤ p ≤ p_max` is the one to come) implements [`Constraint`]
-//! in a file of its own and is passed to [`super::Solver::with_constraint`]; what it changes
-//! beyond these methods (the error measure on saturated nodes) is named in
-//! docs/ARCHITECTURE.md.
+//! [`NonNegative`] gives exactly the bits the solver always had. A new constraint implements
+//! [`Constraint`] in a file of its own and is passed to [`super::Solver::with_constraint`];
+//! the perfectly plastic ceiling `0 ≤ p ≤ p_max` (`ceiling.rs`) is one, and what a bounded
+//! constraint changes beyond these methods is in `bounded.rs` (docs/ARCHITECTURE.md).
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -25,12 +24,51 @@ pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static
     /// direction and the load offset's slope are taken over it.
     fn active(self, p: f64) -> bool;
 
-    /// Whether a node of pressure `p` and separation `w = u − h` is in the free set of the
-    /// preconditioned iteration, given the entry threshold `entry` below the level: the active
-    /// nodes and those that interpenetrate.
+    /// Whether the constraint has a ceiling `p ≤ p_max` ([`Self::ceiling`]). A bounded
+    /// constraint is not positively homogeneous, so the solver never rescales its pressures:
+    /// it restores the load by an offset `p ← P(p + c)` and measures the error on both
+    /// bounds (`Solver::complementarity_error`). A compile-time constant: the unbounded
+    /// solver's code is unchanged by it.
+    const BOUNDED: bool = false;
+
+    /// The ceiling `p_max` (`+∞` when unbounded).
     #[inline(always)]
-    fn free(self, p: f64, w: f64, entry: f64) -> bool {
+    fn ceiling(self) -> f64 {
+        f64::INFINITY
+    }
+
+    /// Whether a node of pressure `p` sits on the ceiling (never when unbounded).
+    #[inline(always)]
+    fn saturated(self, _p: f64) -> bool {
+        false
+    }
+
+    /// Whether a node of pressure `p` and separation `w = u − h` is in the free set of the
+    /// preconditioned iteration, given the level `mean` of the gradient and the entry
+    /// threshold `entry ≤ mean`: the active nodes and those that interpenetrate.
+    #[inline(always)]
+    fn free(self, p: f64, w: f64, entry: f64, _mean: f64) -> bool {
         self.active(p) || w < entry
+    }
+
+    /// A node of pressure `p` offset by `c` when the load is restored
+    /// (`Solver::load_offset`): `P(p + c)`, which for `c ≤ 0` leaves the nodes at 0 there.
+    /// `wide` asks for the offset of every node, where a constraint would move fewer.
+    #[inline(always)]
+    fn offset(self, p: f64, c: f64, _wide: bool) -> f64 {
+        self.project(p + c)
+    }
+
+    /// The plain iteration's re-admission after the step: `kept` is the projected pressure,
+    /// `gc = w − level` the gradient, `tau` the step. A node the projection left at 0 where
+    /// the surfaces interpenetrate (`gc < 0`) re-enters with `−τ gc`; the others keep `kept`.
+    #[inline(always)]
+    fn readmit(self, kept: f64, gc: f64, tau: f64) -> f64 {
+        if kept == 0.0 && gc < 0.0 {
+            -tau * gc
+        } else {
+            kept
+        }
     }
 
     /// [`Self::project`] on four lanes.
@@ -54,9 +92,27 @@ pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static
     /// As [`Self::project_avx2`].
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn free_avx2(self, p: __m256d, w: __m256d, entry: __m256d) -> __m256d {
+    unsafe fn free_avx2(self, p: __m256d, w: __m256d, entry: __m256d, _mean: __m256d) -> __m256d {
         // SAFETY: the caller guarantees AVX2.
         unsafe { _mm256_or_pd(self.active_avx2(p), _mm256_cmp_pd::<_CMP_LT_OQ>(w, entry)) }
+    }
+
+    /// [`Self::readmit`] on four lanes (`neg_tau` is `−τ`).
+    ///
+    /// # Safety
+    /// As [`Self::project_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn readmit_avx2(self, kept: __m256d, gc: __m256d, neg_tau: __m256d) -> __m256d {
+        // SAFETY: the caller guarantees AVX2.
+        unsafe {
+            let zero = _mm256_setzero_pd();
+            let enter = _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_EQ_OQ>(kept, zero),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(gc, zero),
+            );
+            _mm256_blendv_pd(kept, _mm256_mul_pd(neg_tau, gc), enter)
+        }
     }
 }
 
@@ -97,38 +153,62 @@ impl Constraint for NonNegative {
 
 #[cfg(test)]
 mod tests {
+    use super::super::ceiling::Ceiling;
     use super::*;
 
-    /// Each AVX2 form gives the scalar form's bits on values either side of 0, ±0, ±∞ and NaN.
+    /// Each AVX2 form gives the scalar form's bits on values either side of 0, ±0, ±∞ and NaN,
+    /// for the elastic constraint and for a ceiling among those values.
     #[test]
     fn vector_forms_match_the_scalar_ones() {
         super::super::test_support::require_vector_path();
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
-            let c = NonNegative;
-            let values = [
-                -1.5,
-                -0.0,
-                0.0,
-                1e-300,
-                2.5,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::NAN,
-            ];
-            let entry = 0.25;
-            for p in values.chunks(4) {
-                for w in values.chunks(4) {
-                    let (p, w): ([f64; 4], [f64; 4]) =
-                        (p.try_into().unwrap(), w.try_into().unwrap());
-                    let (mut project, mut active, mut free) = ([0.0; 4], [0.0; 4], [0.0; 4]);
-                    // SAFETY: AVX2 is present (checked above).
-                    unsafe { lanes(c, &p, &w, entry, &mut project, &mut active, &mut free) };
-                    for l in 0..4 {
-                        assert_eq!(project[l].to_bits(), c.project(p[l]).to_bits(), "{}", p[l]);
-                        assert_eq!(active[l].to_bits() != 0, c.active(p[l]), "{}", p[l]);
-                        assert_eq!(free[l].to_bits() != 0, c.free(p[l], w[l], entry));
-                    }
+            check(NonNegative);
+            check(Ceiling::new(2.5).unwrap());
+            check(Ceiling::new(1e-300).unwrap());
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    fn check<C: Constraint>(c: C) {
+        let values = [
+            -1.5,
+            -0.0,
+            0.0,
+            1e-300,
+            2.5,
+            3.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            0.75,
+            -0.25,
+            1.0,
+        ];
+        let (entry, mean, tau) = (0.25, 0.5, 0.75);
+        for p in values.chunks(4) {
+            for w in values.chunks(4) {
+                let (p, w): ([f64; 4], [f64; 4]) = (p.try_into().unwrap(), w.try_into().unwrap());
+                let mut out = [[0.0; 4]; 4];
+                // SAFETY: AVX2 is present (checked by the caller).
+                unsafe { lanes(c, &p, &w, [entry, mean, tau], &mut out) };
+                let [project, active, free, readmit] = out;
+                for l in 0..4 {
+                    let at = format!("{c:?} p {} w {}", p[l], w[l]);
+                    assert_eq!(project[l].to_bits(), c.project(p[l]).to_bits(), "{at}");
+                    assert_eq!(active[l].to_bits() != 0, c.active(p[l]), "{at}");
+                    assert_eq!(
+                        free[l].to_bits() != 0,
+                        c.free(p[l], w[l], entry, mean),
+                        "{at}"
+                    );
+                    // The re-admission takes a projected pressure and a gradient.
+                    let kept = c.project(p[l]);
+                    assert_eq!(
+                        readmit[l].to_bits(),
+                        c.readmit(kept, w[l], tau).to_bits(),
+                        "{at}"
+                    );
                 }
             }
         }
@@ -136,23 +216,24 @@ mod tests {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn lanes(
-        c: NonNegative,
+    unsafe fn lanes<C: Constraint>(
+        c: C,
         p: &[f64; 4],
         w: &[f64; 4],
-        entry: f64,
-        project: &mut [f64; 4],
-        active: &mut [f64; 4],
-        free: &mut [f64; 4],
+        [entry, mean, tau]: [f64; 3],
+        out: &mut [[f64; 4]; 4],
     ) {
         unsafe {
             let (pv, wv) = (_mm256_loadu_pd(p.as_ptr()), _mm256_loadu_pd(w.as_ptr()));
-            _mm256_storeu_pd(project.as_mut_ptr(), c.project_avx2(pv));
-            _mm256_storeu_pd(active.as_mut_ptr(), c.active_avx2(pv));
-            _mm256_storeu_pd(
-                free.as_mut_ptr(),
-                c.free_avx2(pv, wv, _mm256_set1_pd(entry)),
-            );
+            let free = c.free_avx2(pv, wv, _mm256_set1_pd(entry), _mm256_set1_pd(mean));
+            let kept = c.project_avx2(pv);
+            let readmit = c.readmit_avx2(kept, wv, _mm256_set1_pd(-tau));
+            for (o, v) in out
+                .iter_mut()
+                .zip([c.project_avx2(pv), c.active_avx2(pv), free, readmit])
+            {
+                _mm256_storeu_pd(o.as_mut_ptr(), v);
+            }
         }
     }
 }

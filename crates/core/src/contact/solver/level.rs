@@ -23,7 +23,7 @@ impl<C: Constraint> Level<C> {
     /// raise ([`Constraint::free`]).
     #[inline(always)]
     pub(super) fn free(self, p: f64, w: f64) -> bool {
-        self.constraint.free(p, w, self.entry)
+        self.constraint.free(p, w, self.entry, self.mean)
     }
 }
 

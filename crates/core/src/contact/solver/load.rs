@@ -31,6 +31,9 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         it: &mut Iteration,
         report: &mut SolveReport,
     ) -> GradientStats {
+        if C::BOUNDED {
+            return self.restore_bounded_load(totals, linear_stats, target, it, report);
+        }
         let total = totals.sum_p;
         let load = target * self.pressure.len() as f64;
         let offset = (cfg.preconditioned
@@ -42,7 +45,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         if let Some((offset, shifted)) = offset {
             report.convolutions += 1;
             it.linear_steps = 0;
-            self.offset_deflection(offset, load / shifted, it.shift)
+            self.offset_deflection(offset, false, load / shifted, it.shift)
         } else {
             self.next_deflection(
                 totals,
@@ -57,7 +60,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
 
     /// `Σ max(p + c, 0)` and the number of nodes where `p + c > 0` (the constraint's
     /// projection and active set), reduced over the fixed blocks.
-    fn shifted_sum(&mut self, c: f64) -> (f64, f64) {
+    pub(super) fn shifted_sum(&mut self, c: f64, wide: bool) -> (f64, f64) {
         let constraint = self.constraint;
         self.pressure
             .par_chunks(self.chunk)
@@ -65,7 +68,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             .for_each(|(pc, [sums, counts])| {
                 *sums = [0.0; LANES];
                 *counts = [0.0; LANES];
-                dispatch_offset_sums(constraint, c, pc, sums, counts);
+                dispatch_offset_sums(constraint, c, wide, pc, sums, counts);
             });
         self.offset_acc
             .iter()
@@ -86,7 +89,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
                 break;
             }
             let next = c - (sum - load) / count;
-            let (next_sum, next_count) = self.shifted_sum(next);
+            let (next_sum, next_count) = self.shifted_sum(next, false);
             let same_piece = next_count == count;
             (c, sum, count) = (next, next_sum, next_count);
             if same_piece {
@@ -132,12 +135,13 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
 }
 
 avx2_dispatch! {
-    /// Adds the projection of `p + c` and `[p + c active]` (for `p ≥ 0`: `max(p + c, 0)` and
-    /// `[p + c > 0]`) over `p` to the lane sums `sums` and `counts` (the load of an offset
+    /// Adds the offset pressure ([`Constraint::offset`]) and whether it is active (for
+    /// `p ≥ 0`: `max(p + c, 0)` and `[p + c > 0]`) over `p` to the lane sums `sums` and `counts` (the load of an offset
     /// pressure and its slope in `c`, [`Solver::load_offset`]).
     fn dispatch_offset_sums<C: Constraint>(
         constraint: C,
         c: f64,
+        wide: bool,
         p: &[f64],
         sums: &mut [f64; LANES],
         counts: &mut [f64; LANES],
@@ -145,14 +149,14 @@ avx2_dispatch! {
         let mut blocks = p.chunks_exact(LANES);
         for x in &mut blocks {
             for k in 0..LANES {
-                let v = x[k] + c;
-                sums[k] += constraint.project(v);
+                let v = constraint.offset(x[k], c, wide);
+                sums[k] += v;
                 counts[k] += if constraint.active(v) { 1.0 } else { 0.0 };
             }
         }
         for (k, &x) in blocks.remainder().iter().enumerate() {
-            let v = x + c;
-            sums[k] += constraint.project(v);
+            let v = constraint.offset(x, c, wide);
+            sums[k] += v;
             counts[k] += if constraint.active(v) { 1.0 } else { 0.0 };
         }
     }

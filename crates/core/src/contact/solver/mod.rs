@@ -9,7 +9,8 @@
 //! `err = Σ p_i g_i / (Σ p_i · σ_h)`, with `σ_h` the standard deviation of the heights about
 //! their mean; it is zero only at the exact discrete solution, and never larger than
 //! Tamaas's measure (which divides by the `ddof = 1` deviation), so a tolerance here is at
-//! least as strict as the same tolerance there.
+//! least as strict as the same tolerance there. Under a ceiling it is measured on both
+//! bounds (`bounded.rs`).
 //!
 //! **The iteration** ([`Solver::solve`]): start (`start.rs`: the exact solution at zero load
 //! or on a flat surface, else the last solutions carried to the new load); then, until the
@@ -49,12 +50,19 @@
 //!   either way a single-node solution that is the discrete optimum has error exactly 0;
 //! - all pressure projected away: reset to the uniform pressure, restart;
 //! - non-finite heights or loads, wrong lengths: an error before solving;
+//! - under a ceiling `p_max` ([`Ceiling`]): a mean pressure of `p_max` is the uniform field
+//!   `p_max`, every node saturated, in 0 iterations; a mean above it is an error before
+//!   solving ([`ContactError::AboveCeiling`]), naming both;
 //! - no progress for `stall_window` iterations, or a non-finite error: `Stalled`;
 //!   `max_iterations` reached: `MaxIterations`. Neither is ever a result that looks valid.
 //!
 //! Measurements of each part (iterations saved, cost per iteration): docs/ARCHITECTURE.md and
 //! docs/BENCHMARKS.md.
 
+mod bounded;
+mod ceiling;
+#[cfg(test)]
+mod ceiling_tests;
 mod constraint;
 mod deflation;
 mod extension;
@@ -77,6 +85,7 @@ mod tests;
 mod update;
 
 use super::elastic::ElasticOperator;
+pub use ceiling::Ceiling;
 pub use constraint::{Constraint, NonNegative};
 pub use extension::Extension;
 use iteration::Iteration;
@@ -148,6 +157,11 @@ pub enum ContactError {
     BadStart { row: usize, col: usize, value: f64 },
     #[error("mean pressure {0} is invalid: it must be finite and ≥ 0")]
     BadLoad(f64),
+    #[error(
+        "mean pressure {mean} is above the pressure ceiling {ceiling}: no pressure field \
+         bounded by the ceiling carries it (lower the load or raise the hardness)"
+    )]
+    AboveCeiling { mean: f64, ceiling: f64 },
     #[error("solver settings invalid: {0}")]
     BadConfig(String),
 }
@@ -261,8 +275,17 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
             block_stats: vec![GradientStats::EMPTY; blocks],
             update_acc: (0..blocks).map(|_| UpdateAcc::new()).collect(),
             offset_acc: vec![[[0.0; LANES]; 2]; blocks],
+            // Under a ceiling the load restoration reads where the step left every node it
+            // projected: the lists hold them all.
             changes: (0..blocks)
-                .map(|_| Vec::with_capacity((chunk / CHANGES_PER_NODE).max(MAX_SPARSE)))
+                .map(|_| {
+                    let listed = if C::BOUNDED {
+                        chunk
+                    } else {
+                        chunk / CHANGES_PER_NODE
+                    };
+                    Vec::with_capacity(listed.max(MAX_SPARSE))
+                })
                 .collect(),
             sparse: Vec::with_capacity(MAX_SPARSE),
             preconditioner: None,
@@ -293,6 +316,30 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
     /// Number of nodes in contact (`p > 0`) in the last solve.
     pub fn contact_count(&self) -> usize {
         self.pressure.iter().filter(|&&p| p > 0.0).count()
+    }
+
+    /// Number of nodes on the constraint's ceiling (`p = p_max`; none when unbounded) in
+    /// the last solve.
+    pub fn saturated_count(&self) -> usize {
+        let c = self.constraint;
+        self.pressure.iter().filter(|&&p| c.saturated(p)).count()
+    }
+
+    /// The plastic displacement of the last solve (row-major): on the saturated nodes the
+    /// interpenetration `−gap = ℓ − w ≥ 0` below the level of the unsaturated contact, 0
+    /// elsewhere (everywhere when unbounded).
+    pub fn plastic_displacement(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        let (c, level) = (self.constraint, self.gap_level);
+        self.pressure
+            .iter()
+            .zip(&self.separation)
+            .map(move |(&p, &w)| {
+                if c.saturated(p) {
+                    (level - w).max(0.0)
+                } else {
+                    0.0
+                }
+            })
     }
 
     /// Start the next [`Self::solve`] from `pressure` (row-major, finite, ≥ 0, not all
@@ -339,10 +386,18 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
         cfg: &SolverConfig,
     ) -> Result<SolveReport, ContactError> {
         check_request(mean_pressure, cfg)?;
+        let ceiling = self.constraint.ceiling();
+        if mean_pressure > ceiling {
+            return Err(ContactError::AboveCeiling {
+                mean: mean_pressure,
+                ceiling,
+            });
+        }
         self.prepare_parts(cfg);
         let target = mean_pressure;
         let mut report = SolveReport::new(mean_pressure, cfg.max_iterations);
-        if target == 0.0 || self.flat {
+        // At the ceiling's mean the only admissible field is uniform: every node saturated.
+        if target == 0.0 || self.flat || target == ceiling {
             self.uniform_solution(target);
             report.error_history.push(0.0);
             return Ok(report);
@@ -355,11 +410,15 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
         let mut it = Iteration::new();
         loop {
             // The error from the gradient's statistics on the contact set.
-            let error = stats.error(self.height_std);
+            let error = self.complementarity_error(&stats, it.shift);
             if error <= cfg.tolerance && !it.exact {
                 // Confirm with an exact deflection (and the exact load) before declaring
                 // convergence.
-                stats = self.exact_deflection(target * len / stats.sum_p, it.shift);
+                stats = if C::BOUNDED {
+                    self.deflection_at_load(target, stats.sum_p, it.shift, &mut it.restart)
+                } else {
+                    self.exact_deflection(target * len / stats.sum_p, it.shift)
+                };
                 report.convolutions += 1;
                 (it.exact, it.linear_steps) = (true, 0);
                 continue;
@@ -371,7 +430,7 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
             report.iterations += 1;
             // The direction (fused with the forward FFT), then K t and the curvature ⟨t, K t⟩
             // (Parseval), and the exact line search.
-            let level = it.shift + stats.mean_g();
+            let level = it.shift + self.gradient_level(&stats);
             let (denominator, numerator) =
                 self.search_direction(level, error, stats.g_norm(), &mut it, &mut report);
             report.convolutions += 1;

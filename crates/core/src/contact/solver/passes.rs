@@ -102,6 +102,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     pub(super) fn offset_deflection(
         &mut self,
         offset: f64,
+        wide: bool,
         scale: f64,
         shift: f64,
     ) -> GradientStats {
@@ -111,12 +112,12 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             self.pressure.par_chunks(chunk),
             |rows: &mut &[f64], r, buf| {
                 for (b, &p) in buf.iter_mut().zip(&rows[r * n..(r + 1) * n]) {
-                    *b = constraint.project(p + offset);
+                    *b = constraint.offset(p, offset, wide);
                 }
             },
             &mut self.ws,
         );
-        self.finish_deflection(false, Some(offset), scale, shift)
+        self.finish_deflection(false, Some((offset, wide)), scale, shift)
     }
 
     /// Second half of [`Self::exact_deflection`] (`add = false`: `u ← s K x`; with an
@@ -127,7 +128,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     pub(super) fn finish_deflection(
         &mut self,
         add: bool,
-        offset: Option<f64>,
+        offset: Option<(f64, bool)>,
         scale: f64,
         shift: f64,
     ) -> GradientStats {
@@ -153,8 +154,9 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
                     }
                     dispatch_gradient(constraint, shift, Some(scale), p, w, h, &mut acc.grad);
                 } else {
-                    if let Some(c) = offset {
-                        p.iter_mut().for_each(|p| *p = constraint.project(*p + c));
+                    if let Some((c, wide)) = offset {
+                        p.iter_mut()
+                            .for_each(|p| *p = constraint.offset(*p, c, wide));
                     }
                     dispatch_exact(scale, p, w, kx, h);
                     dispatch_gradient(constraint, shift, None, p, w, h, &mut acc.grad);
@@ -325,13 +327,32 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         self.finish_deflection(true, None, scale, shift)
     }
 
-    /// Record `min w`, the rigid-body level of the gap `w − min w` ([`Solver::gap`]; `w = u − h`
-    /// must be exact).
+    /// Record `min w` (over the unsaturated nodes under a ceiling), the rigid-body level of the
+    /// gap `w − min w` ([`Solver::gap`]; `w = u − h` must be exact).
     pub(super) fn finish_gap(&mut self) {
-        self.gap_level = self
-            .separation
-            .par_iter()
-            .copied()
-            .reduce(|| f64::INFINITY, f64::min);
+        let c = self.constraint;
+        self.gap_level = if C::BOUNDED {
+            // The level of the unsaturated nodes; with every node saturated (the mean at
+            // the ceiling) the highest `w`, so that no node has a gap.
+            let unsaturated = self
+                .pressure
+                .par_iter()
+                .zip(self.separation.par_iter())
+                .map(|(&p, &w)| if c.saturated(p) { f64::INFINITY } else { w })
+                .reduce(|| f64::INFINITY, f64::min);
+            if unsaturated.is_finite() {
+                unsaturated
+            } else {
+                self.separation
+                    .par_iter()
+                    .copied()
+                    .reduce(|| f64::NEG_INFINITY, f64::max)
+            }
+        } else {
+            self.separation
+                .par_iter()
+                .copied()
+                .reduce(|| f64::INFINITY, f64::min)
+        };
     }
 }

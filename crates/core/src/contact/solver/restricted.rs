@@ -220,7 +220,7 @@ unsafe fn precondition_output_avx2<C: Constraint>(
         };
         // `Level::free`, through the constraint's AVX2 form.
         // SAFETY: AVX2 is present (this function's contract).
-        let on = unsafe { level.constraint.free_avx2(pv, wv, entry_v) };
+        let on = unsafe { level.constraint.free_avx2(pv, wv, entry_v, level_v) };
         // z on F (v, exactly the f32 value), NaN off it.
         let stored = _mm256_cvtpd_ps(_mm256_blendv_pd(off, v, on));
         // SAFETY: as for the loads.

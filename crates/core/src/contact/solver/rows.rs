@@ -36,6 +36,11 @@ pub(super) struct GradientLanes {
     pub(super) spg: [f64; LANES],
     pub(super) sp: [f64; LANES],
     pub(super) min: [f64; LANES],
+    /// A bounded constraint's saturated nodes ([`Constraint::saturated`]): their count,
+    /// `Σg` and `max g` (untouched when unbounded).
+    pub(super) sat_n: [f64; LANES],
+    pub(super) sat_g: [f64; LANES],
+    pub(super) sat_max: [f64; LANES],
 }
 
 impl GradientLanes {
@@ -48,6 +53,9 @@ impl GradientLanes {
             spg: [0.0; LANES],
             sp: [0.0; LANES],
             min: [f64::INFINITY; LANES],
+            sat_n: [0.0; LANES],
+            sat_g: [0.0; LANES],
+            sat_max: [f64::NEG_INFINITY; LANES],
         }
     }
 
@@ -55,15 +63,24 @@ impl GradientLanes {
     pub(super) fn add<C: Constraint>(&mut self, c: C, p: &[f64; LANES], g: &[f64; LANES]) {
         for l in 0..LANES {
             let m = if c.active(p[l]) { 1.0 } else { 0.0 };
-            self.min[l] = if g[l] < self.min[l] {
-                g[l]
+            if C::BOUNDED && c.saturated(p[l]) {
+                // Off the minimum: the level is that of the unsaturated nodes.
+                self.sat_n[l] += 1.0;
+                self.sat_g[l] += g[l];
+                self.sat_max[l] = self.sat_max[l].max(g[l]);
             } else {
-                self.min[l]
-            };
+                self.min[l] = if g[l] < self.min[l] {
+                    g[l]
+                } else {
+                    self.min[l]
+                };
+            }
             self.n[l] += m;
             self.sg[l] += m * g[l];
             self.sg2[l] += m * g[l] * g[l];
-            self.spg[l] += p[l] * g[l];
+            if !(C::BOUNDED && c.saturated(p[l])) {
+                self.spg[l] += p[l] * g[l];
+            }
             self.sp[l] += p[l];
         }
     }
@@ -78,6 +95,9 @@ impl GradientLanes {
             self.spg[l] += other.spg[l];
             self.sp[l] += other.sp[l];
             self.min[l] = self.min[l].min(other.min[l]);
+            self.sat_n[l] += other.sat_n[l];
+            self.sat_g[l] += other.sat_g[l];
+            self.sat_max[l] = self.sat_max[l].max(other.sat_max[l]);
         }
     }
 
@@ -92,12 +112,20 @@ impl GradientLanes {
             sum_pg: sum(&self.spg),
             sum_p: sum(&self.sp),
             min_g: self.min.iter().fold(f64::INFINITY, |a, &b| a.min(b)),
+            saturated_nodes: sum(&self.sat_n),
+            sum_g_saturated: sum(&self.sat_g),
+            max_g_saturated: self
+                .sat_max
+                .iter()
+                .fold(f64::NEG_INFINITY, |a, &b| a.max(b)),
         }
     }
 }
 
-/// Statistics of the gradient `g = w − shift` of one state: over the contact set
-/// `S = {p > 0}` its size, `Σg`, `Σg²`, `Σpg` and `Σp`, and `min g` over all nodes.
+/// Statistics of the gradient `g = w − shift` of one state: over the active set `S`
+/// (`p > 0`, or `0 < p < p_max` under a ceiling) its size, `Σg` and `Σg²`; `Σp` over all
+/// nodes; `Σpg` and `min g` over the unsaturated nodes (all of them when unbounded); and over
+/// the saturated ones their number, `Σg` and `max g`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct GradientStats {
     pub contact_nodes: f64,
@@ -106,6 +134,9 @@ pub(super) struct GradientStats {
     pub sum_pg: f64,
     pub sum_p: f64,
     pub min_g: f64,
+    pub saturated_nodes: f64,
+    pub sum_g_saturated: f64,
+    pub max_g_saturated: f64,
 }
 
 impl GradientStats {
@@ -117,6 +148,9 @@ impl GradientStats {
         sum_pg: 0.0,
         sum_p: 0.0,
         min_g: f64::INFINITY,
+        saturated_nodes: 0.0,
+        sum_g_saturated: 0.0,
+        max_g_saturated: f64::NEG_INFINITY,
     };
 
     /// The complementarity error `(Σpg − min g Σp) / (Σp σ_h)` (docs/CONVENTIONS.md), with
@@ -147,6 +181,9 @@ impl GradientStats {
             acc.sum_pg += b.sum_pg;
             acc.sum_p += b.sum_p;
             acc.min_g = acc.min_g.min(b.min_g);
+            acc.saturated_nodes += b.saturated_nodes;
+            acc.sum_g_saturated += b.sum_g_saturated;
+            acc.max_g_saturated = acc.max_g_saturated.max(b.max_g_saturated);
         }
         acc
     }

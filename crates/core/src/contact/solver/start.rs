@@ -48,6 +48,9 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// the pass that makes the state). After a converged solve `w = K p − h` is exact, and
     /// `K (s p) = s K p`, so the scaled start needs a pass, not a convolution.
     pub(super) fn start(&mut self, target: f64, report: &mut SolveReport) -> GradientStats {
+        if C::BOUNDED {
+            return self.bounded_start(target, report);
+        }
         let len = self.pressure.len();
         let previous_total: f64 = self.chunked_sum(|p| p);
         let warm = self.has_solution && previous_total > 0.0;

@@ -76,8 +76,8 @@ fn update_lanes<C: Constraint>(
         let stepped = pn[l] - tau * t[l]; // t = 0 off S, so p stays 0 there
         let kept = a.constraint.project(stepped);
         let gc = wn[l] - level;
-        let new = if a.readmit && kept == 0.0 && gc < 0.0 {
-            -tau * gc
+        let new = if a.readmit {
+            a.constraint.readmit(kept, gc, tau)
         } else {
             kept
         };
@@ -204,6 +204,12 @@ unsafe fn update_row_avx2<C: Constraint>(
 ) {
     use std::arch::x86_64::*;
     const _: () = assert!(LANES == 4, "one AVX register of f64 per lane block");
+    if C::BOUNDED {
+        // The saturated nodes' statistics are gathered by the scalar code (compiled here
+        // with AVX2 all the same).
+        update_row(a, base, pc, wc, tc, rc, acc, changes);
+        return;
+    }
     let len = pc.len();
     assert!(wc.len() == len && tc.len() == len && rc.len() == len);
     let whole = len / LANES * LANES;
@@ -239,11 +245,8 @@ unsafe fn update_row_avx2<C: Constraint>(
         let kept = unsafe { a.constraint.project_avx2(stepped) };
         let gc = _mm256_sub_pd(w, level);
         let new = if readmit {
-            let enter = _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_EQ_OQ>(kept, zero),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(gc, zero),
-            );
-            _mm256_blendv_pd(kept, _mm256_mul_pd(neg_tau, gc), enter)
+            // SAFETY: as above.
+            unsafe { a.constraint.readmit_avx2(kept, gc, neg_tau) }
         } else {
             kept
         };

@@ -1,0 +1,312 @@
+//! What the solver does differently under a bounded constraint ([`Constraint::BOUNDED`]: the
+//! ceiling `0 ≤ p ≤ p_max`, `ceiling.rs`). A bounded field is not positively homogeneous,
+//! so the load is never restored by rescaling the pressures: every exact deflection first
+//! brings the mean to `p̄` by the offset `p ← P(p + c)` (the nearest admissible field of
+//! that mean), and between exact deflections the few nodes a step projects may move the
+//! mean slightly, which the next exact deflection (at the latest the one that confirms
+//! convergence) corrects. The error is measured on both bounds.
+
+use rayon::prelude::*;
+
+use super::constraint::Constraint;
+use super::iteration::Iteration;
+use super::load::RESYNC;
+use super::operator::Operator;
+use super::passes::{UpdateTotals, MAX_SPARSE};
+use super::rows::GradientStats;
+use super::{SolveReport, Solver};
+
+/// Newton steps allowed to find the load's offset (each a pass over `p`); bisection
+/// safeguards them, so 64 halve the bracket below the rounding of any pressure.
+const OFFSET_STEPS: usize = 64;
+
+/// The load is restored once the offset pressures sum to it within this relative rounding
+/// (far below any tolerance on the error).
+const OFFSET_ROUNDING: f64 = 1e-14;
+
+impl<C: Constraint, O: Operator> Solver<'_, C, O> {
+    /// The complementarity error of a state with gradient statistics `stats` (of
+    /// `g = w − shift`), in units of the load times σ_h. Unbounded: `Σ p (g − min g)`
+    /// (docs/CONVENTIONS.md). Bounded, with `ℓ = min g` over the unsaturated nodes:
+    /// `Σ_{p<p_max} p (g − ℓ) + p_max Σ_{p=p_max} (g − ℓ)⁺`, zero exactly when every node
+    /// with `0 < p < p_max` is at the level, none at 0 is below it and none on the ceiling
+    /// above it; the second sum takes a pass over the saturated nodes only when one of them
+    /// is above the level.
+    pub(super) fn complementarity_error(&mut self, stats: &GradientStats, shift: f64) -> f64 {
+        if !C::BOUNDED {
+            return stats.error(self.height_std);
+        }
+        let max = self.constraint.ceiling();
+        let level = if stats.min_g.is_finite() {
+            stats.min_g
+        } else {
+            stats.max_g_saturated
+        };
+        let unsaturated = stats.sum_pg - level * (stats.sum_p - max * stats.saturated_nodes);
+        let violation = if stats.max_g_saturated > level {
+            max * self.saturated_violation(shift + level)
+        } else {
+            0.0
+        };
+        (unsaturated + violation) / (stats.sum_p * self.height_std)
+    }
+
+    /// `Σ (w − level)⁺` over the saturated nodes, reduced over the fixed blocks.
+    fn saturated_violation(&mut self, level: f64) -> f64 {
+        let c = self.constraint;
+        self.pressure
+            .par_chunks(self.chunk)
+            .zip(self.separation.par_chunks(self.chunk))
+            .zip(self.lane_sums.par_iter_mut())
+            .for_each(|((pc, wc), part)| {
+                part[0] = pc
+                    .iter()
+                    .zip(wc)
+                    .map(|(&p, &w)| {
+                        if c.saturated(p) {
+                            (w - level).max(0.0)
+                        } else {
+                            0.0
+                        }
+                    })
+                    .sum();
+            });
+        self.lane_sums.iter().map(|p| p[0]).sum()
+    }
+
+    /// The level of the gradient that the search direction is centred on: its mean over the
+    /// active set, or, under a ceiling that left no node strictly between the bounds, the
+    /// lowest unsaturated `g` (else the highest saturated one).
+    pub(super) fn gradient_level(&self, stats: &GradientStats) -> f64 {
+        if C::BOUNDED && stats.contact_nodes == 0.0 {
+            if stats.min_g.is_finite() {
+                stats.min_g
+            } else {
+                stats.max_g_saturated
+            }
+        } else {
+            stats.mean_g()
+        }
+    }
+
+    /// The offset `c` for which the pressures offset by it ([`Constraint::offset`]: only
+    /// the active nodes move, within the bounds) sum to `load`, for pressures summing to
+    /// `total`, and `false`; where the active nodes cannot take or give up that much, the
+    /// offset of every node (the nearest admissible field of that mean) and `true`. The sum is piecewise linear and non-decreasing in `c`, with slope the
+    /// number of nodes still active; Newton's method, kept inside a shrinking bracket by
+    /// bisection, is exact once a step stays on one linear piece. `p` is not changed.
+    pub(super) fn bounded_offset(&mut self, load: f64, total: f64) -> (f64, bool) {
+        if (total - load).abs() <= OFFSET_ROUNDING * load {
+            return (0.0, false);
+        }
+        let narrow = self.offset_in(load, total, false);
+        // The projection of every node reaches any load from 0 to n p_max.
+        narrow.map_or_else(
+            || (self.offset_in(load, total, true).unwrap_or(0.0), true),
+            |c| (c, false),
+        )
+    }
+
+    /// [`Self::bounded_offset`] with the nodes `wide` says ([`Constraint::offset`]).
+    fn offset_in(&mut self, load: f64, total: f64, wide: bool) -> Option<f64> {
+        let close = |sum: f64| (sum - load).abs() <= OFFSET_ROUNDING * load;
+        let max = self.constraint.ceiling();
+        // Offsets of ±p_max take every moving node to a bound.
+        let (mut low, mut high) = if total > load {
+            (-max, 0.0)
+        } else {
+            (0.0, max)
+        };
+        let end = if total > load { low } else { high };
+        let (end_sum, _) = self.shifted_sum(end, wide);
+        if (total > load && end_sum > load) || (total < load && end_sum < load) {
+            return None;
+        }
+        let (mut c, mut sum) = (0.0f64, total);
+        let mut slope = self.shifted_sum(0.0, wide).1;
+        for _ in 0..OFFSET_STEPS {
+            let newton = c - (sum - load) / slope;
+            let next = if slope > 0.0 && newton > low && newton < high {
+                newton
+            } else {
+                0.5 * (low + high)
+            };
+            if next == c {
+                break;
+            }
+            let (next_sum, next_slope) = self.shifted_sum(next, wide);
+            (c, sum, slope) = (next, next_sum, next_slope);
+            if close(sum) {
+                break;
+            } else if sum > load {
+                high = c;
+            } else {
+                low = c;
+            }
+        }
+        Some(c)
+    }
+
+    /// The exact deflection of the pressures offset to the mean `target` (their sum now
+    /// `total`), with the gradient statistics of `g = w − shift`: one convolution. An offset
+    /// moves every active pressure, so the next direction restarts (the old one is not
+    /// conjugate to the new state: kept, it stalls the plain iteration).
+    pub(super) fn deflection_at_load(
+        &mut self,
+        target: f64,
+        total: f64,
+        shift: f64,
+        restart: &mut bool,
+    ) -> GradientStats {
+        let load = target * self.pressure.len() as f64;
+        let (offset, wide) = self.bounded_offset(load, total);
+        *restart |= offset != 0.0;
+        self.offset_deflection(offset, wide, 1.0, shift)
+    }
+
+    /// [`Solver::restore_load`] under a ceiling: nothing to do where no node changed (the
+    /// direction is centred, so the step kept the load), a direct correction of `u` for a
+    /// few changed nodes (the mean moves by their projection until the next exact
+    /// deflection), else the step's offset to the load ([`Self::step_offset`]) and the exact
+    /// deflection.
+    pub(super) fn restore_bounded_load(
+        &mut self,
+        totals: &UpdateTotals,
+        linear_stats: GradientStats,
+        target: f64,
+        it: &mut Iteration,
+        report: &mut SolveReport,
+    ) -> GradientStats {
+        let linear = it.linear_steps + 1 < RESYNC;
+        let stats = if totals.changed == 0 && linear {
+            linear_stats
+        } else if totals.changed <= MAX_SPARSE && linear && self.gather_changes() {
+            self.sparse_update(1.0, it.shift)
+        } else {
+            report.convolutions += 1;
+            it.linear_steps = 0;
+            let load = target * self.pressure.len() as f64;
+            return match self.step_offset(load, totals.sum_p) {
+                Some(c) => {
+                    it.restart |= c != 0.0;
+                    self.step_offset_sums(c, true);
+                    self.exact_deflection(1.0, it.shift)
+                }
+                None => self.deflection_at_load(target, totals.sum_p, it.shift, &mut it.restart),
+            };
+        };
+        it.linear_steps += 1;
+        stats
+    }
+
+    /// The offset `c` that restores the load after a step: each node the step projected
+    /// ([`Solver::changes`], all listed under a ceiling) is offset from where the step left
+    /// it, `P(p − Δ + c)`, each active node from its pressure, `P(p + c)`, and the others
+    /// (at 0 or on the ceiling, and not moved) stay. This is the projection of the step onto
+    /// the load, restricted to the nodes the step moved: a node the step took far past a
+    /// bound stays there, one it took just past comes back first. `None` if that cannot
+    /// reach the load.
+    fn step_offset(&mut self, load: f64, total: f64) -> Option<f64> {
+        if !self.changes_listed() {
+            return None;
+        }
+        let close = |sum: f64| (sum - load).abs() <= OFFSET_ROUNDING * load;
+        let max = self.constraint.ceiling();
+        let span = max
+            + self
+                .changes
+                .iter()
+                .flatten()
+                .fold(0.0f64, |m, &(_, d)| m.max(d.abs()));
+        let (mut low, mut high) = if total > load {
+            (-span, 0.0)
+        } else {
+            (0.0, span)
+        };
+        let end = if total > load { low } else { high };
+        let (end_sum, _) = self.step_offset_sums(end, false);
+        if (total > load && end_sum > load) || (total < load && end_sum < load) {
+            return None;
+        }
+        let (mut c, mut sum) = (0.0f64, total);
+        let mut slope = self.step_offset_sums(0.0, false).1;
+        for _ in 0..OFFSET_STEPS {
+            if close(sum) {
+                break;
+            }
+            let newton = c - (sum - load) / slope;
+            let next = if slope > 0.0 && newton > low && newton < high {
+                newton
+            } else {
+                0.5 * (low + high)
+            };
+            if next == c {
+                break;
+            }
+            let (next_sum, next_slope) = self.step_offset_sums(next, false);
+            (c, sum, slope) = (next, next_sum, next_slope);
+            if sum > load {
+                high = c;
+            } else {
+                low = c;
+            }
+        }
+        Some(c)
+    }
+
+    /// The sum of the pressures [`Self::step_offset`]'s offset `c` gives, and how many of
+    /// them are active (the sum's slope in `c`), reduced over the fixed blocks; with
+    /// `apply`, those pressures are written.
+    fn step_offset_sums(&mut self, c: f64, apply: bool) -> (f64, f64) {
+        let (constraint, chunk) = (self.constraint, self.chunk);
+        self.pressure
+            .par_chunks_mut(chunk)
+            .zip(self.changes.par_iter())
+            .zip(self.offset_acc.par_iter_mut())
+            .enumerate()
+            .for_each(|(b, ((pc, list), [sums, counts]))| {
+                let (mut sum, mut count, mut k) = (0.0, 0.0, 0);
+                for (j, p) in pc.iter_mut().enumerate() {
+                    let v = if k < list.len() && list[k].0 == b * chunk + j {
+                        k += 1;
+                        constraint.project(*p - list[k - 1].1 + c)
+                    } else if constraint.active(*p) {
+                        constraint.project(*p + c)
+                    } else {
+                        *p
+                    };
+                    sum += v;
+                    count += if constraint.active(v) { 1.0 } else { 0.0 };
+                    if apply {
+                        *p = v;
+                    }
+                }
+                *sums = [sum, 0.0, 0.0, 0.0];
+                *counts = [count, 0.0, 0.0, 0.0];
+            });
+        self.offset_acc
+            .iter()
+            .fold((0.0, 0.0), |(s, k), [sums, counts]| {
+                (s + sums[0], k + counts[0])
+            })
+    }
+
+    /// [`Solver::start`] under a ceiling: the last solution scaled to the new load and
+    /// projected (else the uniform pressure), offset to the load, and its exact deflection.
+    pub(super) fn bounded_start(&mut self, target: f64, report: &mut SolveReport) -> GradientStats {
+        let len = self.pressure.len();
+        let previous_total: f64 = self.chunked_sum(|p| p);
+        let c = self.constraint;
+        if self.has_solution && previous_total > 0.0 {
+            let scale = target * len as f64 / previous_total;
+            self.pressure
+                .par_iter_mut()
+                .for_each(|p| *p = c.project(*p * scale));
+        } else {
+            self.pressure.fill(target);
+        }
+        let total = self.chunked_sum(|p| p);
+        report.convolutions += 1;
+        self.deflection_at_load(target, total, 0.0, &mut false)
+    }
+}
