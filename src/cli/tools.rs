@@ -35,7 +35,7 @@ pub struct SolveArgs {
     pub e_star: f64,
     /// Perfectly plastic interface: the pressure saturates at the hardness 𝓗, given in
     /// units of E*·rms slope like the loads (so p̄/𝓗 = (W/W0)/hardness; every load must be
-    /// ≤ it). Absent (or inf): elastic contact.
+    /// ≤ it). Absent (or inf): elastic contact. Not with --plain-cg.
     #[arg(long)]
     pub hardness: Option<f64>,
     /// Use the plain Polonsky–Keer conjugate gradient instead of the default preconditioned
@@ -420,6 +420,12 @@ fn check_solve_args(args: &SolveArgs) -> anyhow::Result<wearcoef::contact::solve
             return Err(InputError(format!(
                 "--hardness {h} must be > 0 (in units of E*·rms slope, as the loads; omit it, or give inf, for elastic contact)"
             ))
+            .into());
+        }
+        if args.plain_cg && h.is_finite() {
+            return Err(InputError(
+                "--plain-cg with --hardness: the plain iteration stalls under a pressure ceiling on rough surfaces (512², hardness 1 and 0.5, docs/VALIDATION.md); drop --plain-cg for the default preconditioned iteration".into(),
+            )
             .into());
         }
         if let Some((i, w)) = args.loads.iter().enumerate().find(|(_, w)| **w > h) {

@@ -380,6 +380,10 @@ fn solve_command_hardness_caps_the_pressure() {
         "{err}"
     );
     assert!(!above_p.exists());
+    let (plain, plain_p) = solve(&["--hardness", "0.1", "--plain-cg"], "plain");
+    assert_eq!(plain.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&plain.stderr).contains("--plain-cg with --hardness"));
+    assert!(!plain_p.exists());
     for bad in ["0", "-1", "nan"] {
         let flag = format!("--hardness={bad}");
         let (out, path) = solve(&[&flag], "bad");

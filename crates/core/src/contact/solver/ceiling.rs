@@ -11,6 +11,7 @@
 use std::arch::x86_64::*;
 
 use super::constraint::Constraint;
+
 use super::ContactError;
 
 /// `0 ≤ p ≤ p_max`: the nodes strictly between the bounds are active (the conjugate

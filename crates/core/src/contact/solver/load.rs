@@ -32,7 +32,14 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         report: &mut SolveReport,
     ) -> GradientStats {
         if C::BOUNDED {
-            return self.restore_bounded_load(totals, linear_stats, target, it, report);
+            return self.restore_bounded_load(
+                cfg.preconditioned,
+                totals,
+                linear_stats,
+                target,
+                it,
+                report,
+            );
         }
         let total = totals.sum_p;
         let load = target * self.pressure.len() as f64;

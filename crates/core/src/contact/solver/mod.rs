@@ -410,7 +410,7 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
         let mut it = Iteration::new();
         loop {
             // The error from the gradient's statistics on the contact set.
-            let error = self.complementarity_error(&stats, it.shift);
+            let error = self.complementarity_error(&stats, it.shift, cfg.tolerance);
             if error <= cfg.tolerance && !it.exact {
                 // Confirm with an exact deflection (and the exact load) before declaring
                 // convergence.

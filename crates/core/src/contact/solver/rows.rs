@@ -67,7 +67,11 @@ impl GradientLanes {
                 // Off the minimum: the level is that of the unsaturated nodes.
                 self.sat_n[l] += 1.0;
                 self.sat_g[l] += g[l];
-                self.sat_max[l] = self.sat_max[l].max(g[l]);
+                self.sat_max[l] = if g[l] > self.sat_max[l] {
+                    g[l]
+                } else {
+                    self.sat_max[l]
+                };
             } else {
                 self.min[l] = if g[l] < self.min[l] {
                     g[l]

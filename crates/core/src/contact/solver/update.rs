@@ -204,12 +204,6 @@ unsafe fn update_row_avx2<C: Constraint>(
 ) {
     use std::arch::x86_64::*;
     const _: () = assert!(LANES == 4, "one AVX register of f64 per lane block");
-    if C::BOUNDED {
-        // The saturated nodes' statistics are gathered by the scalar code (compiled here
-        // with AVX2 all the same).
-        update_row(a, base, pc, wc, tc, rc, acc, changes);
-        return;
-    }
     let len = pc.len();
     assert!(wc.len() == len && tc.len() == len && rc.len() == len);
     let whole = len / LANES * LANES;
@@ -227,6 +221,10 @@ unsafe fn update_row_avx2<C: Constraint>(
     let mut spg = _mm256_loadu_pd(g.spg.as_ptr());
     let mut sp = _mm256_loadu_pd(g.sp.as_ptr());
     let mut min = _mm256_loadu_pd(g.min.as_ptr());
+    let mut sat_n = _mm256_loadu_pd(g.sat_n.as_ptr());
+    let mut sat_g = _mm256_loadu_pd(g.sat_g.as_ptr());
+    let mut sat_max = _mm256_loadu_pd(g.sat_max.as_ptr());
+    let ceiling = _mm256_set1_pd(a.constraint.ceiling());
     let mut kept_t = _mm256_loadu_pd(acc.kept_t.as_ptr());
     let (pp, wp, tp, rp) = (pc.as_mut_ptr(), wc.as_mut_ptr(), tc.as_ptr(), rc.as_ptr());
     for i in (0..whole).step_by(LANES) {
@@ -257,12 +255,25 @@ unsafe fn update_row_avx2<C: Constraint>(
         let w_new = _mm256_sub_pd(w, _mm256_mul_pd(tau, r));
         let gn = _mm256_sub_pd(w_new, next_shift);
         // GradientLanes::add: `if g < min { g } else { min }` is exactly `min_pd(g, min)`.
-        min = _mm256_min_pd(gn, min);
         n = _mm256_add_pd(n, m);
         let mg = _mm256_mul_pd(m, gn);
         sg = _mm256_add_pd(sg, mg);
         sg2 = _mm256_add_pd(sg2, _mm256_mul_pd(mg, gn));
-        spg = _mm256_add_pd(spg, _mm256_mul_pd(new, gn));
+        if C::BOUNDED {
+            // The saturated lanes (`p ≥ p_max`) go to their own sums and maximum
+            // (`max_pd(g, max)` is `if g > max { g } else { max }`), the others to the
+            // minimum and Σpg; adding +0 in the lanes a sum skips leaves it as the scalar
+            // code's (no sum here is ever −0).
+            let sat = _mm256_cmp_pd::<_CMP_GE_OQ>(new, ceiling);
+            min = _mm256_blendv_pd(_mm256_min_pd(gn, min), min, sat);
+            spg = _mm256_add_pd(spg, _mm256_andnot_pd(sat, _mm256_mul_pd(new, gn)));
+            sat_n = _mm256_add_pd(sat_n, _mm256_and_pd(sat, one));
+            sat_g = _mm256_add_pd(sat_g, _mm256_and_pd(sat, gn));
+            sat_max = _mm256_blendv_pd(sat_max, _mm256_max_pd(gn, sat_max), sat);
+        } else {
+            min = _mm256_min_pd(gn, min);
+            spg = _mm256_add_pd(spg, _mm256_mul_pd(new, gn));
+        }
         sp = _mm256_add_pd(sp, new);
         // SAFETY: as for the loads.
         unsafe {
@@ -285,6 +296,9 @@ unsafe fn update_row_avx2<C: Constraint>(
     _mm256_storeu_pd(g.spg.as_mut_ptr(), spg);
     _mm256_storeu_pd(g.sp.as_mut_ptr(), sp);
     _mm256_storeu_pd(g.min.as_mut_ptr(), min);
+    _mm256_storeu_pd(g.sat_n.as_mut_ptr(), sat_n);
+    _mm256_storeu_pd(g.sat_g.as_mut_ptr(), sat_g);
+    _mm256_storeu_pd(g.sat_max.as_mut_ptr(), sat_max);
     _mm256_storeu_pd(acc.kept_t.as_mut_ptr(), kept_t);
     if whole < len {
         let at = whole..len;
@@ -322,18 +336,25 @@ mod tests {
     }
 
     /// The AVX2 update (where the processor has it) gives the scalar code's bits: the
-    /// pressures, separations, every accumulator lane and the list of changed nodes.
+    /// pressures, separations, every accumulator lane and the list of changed nodes; for the
+    /// elastic constraint and for a ceiling low enough to saturate some nodes.
     #[test]
     fn vector_update_matches_scalar_bits() {
         require_vector_path();
+        check(super::super::constraint::NonNegative);
+        check(super::super::ceiling::Ceiling::new(0.5).unwrap());
+    }
+
+    fn check<C: Constraint>(constraint: C) {
         for (len, readmit) in [(64, false), (64, true), (39, false), (39, true), (3, true)] {
             let (p0, w0, t, r) = row(len, len as u64 + readmit as u64);
+            let p0: Vec<f64> = p0.iter().map(|&p| constraint.project(p)).collect();
             let args = UpdateArgs {
                 tau: 0.7,
                 level: 0.1,
                 next_shift: -0.05,
                 readmit,
-                constraint: super::super::constraint::NonNegative,
+                constraint,
             };
             let run = |vector: bool| {
                 let (mut p, mut w) = (p0.clone(), w0.clone());
@@ -346,7 +367,9 @@ mod tests {
                 }
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 let g = &acc.grad;
-                let lanes = [g.n, g.sg, g.sg2, g.spg, g.sp, g.min, acc.kept_t];
+                let lanes = [
+                    g.n, g.sg, g.sg2, g.spg, g.sp, g.min, g.sat_n, g.sat_g, g.sat_max, acc.kept_t,
+                ];
                 (
                     bits(&p),
                     bits(&w),
@@ -364,7 +387,18 @@ mod tests {
                 !readmit || scalar.3 .1 > 0,
                 "with re-admission the row must re-admit some nodes"
             );
-            assert_eq!(scalar, vector, "len {len}, readmit {readmit}");
+            if C::BOUNDED && len > 8 {
+                let saturated = scalar
+                    .0
+                    .iter()
+                    .filter(|&&b| f64::from_bits(b) == 0.5)
+                    .count();
+                assert!(saturated > 0, "the row must saturate some nodes");
+            }
+            assert_eq!(
+                scalar, vector,
+                "{constraint:?}, len {len}, readmit {readmit}"
+            );
         }
     }
 }
