@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
+.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -91,6 +91,10 @@ speed-accuracy:
 # Contact sweeps of wearcoef and Tamaas (PyPI) on the same surfaces, in the same run.
 bench-peers:
 	bash benches/peers/run.sh 256 512 1024
+
+# Pressure ceiling against Tamaas's KatoSaturated: N, hardness (units of W/W0), loads.
+bench-plastic:
+	bash benches/peers/plastic.sh 512 0.25 0.01,0.03,0.05
 
 # Removes the store data/ only if it holds nothing but a store (wearcoef clean refuses
 # anything else and says what it would remove with --dry-run).

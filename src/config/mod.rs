@@ -107,6 +107,11 @@ pub struct Study {
     /// loads of its own, a study computes exactly what its figures ask for.
     #[serde(default)]
     pub loads: Option<Loads>,
+    /// Perfectly plastic interface: the hardness 𝓗 at which the contact pressure saturates,
+    /// in units of E*·h'_rms (the units of W/W0, so p̄/𝓗 = (W/W0)/hardness); every load must
+    /// be ≤ it. Absent: elastic contact (and the elastic studies' store keys).
+    #[serde(default)]
+    pub hardness: Option<f64>,
     /// Profile name → sizes for that profile. A study without an entry for a profile is not
     /// part of that profile.
     pub profiles: BTreeMap<String, StudyProfile>,
@@ -172,6 +177,8 @@ pub struct StudyPlan {
     /// Solver tolerance and iteration cap.
     pub tolerance: f64,
     pub max_iterations: u32,
+    /// The hardness (units of W/W0), if the contact is perfectly plastic.
+    pub hardness: Option<f64>,
 }
 
 impl StudyPlan {
@@ -379,6 +386,26 @@ impl Pipeline {
         let n = sizes::checked_grid_side(study, sp, ratio, &base, &pbase, origin)?;
         let res = sp.lambda_s_over_dl;
         let (loads, sweep, keep_pressure) = self.resolve_study_loads(name, profile, origin)?;
+        if let Some(h) = study.hardness {
+            let invalid = |value: String, allowed: String| ConfigError::Invalid {
+                path: origin.to_string(),
+                field: format!("{base}.hardness"),
+                value,
+                allowed,
+            };
+            if !(h.is_finite() && h > 0.0) {
+                return Err(invalid(
+                    h.to_string(),
+                    "must be finite and > 0 (in units of E*·rms slope, as W/W0), or left out for elastic contact".into(),
+                ));
+            }
+            if let Some(w) = loads.iter().find(|&&w| w > h) {
+                return Err(invalid(
+                    h.to_string(),
+                    format!("is below the load W/W0 = {w} of profile {profile}: a pressure capped at the hardness cannot carry a mean above it; raise the hardness or lower the loads")
+                ));
+            }
+        }
         limits::check_realizations(&pbase, sp.realizations, loads.len(), profile, origin)?;
         let lambda_s_px = res;
         let lambda_l_px = res * ratio;
@@ -409,6 +436,7 @@ impl Pipeline {
             e_star: self.material.e_star,
             tolerance: sp.tolerance.unwrap_or(self.solver.tolerance),
             max_iterations: self.solver.max_iterations,
+            hardness: study.hardness,
         })
     }
 }

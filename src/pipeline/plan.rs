@@ -283,6 +283,7 @@ fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> StudyKeys<'a> {
             e_star: plan.e_star,
             tolerance: plan.tolerance,
             max_iterations: plan.max_iterations,
+            hardness: plan.hardness,
         };
         let contact = b.add::<Contact>(&job, vec![surface.clone()], studies, Some(r), None);
         let job = ClustersJob {

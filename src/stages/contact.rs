@@ -8,8 +8,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
+use crate::contact::elastic::ElasticOperator;
 use crate::contact::solver::SolverConfig;
-use crate::contact::sweep::{pack_contact, sweep_heights, LoadResult};
+use crate::contact::sweep::{pack_contact, sweep_heights_with_hardness, LoadResult};
+use crate::grid::Grid;
 use crate::store::table::{col, load_columns, write};
 
 pub struct Contact;
@@ -28,11 +30,25 @@ pub struct ContactJob {
     /// Solver tolerance on the complementarity error, and iteration cap.
     pub tolerance: f64,
     pub max_iterations: u32,
+    /// The hardness (units of W/W0) of a perfectly plastic interface; absent (and then not
+    /// in the key) for elastic contact.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hardness: Option<f64>,
 }
 
 /// File name of the packed contact map of load `index`.
 pub fn contact_file(index: usize) -> String {
     format!("contact_{index:03}.npy")
+}
+
+/// File name of the packed saturated map (p = 𝓗) of load `index`, under a hardness.
+pub fn saturated_file(index: usize) -> String {
+    format!("saturated_{index:03}.npy")
+}
+
+/// File name of the plastic displacement field of kept load `index`, under a hardness.
+pub fn plastic_file(index: usize) -> String {
+    format!("plastic_displacement_{index:03}.npy")
 }
 
 /// File name of the pressure field of load `index`.
@@ -54,16 +70,36 @@ impl Stage for Contact {
             ..SolverConfig::default()
         };
         let row_bytes = n.div_ceil(8);
-        let (slope, results) = sweep_heights(
+        let (slope, results) = sweep_heights_with_hardness(
             &heights,
             n,
             job.e_star,
             &job.loads,
             &cfg,
-            |index, pressure, _| {
+            job.hardness,
+            |index, pressure, result| {
                 let packed = pack_contact(pressure, n);
                 crate::io::write_u8(&dir.join(contact_file(index)), &[n, row_bytes], packed)
                     .map_err(|e| e.to_string())?;
+                if let Some(ceiling) = result.ceiling {
+                    let saturated: Vec<f64> = pressure
+                        .iter()
+                        .map(|&p| if p >= ceiling { 1.0 } else { 0.0 })
+                        .collect();
+                    crate::io::write_u8(
+                        &dir.join(saturated_file(index)),
+                        &[n, row_bytes],
+                        pack_contact(&saturated, n),
+                    )
+                    .map_err(|e| e.to_string())?;
+                    if job.keep_pressure.contains(&index) {
+                        let plastic =
+                            plastic_displacement(&heights, n, job.e_star, pressure, ceiling)
+                                .map_err(|e| e.to_string())?;
+                        crate::io::write_f64(&dir.join(plastic_file(index)), &[n, n], plastic)
+                            .map_err(|e| e.to_string())?;
+                    }
+                }
                 if job.keep_pressure.contains(&index) {
                     crate::io::write_f64(
                         &dir.join(pressure_file(index)),
@@ -83,6 +119,45 @@ impl Stage for Contact {
             "solve_seconds": results.iter().map(|r| r.seconds).collect::<Vec<_>>(),
         }))
     }
+}
+
+/// The plastic displacement of a solved field under the ceiling `ceiling` (docs/CONVENTIONS.md):
+/// on the saturated nodes `ℓ − w ≥ 0`, with `w = K p − h` recomputed here by the operator and
+/// `ℓ` its least value over the unsaturated nodes; 0 elsewhere. In the unit of the heights.
+fn plastic_displacement(
+    heights: &[f64],
+    n: usize,
+    e_star: f64,
+    pressure: &[f64],
+    ceiling: f64,
+) -> anyhow::Result<Vec<f64>> {
+    let op = ElasticOperator::new(Grid::unit(n)?, e_star);
+    let mut w = vec![0.0; n * n];
+    op.apply(pressure, &mut w, &mut op.make_workspace());
+    for (w, h) in w.iter_mut().zip(heights) {
+        *w -= h;
+    }
+    let level = pressure
+        .iter()
+        .zip(&w)
+        .filter(|(&p, _)| p < ceiling)
+        .fold(f64::INFINITY, |m, (_, &w)| m.min(w));
+    let level = if level.is_finite() {
+        level
+    } else {
+        w.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
+    };
+    Ok(pressure
+        .iter()
+        .zip(&w)
+        .map(|(&p, &w)| {
+            if p >= ceiling {
+                (level - w).max(0.0)
+            } else {
+                0.0
+            }
+        })
+        .collect())
 }
 
 fn loads_table(results: &[LoadResult]) -> PolarsResult<DataFrame> {
@@ -115,6 +190,22 @@ fn loads_table(results: &[LoadResult]) -> PolarsResult<DataFrame> {
                         .collect::<Vec<_>>(),
                 ),
             ],
+            // Under a hardness only (elastic tables keep their columns and bits): the
+            // ceiling in the unit of E* and the saturated nodes.
+            if results.iter().all(|r| r.ceiling.is_some()) && !results.is_empty() {
+                vec![
+                    col("hardness_pressure", per(&|r| r.ceiling.unwrap_or(f64::NAN))),
+                    col(
+                        "n_saturated_px",
+                        results
+                            .iter()
+                            .map(|r| r.n_saturated_px.unwrap_or(0) as u64)
+                            .collect::<Vec<_>>(),
+                    ),
+                ]
+            } else {
+                vec![]
+            },
         ]
         .concat(),
     )

@@ -9,6 +9,7 @@ mod contact;
 mod galleries;
 mod layout;
 mod plan;
+mod plastic;
 mod powerlaw;
 mod stability;
 mod stages;

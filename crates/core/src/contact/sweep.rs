@@ -23,6 +23,10 @@ pub struct LoadResult {
     /// elastic.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub n_saturated_px: Option<usize>,
+    /// Under a hardness: the pressure ceiling `𝓗 = hardness·E*·rms slope`, in the unit of
+    /// E* (a saturated node's pressure is exactly it); absent when elastic.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ceiling: Option<f64>,
     pub report: SolveReport,
     /// Wall time of this solve.
     pub seconds: f64,
@@ -147,6 +151,7 @@ pub fn sweep_heights_with_hardness(
     let mut pass_on = |i, solved: &[f64], r: &LoadResult| {
         let r = LoadResult {
             mean_pressure: r.mean_pressure * to_p,
+            ceiling: r.ceiling.map(|c| c * to_p),
             ..r.clone()
         };
         if to_p == 1.0 {
@@ -184,6 +189,7 @@ pub fn sweep_heights_with_hardness(
     };
     for r in &mut results {
         r.mean_pressure *= to_p;
+        r.ceiling = r.ceiling.map(|c| c * to_p);
         r.report.mean_pressure *= to_p;
     }
     Ok((slope, results))
@@ -276,6 +282,7 @@ pub fn sweep<C: Constraint>(
             area_fraction: n_contact_px as f64 / nodes,
             n_contact_px,
             n_saturated_px: C::BOUNDED.then(|| solver.saturated_count()),
+            ceiling: C::BOUNDED.then(|| solver.ceiling()),
             report,
             seconds,
         };

@@ -318,6 +318,11 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
         self.pressure.iter().filter(|&&p| p > 0.0).count()
     }
 
+    /// The constraint's ceiling `p_max` (`+∞` when unbounded).
+    pub fn ceiling(&self) -> f64 {
+        self.constraint.ceiling()
+    }
+
     /// Number of nodes on the constraint's ceiling (`p = p_max`; none when unbounded) in
     /// the last solve.
     pub fn saturated_count(&self) -> usize {
