@@ -210,3 +210,47 @@ fn loads_table(results: &[LoadResult]) -> PolarsResult<DataFrame> {
         .concat(),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::solver::{Ceiling, Solver};
+
+    /// The stored plastic displacement, recomputed from the pressure by the operator, equals
+    /// the solver's own (from its separation) on a surface where a third of the contact
+    /// saturates, to the solver's tolerance in units of the heights.
+    #[test]
+    fn plastic_displacement_matches_the_solver() {
+        let n = 64;
+        let heights: Vec<f64> = (0..n * n)
+            .map(|i| {
+                let (x, y) = ((i % n) as f64 / n as f64, (i / n) as f64 / n as f64);
+                let tau = std::f64::consts::TAU;
+                0.01 * ((tau * x).cos()
+                    + 0.5 * (tau * 3.0 * y).sin()
+                    + 0.3 * (tau * (5.0 * x + 2.0 * y)).cos())
+            })
+            .collect();
+        let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+        let ceiling = 0.02;
+        let mut solver =
+            Solver::with_constraint(&op, &heights, Ceiling::new(ceiling).unwrap()).unwrap();
+        let cfg = SolverConfig {
+            tolerance: 1e-12,
+            ..SolverConfig::default()
+        };
+        assert!(solver.solve(0.004, &cfg).unwrap().converged());
+        let saturated = solver.saturated_count();
+        assert!(
+            saturated > 0 && saturated < solver.contact_count(),
+            "{saturated}"
+        );
+        let stored = plastic_displacement(&heights, n, 1.0, solver.pressure(), ceiling).unwrap();
+        let own: Vec<f64> = solver.plastic_displacement().collect();
+        let largest = own.iter().fold(0.0f64, |m, &d| m.max(d));
+        assert!(largest > 0.0);
+        for (i, (a, b)) in stored.iter().zip(&own).enumerate() {
+            assert!((a - b).abs() <= 1e-9 * largest, "node {i}: {a} vs {b}");
+        }
+    }
+}
