@@ -168,3 +168,21 @@ impl Constraint for Ceiling {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each AVX2 form gives the scalar form's bits (as `NonNegative`'s), for ceilings among
+    /// the values tried and one below all but zero.
+    #[test]
+    fn vector_forms_match_the_scalar_ones() {
+        super::super::test_support::require_vector_path();
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            for max in [2.5, 1.0, 1e-300] {
+                super::super::constraint::tests::check(Ceiling::new(max).unwrap());
+            }
+        }
+    }
+}

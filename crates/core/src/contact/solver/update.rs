@@ -8,6 +8,9 @@
 // structure the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
 use super::constraint::Constraint;
 use super::rows::{avx2_dispatch, lanes, padded, GradientLanes, LANES};
 
@@ -202,7 +205,6 @@ unsafe fn update_row_avx2<C: Constraint>(
     acc: &mut UpdateAcc,
     changes: &mut Vec<(usize, f64)>,
 ) {
-    use std::arch::x86_64::*;
     const _: () = assert!(LANES == 4, "one AVX register of f64 per lane block");
     let len = pc.len();
     assert!(wc.len() == len && tc.len() == len && rc.len() == len);
@@ -214,16 +216,8 @@ unsafe fn update_row_avx2<C: Constraint>(
     let zero = _mm256_setzero_pd();
     let one = _mm256_set1_pd(1.0);
     let readmit = a.readmit;
-    let g = &mut acc.grad;
-    let mut n = _mm256_loadu_pd(g.n.as_ptr());
-    let mut sg = _mm256_loadu_pd(g.sg.as_ptr());
-    let mut sg2 = _mm256_loadu_pd(g.sg2.as_ptr());
-    let mut spg = _mm256_loadu_pd(g.spg.as_ptr());
-    let mut sp = _mm256_loadu_pd(g.sp.as_ptr());
-    let mut min = _mm256_loadu_pd(g.min.as_ptr());
-    let mut sat_n = _mm256_loadu_pd(g.sat_n.as_ptr());
-    let mut sat_g = _mm256_loadu_pd(g.sat_g.as_ptr());
-    let mut sat_max = _mm256_loadu_pd(g.sat_max.as_ptr());
+    // SAFETY: AVX2 is present (this function's contract).
+    let mut g = unsafe { GradientRegs::load(&acc.grad) };
     let ceiling = _mm256_set1_pd(a.constraint.ceiling());
     let mut kept_t = _mm256_loadu_pd(acc.kept_t.as_ptr());
     let (pp, wp, tp, rp) = (pc.as_mut_ptr(), wc.as_mut_ptr(), tc.as_ptr(), rc.as_ptr());
@@ -254,27 +248,8 @@ unsafe fn update_row_avx2<C: Constraint>(
         kept_t = _mm256_add_pd(kept_t, _mm256_mul_pd(m, t));
         let w_new = _mm256_sub_pd(w, _mm256_mul_pd(tau, r));
         let gn = _mm256_sub_pd(w_new, next_shift);
-        // GradientLanes::add: `if g < min { g } else { min }` is exactly `min_pd(g, min)`.
-        n = _mm256_add_pd(n, m);
-        let mg = _mm256_mul_pd(m, gn);
-        sg = _mm256_add_pd(sg, mg);
-        sg2 = _mm256_add_pd(sg2, _mm256_mul_pd(mg, gn));
-        if C::BOUNDED {
-            // The saturated lanes (`p ≥ p_max`) go to their own sums and maximum
-            // (`max_pd(g, max)` is `if g > max { g } else { max }`), the others to the
-            // minimum and Σpg; adding +0 in the lanes a sum skips leaves it as the scalar
-            // code's (no sum here is ever −0).
-            let sat = _mm256_cmp_pd::<_CMP_GE_OQ>(new, ceiling);
-            min = _mm256_blendv_pd(_mm256_min_pd(gn, min), min, sat);
-            spg = _mm256_add_pd(spg, _mm256_andnot_pd(sat, _mm256_mul_pd(new, gn)));
-            sat_n = _mm256_add_pd(sat_n, _mm256_and_pd(sat, one));
-            sat_g = _mm256_add_pd(sat_g, _mm256_and_pd(sat, gn));
-            sat_max = _mm256_blendv_pd(sat_max, _mm256_max_pd(gn, sat_max), sat);
-        } else {
-            min = _mm256_min_pd(gn, min);
-            spg = _mm256_add_pd(spg, _mm256_mul_pd(new, gn));
-        }
-        sp = _mm256_add_pd(sp, new);
+        // SAFETY: as above.
+        unsafe { g.add::<C>(new, gn, m, ceiling) };
         // SAFETY: as for the loads.
         unsafe {
             _mm256_storeu_pd(pp.add(i), new);
@@ -289,16 +264,8 @@ unsafe fn update_row_avx2<C: Constraint>(
             record_changes(a.constraint, &d, &pn, base + i, LANES, acc, changes);
         }
     }
-    let g = &mut acc.grad;
-    _mm256_storeu_pd(g.n.as_mut_ptr(), n);
-    _mm256_storeu_pd(g.sg.as_mut_ptr(), sg);
-    _mm256_storeu_pd(g.sg2.as_mut_ptr(), sg2);
-    _mm256_storeu_pd(g.spg.as_mut_ptr(), spg);
-    _mm256_storeu_pd(g.sp.as_mut_ptr(), sp);
-    _mm256_storeu_pd(g.min.as_mut_ptr(), min);
-    _mm256_storeu_pd(g.sat_n.as_mut_ptr(), sat_n);
-    _mm256_storeu_pd(g.sat_g.as_mut_ptr(), sat_g);
-    _mm256_storeu_pd(g.sat_max.as_mut_ptr(), sat_max);
+    // SAFETY: as above.
+    unsafe { g.store(&mut acc.grad) };
     _mm256_storeu_pd(acc.kept_t.as_mut_ptr(), kept_t);
     if whole < len {
         let at = whole..len;
@@ -312,6 +279,100 @@ unsafe fn update_row_avx2<C: Constraint>(
             acc,
             changes,
         );
+    }
+}
+
+/// [`GradientLanes`] in AVX2 registers, one accumulator lane per register lane.
+#[cfg(target_arch = "x86_64")]
+struct GradientRegs {
+    n: __m256d,
+    sg: __m256d,
+    sg2: __m256d,
+    spg: __m256d,
+    sp: __m256d,
+    min: __m256d,
+    sat_n: __m256d,
+    sat_g: __m256d,
+    sat_max: __m256d,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl GradientRegs {
+    /// # Safety
+    /// AVX2 must be present; called from a function compiled with it, into which it inlines.
+    #[inline(always)]
+    unsafe fn load(g: &GradientLanes) -> Self {
+        // SAFETY: the caller guarantees AVX2; each array holds LANES = 4 values.
+        unsafe {
+            Self {
+                n: _mm256_loadu_pd(g.n.as_ptr()),
+                sg: _mm256_loadu_pd(g.sg.as_ptr()),
+                sg2: _mm256_loadu_pd(g.sg2.as_ptr()),
+                spg: _mm256_loadu_pd(g.spg.as_ptr()),
+                sp: _mm256_loadu_pd(g.sp.as_ptr()),
+                min: _mm256_loadu_pd(g.min.as_ptr()),
+                sat_n: _mm256_loadu_pd(g.sat_n.as_ptr()),
+                sat_g: _mm256_loadu_pd(g.sat_g.as_ptr()),
+                sat_max: _mm256_loadu_pd(g.sat_max.as_ptr()),
+            }
+        }
+    }
+
+    /// # Safety
+    /// As [`Self::load`].
+    #[inline(always)]
+    unsafe fn store(&self, g: &mut GradientLanes) {
+        // SAFETY: as in `load`.
+        unsafe {
+            _mm256_storeu_pd(g.n.as_mut_ptr(), self.n);
+            _mm256_storeu_pd(g.sg.as_mut_ptr(), self.sg);
+            _mm256_storeu_pd(g.sg2.as_mut_ptr(), self.sg2);
+            _mm256_storeu_pd(g.spg.as_mut_ptr(), self.spg);
+            _mm256_storeu_pd(g.sp.as_mut_ptr(), self.sp);
+            _mm256_storeu_pd(g.min.as_mut_ptr(), self.min);
+            _mm256_storeu_pd(g.sat_n.as_mut_ptr(), self.sat_n);
+            _mm256_storeu_pd(g.sat_g.as_mut_ptr(), self.sat_g);
+            _mm256_storeu_pd(g.sat_max.as_mut_ptr(), self.sat_max);
+        }
+    }
+
+    /// [`GradientLanes::add`] on four lanes: pressure `new`, gradient `gn`, active mask `m`
+    /// (1.0 where active). `if g < min { g } else { min }` is exactly `min_pd(g, min)`.
+    ///
+    /// # Safety
+    /// As [`Self::load`].
+    #[inline(always)]
+    unsafe fn add<C: Constraint>(
+        &mut self,
+        new: __m256d,
+        gn: __m256d,
+        m: __m256d,
+        ceiling: __m256d,
+    ) {
+        // SAFETY: as in `load`.
+        unsafe {
+            self.n = _mm256_add_pd(self.n, m);
+            let mg = _mm256_mul_pd(m, gn);
+            self.sg = _mm256_add_pd(self.sg, mg);
+            self.sg2 = _mm256_add_pd(self.sg2, _mm256_mul_pd(mg, gn));
+            if C::BOUNDED {
+                // The saturated lanes (`p ≥ p_max`) go to their own sums and maximum
+                // (`max_pd(g, max)` is `if g > max { g } else { max }`), the others to the
+                // minimum and Σpg; adding +0 in the lanes a sum skips leaves it as the
+                // scalar code's (no sum here is ever −0).
+                let sat = _mm256_cmp_pd::<_CMP_GE_OQ>(new, ceiling);
+                let one = _mm256_set1_pd(1.0);
+                self.min = _mm256_blendv_pd(_mm256_min_pd(gn, self.min), self.min, sat);
+                self.spg = _mm256_add_pd(self.spg, _mm256_andnot_pd(sat, _mm256_mul_pd(new, gn)));
+                self.sat_n = _mm256_add_pd(self.sat_n, _mm256_and_pd(sat, one));
+                self.sat_g = _mm256_add_pd(self.sat_g, _mm256_and_pd(sat, gn));
+                self.sat_max = _mm256_blendv_pd(self.sat_max, _mm256_max_pd(gn, self.sat_max), sat);
+            } else {
+                self.min = _mm256_min_pd(gn, self.min);
+                self.spg = _mm256_add_pd(self.spg, _mm256_mul_pd(new, gn));
+            }
+            self.sp = _mm256_add_pd(self.sp, new);
+        }
     }
 }
 
