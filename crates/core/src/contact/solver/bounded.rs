@@ -24,6 +24,11 @@ const OFFSET_STEPS: usize = 64;
 /// (far below any tolerance on the error).
 const OFFSET_ROUNDING: f64 = 1e-14;
 
+/// After a step, the load is restored to this relative accuracy (the confirmation of
+/// convergence restores it to [`OFFSET_ROUNDING`]): each Newton step is a pass over the
+/// pressures, and requiring rounding level took about one more per restoration.
+const STEP_ROUNDING: f64 = 1e-12;
+
 impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// The complementarity error of a state with gradient statistics `stats` (of
     /// `g = w − shift`), in units of the load times σ_h. Unbounded: `Σ p (g − min g)`
@@ -224,7 +229,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         if !self.changes_listed() {
             return None;
         }
-        let close = |sum: f64| (sum - load).abs() <= OFFSET_ROUNDING * load;
+        let close = |sum: f64| (sum - load).abs() <= STEP_ROUNDING * load;
         // Every moved node reaches a bound within p_max plus its distance past one.
         let past = self
             .changes
@@ -273,34 +278,62 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
 
     /// The sum of the pressures [`Self::step_offset`]'s offset `c` gives, and how many of
     /// them are active (the sum's slope in `c`), reduced over the fixed blocks; with
-    /// `apply`, those pressures are written.
+    /// `apply`, those pressures are written (and the change lists spent). One pass over the
+    /// block's pressures (the active ones offset, the others as they are), and one over its
+    /// listed nodes that are not active (taken from where the step left them).
     fn step_offset_sums(&mut self, c: f64, apply: bool) -> (f64, f64) {
         let (constraint, chunk) = (self.constraint, self.chunk);
         self.pressure
             .par_chunks_mut(chunk)
-            .zip(self.changes.par_iter())
+            .zip(self.changes.par_iter_mut())
             .zip(self.offset_acc.par_iter_mut())
             .enumerate()
             .for_each(|(b, ((pc, list), [sums, counts]))| {
-                let (mut sum, mut count, mut k) = (0.0, 0.0, 0);
-                for (j, p) in pc.iter_mut().enumerate() {
-                    let listed = k < list.len() && list[k].0 == b * chunk + j;
-                    let v = if listed {
-                        constraint.project(*p - list[k].1 + c)
-                    } else if constraint.active(*p) {
-                        constraint.project(*p + c)
+                let offset = |p: f64| {
+                    if constraint.active(p) {
+                        constraint.project(p + c)
                     } else {
-                        *p
-                    };
-                    k += usize::from(listed);
-                    sum += v;
-                    count += if constraint.active(v) { 1.0 } else { 0.0 };
-                    if apply {
-                        *p = v;
+                        p
+                    }
+                };
+                let first = b * chunk;
+                if apply {
+                    // The listed nodes not active take their value from the step's (kept in
+                    // the list, which the next update pass clears; NaN marks the others),
+                    // every other node is offset.
+                    for (i, delta) in list.iter_mut() {
+                        let p = pc[*i - first];
+                        *delta = if constraint.active(p) {
+                            f64::NAN
+                        } else {
+                            constraint.project(p - *delta + c)
+                        };
+                    }
+                    pc.iter_mut().for_each(|p| *p = offset(*p));
+                    for &(i, v) in list.iter() {
+                        if !v.is_nan() {
+                            pc[i - first] = v;
+                        }
+                    }
+                    return;
+                }
+                let (mut sum, mut count) = ([0.0; 4], [0.0; 4]);
+                for (k, &p) in pc.iter().enumerate() {
+                    let v = offset(p);
+                    sum[k % 4] += v;
+                    count[k % 4] += if constraint.active(v) { 1.0 } else { 0.0 };
+                }
+                let mut fixes = (0.0, 0.0);
+                for &(i, delta) in list.iter() {
+                    let p = pc[i - first];
+                    if !constraint.active(p) {
+                        let v = constraint.project(p - delta + c);
+                        fixes.0 += v - p;
+                        fixes.1 += if constraint.active(v) { 1.0 } else { 0.0 };
                     }
                 }
-                *sums = [sum, 0.0, 0.0, 0.0];
-                *counts = [count, 0.0, 0.0, 0.0];
+                *sums = [sum.iter().sum::<f64>() + fixes.0, 0.0, 0.0, 0.0];
+                *counts = [count.iter().sum::<f64>() + fixes.1, 0.0, 0.0, 0.0];
             });
         self.offset_acc
             .iter()
