@@ -11,10 +11,18 @@ its final state is also measured by our error (docs/CONVENTIONS.md, under a hard
 its pressure and displacement. Compared per load: the time, our error of both states, and the
 nodes whose contact (p > 0) or saturation (p = p_max) differ between the two.
 
+With `--cm-python PYTHON` (an interpreter with ContactMechanics 1.8.3 from PyPI): also
+ContactMechanics' plastic system (`PlasticNonSmoothContactSystem` on a
+`PlasticTopography`, built directly: `make_system` is not used) at each load, from a fresh
+system (its plastic displacement accumulates over solves; ours is the displacement of one
+load), force-controlled, pentol 1e-10 σ_h: the nodes in contact or saturated in one code
+only, the largest pressure difference over 𝓗, and the largest difference of the plastic
+displacements over ours (ContactMechanics stores it as a negative height change).
+
 Also, for the same surface: a 30-load warm sweep (W/W0 from 0.005 to 0.15) with and without
 the ceiling, ours only: the cost of the ceiling against the elastic sweep.
 
-Usage: python plastic_peers.py WEARCOEF_BIN OUTDIR N HARDNESS W1,W2,...
+Usage: python plastic_peers.py WEARCOEF_BIN OUTDIR N HARDNESS W1,W2,... [--cm-python PYTHON]
 Prints a markdown table.
 """
 import json
@@ -35,6 +43,54 @@ def our_error(p, u, h, pmax):
     level = w[~sat].min()
     work = np.sum(p[~sat] * (w[~sat] - level)) + pmax * np.sum(np.maximum(w[sat] - level, 0))
     return work / (p.sum() * h.std())
+
+
+def cm_child(path, hardness, loads, out):
+    """ContactMechanics' plastic system at each load (fresh each time), 1 thread: the
+    pressures and plastic displacements (to `out`, load-major, two fields per load) and the
+    seconds, as JSON."""
+    from ContactMechanics import PeriodicFFTElasticHalfSpace
+    from ContactMechanics.PlasticSystemSpecialisations import PlasticNonSmoothContactSystem
+    from SurfaceTopography import Topography
+    from SurfaceTopography.Special import PlasticTopography
+
+    h = np.load(path)
+    n = h.shape[0]
+    slope = spectral_slope(h)
+    pmax = hardness * slope
+    rows, fields = [], []
+    for w in loads:
+        substrate = PeriodicFFTElasticHalfSpace((n, n), 1.0, physical_sizes=(1.0, 1.0))
+        surface = PlasticTopography(Topography(h, physical_sizes=(1.0, 1.0), periodic=True), pmax)
+        system = PlasticNonSmoothContactSystem(substrate, surface)
+        start = time.perf_counter()
+        opt = system.minimize_proxy(external_force=w * slope, pentol=1e-10 * h.std(),
+                                    forcetol=1e-10, maxiter=100000)
+        seconds = time.perf_counter() - start
+        fields.append(np.asarray(opt.jac).reshape(n, n) * n * n)
+        fields.append(np.asarray(surface.plastic_displ).reshape(n, n))
+        rows.append({"seconds": seconds, "success": bool(opt.success), "pmax": pmax})
+    np.stack(fields).tofile(out)
+    print(json.dumps(rows))
+
+
+def spectral_slope(h):
+    """The spectral rms slope of `h` on the unit box (as wearcoef computes it)."""
+    n = h.shape[0]
+    q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
+    qx, qy = np.meshgrid(q, q)
+    return np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
+
+
+def plastic_displacement(p, h, saturated):
+    """Our plastic displacement of a solved field with its saturated nodes
+    (docs/CONVENTIONS.md), E* = 1."""
+    n = h.shape[0]
+    f = np.fft.fftfreq(n, 1.0 / n)
+    k = 2 * np.pi * np.sqrt(np.add.outer(f**2, f**2))
+    kernel = np.where(k > 0, 2.0 / np.where(k > 0, k, 1.0), 0.0)
+    w = np.real(np.fft.ifft2(np.fft.fft2(p) * kernel)) - h
+    return np.where(saturated, w[~saturated].min() - w, 0.0)
 
 
 def tamaas_child(path, hardness, loads, out):
@@ -73,11 +129,16 @@ def tamaas_child(path, hardness, loads, out):
 
 
 def main():
+    if sys.argv[1] == "--cm-child":
+        cm_child(sys.argv[2], float(sys.argv[3]),
+                 [float(w) for w in sys.argv[4].split(",")], sys.argv[5])
+        return
     if sys.argv[1] == "--tamaas-child":
         tamaas_child(sys.argv[2], float(sys.argv[3]),
                      [float(w) for w in sys.argv[4].split(",")], sys.argv[5])
         return
     wearcoef, outdir, n, hardness, loads = sys.argv[1:6]
+    cm_python = sys.argv[7] if len(sys.argv) > 7 and sys.argv[6] == "--cm-python" else None
     n, hardness = int(n), float(hardness)
     loads = [float(w) for w in loads.split(",")]
     os.makedirs(outdir, exist_ok=True)
@@ -129,6 +190,30 @@ def main():
               f"{int(((mine_k > 0) != (theirs_k > 0)).sum())} | {int((sat_a != sat_b).sum())} |")
     print(f"\nTotal: ours {total_ours:.3f} s, Kato {total_kato:.1f} s: "
           f"1/{total_kato / total_ours:.0f}.")
+
+    if cm_python:
+        cm_out = os.path.join(outdir, "cm.f64")
+        proc = subprocess.run([cm_python, __file__, "--cm-child", path, repr(hardness),
+                               ",".join(repr(w) for w in loads), cm_out],
+                              capture_output=True, env=one, check=True)
+        r_cm = json.loads(proc.stdout)
+        cm = np.fromfile(cm_out).reshape(len(loads), 2, n, n)
+        print("\nContactMechanics' plastic system against ours, same surface, ceiling and loads:\n")
+        print("| W/W0 | seconds ours | seconds ContactMechanics | converged | "
+              "nodes in contact in one only | nodes saturated in one only | "
+              "max pressure difference / 𝓗 | max plastic-displacement difference / ours |")
+        print("|---|---|---|---|---|---|---|---|")
+        for k, w in enumerate(loads):
+            pmax = r_cm[k]["pmax"]
+            mine_k, (theirs_k, their_plastic) = p_ours[k], cm[k]
+            sat_a = mine_k >= pmax * (1 - 1e-12)
+            sat_b = theirs_k >= pmax * (1 - 1e-9)
+            plastic = plastic_displacement(mine_k, h, sat_a)
+            worst = np.abs(-their_plastic - plastic).max() / plastic.max()
+            print(f"| {w:g} | {r_ours[k]['seconds']:.3f} | {r_cm[k]['seconds']:.2f} | "
+                  f"{r_cm[k]['success']} | {int(((mine_k > 0) != (theirs_k > 0)).sum())} | "
+                  f"{int((sat_a != sat_b).sum())} | {np.abs(mine_k - theirs_k).max() / pmax:.1e} | "
+                  f"{worst:.1e} |")
 
     sweep = [0.005 * (i + 1) for i in range(30)]
     cap = [w for w in sweep if w <= hardness]
