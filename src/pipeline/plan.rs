@@ -292,6 +292,7 @@ fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> StudyKeys<'a> {
             lambda_s_px: plan.surface.lambda_s_px,
             realization: r,
             connectivity: Default::default(),
+            saturated: plan.hardness.is_some(),
         };
         clusters.push(b.add::<Clusters>(&job, vec![contact.clone()], studies, Some(r), None));
         surfaces.push(surface);

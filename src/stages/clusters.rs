@@ -8,7 +8,7 @@ use polars::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use super::contact::contact_file;
+use super::contact::{contact_file, saturated_file};
 use super::{Inputs, Stage};
 use crate::clusters::{self, Connectivity};
 use crate::store::table::{col, load_columns, write};
@@ -30,6 +30,11 @@ pub struct ClustersJob {
     pub realization: u32,
     /// Neighbours that link pixels (8, the paper's).
     pub connectivity: Connectivity,
+    /// The sweep was under a hardness: its saturated maps are labelled too, into
+    /// `saturated_clusters.parquet` (the same columns). Absent (and not in the key) when
+    /// elastic.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub saturated: bool,
 }
 
 impl Stage for Clusters {
@@ -42,8 +47,33 @@ impl Stage for Clusters {
     }
 }
 
-/// Label the contact map of every load of one realization.
+/// Label the contact map of every load of one realization (and, under a hardness, its
+/// saturated map).
 fn compute_clusters(job: &ClustersJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+    let summary = label_maps(job, inputs, dir, contact_file, "clusters.parquet", true)?;
+    if job.saturated {
+        label_maps(
+            job,
+            inputs,
+            dir,
+            saturated_file,
+            "saturated_clusters.parquet",
+            false,
+        )?;
+    }
+    Ok(summary)
+}
+
+/// Label the maps `file(i)` of the sweep's loads into one row per cluster in `table`, and,
+/// if `per_load`, one row per load in `loads.parquet`; the summary of the labelling.
+fn label_maps(
+    job: &ClustersJob,
+    inputs: &Inputs,
+    dir: &Path,
+    file: fn(usize) -> String,
+    table: &str,
+    per_load: bool,
+) -> anyhow::Result<Value> {
     let ls2 = job.lambda_s_px * job.lambda_s_px;
     let pixels = (job.n * job.n) as f64;
     // Per cluster.
@@ -54,7 +84,7 @@ fn compute_clusters(job: &ClustersJob, inputs: &Inputs, dir: &Path) -> anyhow::R
     let (mut n_clusters, mut fraction, mut largest, mut n_perc) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (i, &load) in job.loads.iter().enumerate() {
-        let path = inputs.file(0, "contact", &contact_file(i))?;
+        let path = inputs.file(0, "contact", &file(i))?;
         let (rows, cols, map, _) = crate::io::read_contact_map(&path)?;
         if (rows, cols) != (job.n, job.n) {
             anyhow::bail!(
@@ -88,7 +118,7 @@ fn compute_clusters(job: &ClustersJob, inputs: &Inputs, dir: &Path) -> anyhow::R
     let realization = vec![job.realization; rows];
     write(
         dir,
-        "clusters.parquet",
+        table,
         DataFrame::new(
             rows,
             vec![
@@ -106,6 +136,9 @@ fn compute_clusters(job: &ClustersJob, inputs: &Inputs, dir: &Path) -> anyhow::R
         )?,
     )?;
     let loads = job.loads.len();
+    if !per_load {
+        return Ok(Value::Null);
+    }
     let total: u64 = n_clusters.iter().map(|&v| v as u64).sum();
     let percolating_loads = n_perc.iter().filter(|&&v| v > 0).count();
     write(

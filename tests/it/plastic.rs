@@ -23,8 +23,8 @@ fn pipeline(plastic: Option<&str>) -> String {
     text + "figures: {}\n"
 }
 
-/// The contact instances' keys of each study in the plan of `text`.
-fn contact_keys(text: &str) -> std::collections::BTreeMap<String, Vec<String>> {
+/// The `stage` instances' keys of each study in the plan of `text`.
+fn stage_keys(text: &str, stage: &str) -> std::collections::BTreeMap<String, Vec<String>> {
     let (_t, dir) = workdir(text);
     let out = run_in(&dir, &["plan", "--profile", "t", "--json"]);
     assert!(
@@ -34,7 +34,7 @@ fn contact_keys(text: &str) -> std::collections::BTreeMap<String, Vec<String>> {
     );
     let mut keys: std::collections::BTreeMap<String, Vec<String>> = Default::default();
     for i in stdout_json(&out)["instances"].as_array().unwrap() {
-        if i["stage"] == "contact" {
+        if i["stage"] == stage {
             for s in i["studies"].as_array().unwrap() {
                 let key = i["key"].as_str().unwrap().to_string();
                 keys.entry(s.as_str().unwrap().to_string())
@@ -48,11 +48,18 @@ fn contact_keys(text: &str) -> std::collections::BTreeMap<String, Vec<String>> {
 
 #[test]
 fn a_hardness_leaves_elastic_keys_and_stores_saturated_maps() {
-    let elastic = contact_keys(&pipeline(None));
-    let both = contact_keys(&pipeline(Some("0.05")));
-    assert_eq!(elastic["a"], both["a"], "an elastic study's keys changed");
-    // The same surfaces under a hardness are other instances.
-    assert!(both["p"].iter().all(|k| !both["a"].contains(k)));
+    for stage in ["contact", "clusters"] {
+        let elastic = stage_keys(&pipeline(None), stage);
+        let both = stage_keys(&pipeline(Some("0.05")), stage);
+        assert_eq!(
+            elastic["a"], both["a"],
+            "an elastic study's {stage} keys changed"
+        );
+        // The same surfaces under a hardness are other instances.
+        assert!(both["p"].iter().all(|k| !both["a"].contains(k)));
+    }
+    let both = stage_keys(&pipeline(Some("0.05")), "contact");
+    let labelled = stage_keys(&pipeline(Some("0.05")), "clusters");
 
     let (_t, dir) = workdir(&pipeline(Some("0.05")));
     let out = run_in(&dir, &["run", "--profile", "t"]);
@@ -96,6 +103,15 @@ fn a_hardness_leaves_elastic_keys_and_stores_saturated_maps() {
                 .any(|f| f.starts_with(&prefix) && f.contains("saturated")),
             "an elastic instance holds a saturated map"
         );
+    }
+    // The saturated clusters, a second table beside the contact clusters, under a hardness
+    // only.
+    for (study, expected) in [("p", true), ("a", false)] {
+        for key in &labelled[study] {
+            let table = format!("data/cache/clusters/{key}/saturated_clusters.parquet");
+            assert_eq!(files.contains_key(&table), expected, "{table}");
+            assert!(files.contains_key(&format!("data/cache/clusters/{key}/clusters.parquet")));
+        }
     }
 }
 
