@@ -124,42 +124,13 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
 
     /// [`Self::bounded_offset`] with the nodes `wide` says ([`Constraint::offset`]).
     fn offset_in(&mut self, load: f64, total: f64, wide: bool) -> Option<f64> {
-        let close = |sum: f64| (sum - load).abs() <= OFFSET_ROUNDING * load;
-        let max = self.constraint.ceiling();
         // Offsets of ±p_max take every moving node to a bound.
-        let (mut low, mut high) = if total > load {
-            (-max, 0.0)
-        } else {
-            (0.0, max)
-        };
-        let end = if total > load { low } else { high };
-        let (end_sum, _) = self.shifted_sum(end, wide);
-        if (total > load && end_sum > load) || (total < load && end_sum < load) {
-            return None;
-        }
-        let (mut c, mut sum) = (0.0f64, total);
-        let mut slope = self.shifted_sum(0.0, wide).1;
-        for _ in 0..OFFSET_STEPS {
-            let newton = c - (sum - load) / slope;
-            let next = if slope > 0.0 && newton > low && newton < high {
-                newton
-            } else {
-                0.5 * (low + high)
-            };
-            if next == c {
-                break;
-            }
-            let (next_sum, next_slope) = self.shifted_sum(next, wide);
-            (c, sum, slope) = (next, next_sum, next_slope);
-            if close(sum) {
-                break;
-            } else if sum > load {
-                high = c;
-            } else {
-                low = c;
-            }
-        }
-        Some(c)
+        let span = self.constraint.ceiling();
+        let slope = self.shifted_sum(0.0, wide).1;
+        let within = OFFSET_ROUNDING * load;
+        offset_to_load(load, total, slope, span, within, |c| {
+            self.shifted_sum(c, wide)
+        })
     }
 
     /// The exact deflection of the pressures offset to the mean `target` (their sum now
@@ -229,7 +200,6 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         if !self.changes_listed() {
             return None;
         }
-        let close = |sum: f64| (sum - load).abs() <= STEP_ROUNDING * load;
         // Every moved node reaches a bound within p_max plus its distance past one.
         let past = self
             .changes
@@ -237,43 +207,10 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             .flatten()
             .fold(0.0f64, |m, &(_, d)| m.max(d.abs()));
         let span = self.constraint.ceiling() + past;
-        let (mut low, mut high) = if total > load {
-            (-span, 0.0)
-        } else {
-            (0.0, span)
-        };
-        let (mut c, mut sum, mut slope) = (0.0f64, total, active);
-        for _ in 0..OFFSET_STEPS {
-            if close(sum) {
-                return Some(c);
-            }
-            let newton = c - (sum - load) / slope;
-            let next = if slope > 0.0 && newton > low && newton < high {
-                newton
-            } else {
-                0.5 * (low + high)
-            };
-            if next == c {
-                break;
-            }
-            let (next_sum, next_slope) = self.step_offset_sums(next, false);
-            (c, sum, slope) = (next, next_sum, next_slope);
-            if sum > load {
-                high = c;
-            } else {
-                low = c;
-            }
-        }
-        // Not within rounding after the steps (the bracket has shrunk below the rounding of
-        // the sum): the offset stands if the load lies within reach at all.
-        let end = if total > load { -span } else { span };
-        let (end_sum, _) = self.step_offset_sums(end, false);
-        let reachable = if total > load {
-            end_sum <= load
-        } else {
-            end_sum >= load
-        };
-        reachable.then_some(c)
+        let within = STEP_ROUNDING * load;
+        offset_to_load(load, total, active, span, within, |c| {
+            self.step_offset_sums(c, false)
+        })
     }
 
     /// The sum of the pressures [`Self::step_offset`]'s offset `c` gives, and how many of
@@ -360,4 +297,55 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         report.convolutions += 1;
         self.deflection_at_load(target, total, 0.0, &mut false)
     }
+}
+
+/// The root `c` of `sum(c) = load` for a piecewise linear, non-decreasing `sum` (`eval(c)`
+/// gives it and its slope, one pass over the pressures) with `sum(0) = total` of slope
+/// `slope`, within `span` of 0, to `within`: Newton's method, kept inside a shrinking bracket
+/// by bisection, exact once a step stays on one linear piece. `None` if the load lies out of
+/// reach (`sum(±span)` on the same side of it as `total`).
+fn offset_to_load(
+    load: f64,
+    total: f64,
+    slope: f64,
+    span: f64,
+    within: f64,
+    mut eval: impl FnMut(f64) -> (f64, f64),
+) -> Option<f64> {
+    let close = |sum: f64| (sum - load).abs() <= within;
+    let (mut low, mut high) = if total > load {
+        (-span, 0.0)
+    } else {
+        (0.0, span)
+    };
+    let (mut c, mut sum, mut slope) = (0.0f64, total, slope);
+    for _ in 0..OFFSET_STEPS {
+        if close(sum) {
+            return Some(c);
+        }
+        let newton = c - (sum - load) / slope;
+        let next = if slope > 0.0 && newton > low && newton < high {
+            newton
+        } else {
+            0.5 * (low + high)
+        };
+        if next == c {
+            break;
+        }
+        (c, (sum, slope)) = (next, eval(next));
+        if sum > load {
+            high = c;
+        } else {
+            low = c;
+        }
+    }
+    // Not within `within` after the steps (the bracket has shrunk below the rounding of the
+    // sum): the offset stands if the load lies within reach at all.
+    let end_sum = eval(if total > load { -span } else { span }).0;
+    let reachable = if total > load {
+        end_sum <= load
+    } else {
+        end_sum >= load
+    };
+    reachable.then_some(c)
 }
