@@ -57,10 +57,15 @@ def tamaas_model(path):
     n = h.shape[0]
     model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
     model.E, model.nu = 1.0, 0.0
+    return h, n, model, rms_slope(h)
+
+
+def rms_slope(h):
+    """The spectral rms slope of `h` on the unit box (as wearcoef computes it)."""
+    n = h.shape[0]
     q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
     qx, qy = np.meshgrid(q, q)
-    slope = np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
-    return h, n, model, slope
+    return np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
 
 
 def tamaas_child(path, tol):

@@ -33,6 +33,10 @@ import time
 
 import numpy as np
 
+# The surface's spectral rms slope and Tamaas's model of it, as the elastic peer bench has them.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from contact_peers import rms_slope, tamaas_model  # noqa: E402
+
 TOL = 1e-8
 
 
@@ -56,7 +60,7 @@ def cm_child(path, hardness, loads, out):
 
     h = np.load(path)
     n = h.shape[0]
-    slope = spectral_slope(h)
+    slope = rms_slope(h)
     pmax = hardness * slope
     rows, fields = [], []
     for w in loads:
@@ -72,14 +76,6 @@ def cm_child(path, hardness, loads, out):
         rows.append({"seconds": seconds, "success": bool(opt.success), "pmax": pmax})
     np.stack(fields).tofile(out)
     print(json.dumps(rows))
-
-
-def spectral_slope(h):
-    """The spectral rms slope of `h` on the unit box (as wearcoef computes it)."""
-    n = h.shape[0]
-    q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
-    qx, qy = np.meshgrid(q, q)
-    return np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
 
 
 def plastic_displacement(p, h, saturated):
@@ -98,13 +94,7 @@ def tamaas_child(path, hardness, loads, out):
     the pressures (to `out`, load-major) and our error of its state, as JSON."""
     import tamaas as tm
 
-    h = np.load(path)
-    n = h.shape[0]
-    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
-    model.E, model.nu = 1.0, 0.0
-    q = 2 * np.pi * np.fft.fftfreq(n, 1.0 / n)
-    qx, qy = np.meshgrid(q, q)
-    slope = np.sqrt(np.sum((qx**2 + qy**2) * np.abs(np.fft.fft2(h)) ** 2) / n**4)
+    h, n, model, slope = tamaas_model(path)
     pmax = hardness * model.E_star * slope
     solver = tm.KatoSaturated(model, h, TOL, pmax)
     solver.max_iter = 20000
