@@ -10,10 +10,11 @@ use rayon::prelude::*;
 
 use super::constraint::Constraint;
 use super::iteration::Iteration;
+use super::load::dispatch_offset_sums;
 use super::load::RESYNC;
 use super::operator::Operator;
 use super::passes::{UpdateTotals, MAX_SPARSE};
-use super::rows::GradientStats;
+use super::rows::{GradientStats, LANES};
 use super::{SolveReport, Solver};
 
 /// Newton steps allowed to find the load's offset (each a pass over `p`); bisection
@@ -21,13 +22,19 @@ use super::{SolveReport, Solver};
 const OFFSET_STEPS: usize = 64;
 
 /// The load is restored once the offset pressures sum to it within this relative rounding
-/// (far below any tolerance on the error).
-const OFFSET_ROUNDING: f64 = 1e-14;
+/// (far below any tolerance on the error, and above the rounding of a sum of 512² pressures,
+/// measured at up to 2e-14: a tighter bound bisected to the end of the steps).
+const OFFSET_ROUNDING: f64 = 1e-13;
 
 /// After a step, the load is restored to this relative accuracy (the confirmation of
 /// convergence restores it to [`OFFSET_ROUNDING`]): each Newton step is a pass over the
 /// pressures, and requiring rounding level took about one more per restoration.
 const STEP_ROUNDING: f64 = 1e-12;
+
+/// The step of [`Solver::gap_start`], as a fraction of `1 / K_ii` (the pressure that closes
+/// a unit gap at a node alone): on a 512² sweep at hardness 0.25 the fractions 0.25, 0.5
+/// and 1 took 321, 314 and 320 iterations (docs/BENCHMARKS.md).
+const GAP_STEP: f64 = 0.5;
 
 impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// The complementarity error of a state with gradient statistics `stats` (of
@@ -122,15 +129,71 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         )
     }
 
-    /// [`Self::bounded_offset`] with the nodes `wide` says ([`Constraint::offset`]).
+    /// [`Self::bounded_offset`] with the nodes `wide` says ([`Constraint::offset`]): every
+    /// node, by passes over `p`, or the active ones, gathered first ([`Self::gather_moving`]).
     fn offset_in(&mut self, load: f64, total: f64, wide: bool) -> Option<f64> {
         // Offsets of ±p_max take every moving node to a bound.
         let span = self.constraint.ceiling();
-        let slope = self.shifted_sum(0.0, wide).1;
         let within = OFFSET_ROUNDING * load;
-        offset_to_load(load, total, slope, span, within, |c| {
-            self.shifted_sum(c, wide)
-        })
+        if wide {
+            let slope = self.shifted_sum(0.0, true).1;
+            return offset_to_load(load, total, slope, span, within, |c| {
+                self.shifted_sum(c, true)
+            });
+        }
+        let slope = self.gather_moving();
+        offset_to_load(load, total, slope, span, within, |c| self.moving_sum(c))
+    }
+
+    /// Gathers, block by block, the pressures that a load offset moves ([`Constraint::offset`]:
+    /// those off the bounds, the active ones and any a step left past a bound) into
+    /// `self.moving`, beside the sum of the others. One pass over `p`, after which each
+    /// offset's sum ([`Self::moving_sum`]) passes over the moving nodes only (a few percent
+    /// to a third of them). Returns how many of them are active (the sum's slope at `c = 0`).
+    fn gather_moving(&mut self) -> f64 {
+        let constraint = self.constraint;
+        let max = constraint.ceiling();
+        self.pressure
+            .par_chunks(self.chunk)
+            .zip(self.moving.par_iter_mut())
+            .for_each(|(pc, (moving, fixed))| {
+                moving.clear();
+                let mut rest = [0.0; 4];
+                for (k, &p) in pc.iter().enumerate() {
+                    if p != 0.0 && p != max {
+                        moving.push(p);
+                    } else {
+                        rest[k % 4] += p;
+                    }
+                }
+                *fixed = rest.iter().sum();
+            });
+        self.moving
+            .iter()
+            .flat_map(|(m, _)| m)
+            .filter(|&&x| constraint.active(x))
+            .count() as f64
+    }
+
+    /// The sum of the pressures with the moving ones ([`Self::gather_moving`]) offset by
+    /// `c`, `P(x + c)`, and how many of those are active (the sum's slope in `c`), reduced
+    /// over the fixed blocks.
+    fn moving_sum(&mut self, c: f64) -> (f64, f64) {
+        let constraint = self.constraint;
+        self.moving
+            .par_iter()
+            .zip(self.offset_acc.par_iter_mut())
+            .for_each(|((moving, fixed), [sums, counts])| {
+                *sums = [0.0; LANES];
+                *counts = [0.0; LANES];
+                dispatch_offset_sums(constraint, c, true, moving, sums, counts);
+                sums[0] += fixed;
+            });
+        self.offset_acc
+            .iter()
+            .fold((0.0, 0.0), |(s, k), [sums, counts]| {
+                (s + sums.iter().sum::<f64>(), k + counts.iter().sum::<f64>())
+            })
     }
 
     /// The exact deflection of the pressures offset to the mean `target` (their sum now
@@ -179,8 +242,8 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
                     // offset (restarting costs 1.2–1.3 times the iterations on a 512² sweep);
                     // the plain one restarts (kept, it stalls).
                     it.restart |= c != 0.0 && !preconditioned;
-                    self.step_offset_sums(c, true);
-                    self.exact_deflection(1.0, it.shift)
+                    // The nodes off the bounds take the offset as the rows are read.
+                    self.offset_deflection(c, false, 1.0, it.shift)
                 }
                 None => self.deflection_at_load(target, totals.sum_p, it.shift, &mut it.restart),
             };
@@ -195,7 +258,10 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// `P(p − Δ + c)`, each active node from its pressure, `P(p + c)`, and the others (at 0 or
     /// on the ceiling, and not moved) stay. This is the projection of the step onto the load,
     /// restricted to the nodes the step moved: a node the step took far past a bound stays
-    /// there, one it took just past comes back first. `None` if that cannot reach the load.
+    /// there, one it took just past comes back first. With `Some(c)`, each projected node is
+    /// left where the step left it, off the bounds, so that the offset of the nodes off the
+    /// bounds ([`Constraint::offset`], fused with the next deflection) applies `c`; with
+    /// `None` (the load out of reach), `p` is as it was.
     fn step_offset(&mut self, load: f64, total: f64, active: f64) -> Option<f64> {
         if !self.changes_listed() {
             return None;
@@ -208,80 +274,63 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             .fold(0.0f64, |m, &(_, d)| m.max(d.abs()));
         let span = self.constraint.ceiling() + past;
         let within = STEP_ROUNDING * load;
-        offset_to_load(load, total, active, span, within, |c| {
-            self.step_offset_sums(c, false)
-        })
+        self.unproject_step(true);
+        self.gather_moving();
+        let offset = offset_to_load(load, total, active, span, within, |c| self.moving_sum(c));
+        if offset.is_none() {
+            self.unproject_step(false);
+        }
+        offset
     }
 
-    /// The sum of the pressures [`Self::step_offset`]'s offset `c` gives, and how many of
-    /// them are active (the sum's slope in `c`), reduced over the fixed blocks; with
-    /// `apply`, those pressures are written (and the change lists spent). One pass over the
-    /// block's pressures (the active ones offset, the others as they are), and one over its
-    /// listed nodes that are not active (taken from where the step left them).
-    fn step_offset_sums(&mut self, c: f64, apply: bool) -> (f64, f64) {
+    /// With `unproject`, moves each listed node that the step left on a bound back to where
+    /// the step took it, `p − Δ` (keeping its pressure in the list, whose `Δ` is spent: the
+    /// next update pass clears it; NaN marks the nodes left as they were); without, puts
+    /// those pressures back. A pass over the lists only.
+    fn unproject_step(&mut self, unproject: bool) {
         let (constraint, chunk) = (self.constraint, self.chunk);
         self.pressure
             .par_chunks_mut(chunk)
             .zip(self.changes.par_iter_mut())
-            .zip(self.offset_acc.par_iter_mut())
             .enumerate()
-            .for_each(|(b, ((pc, list), [sums, counts]))| {
-                let offset = |p: f64| {
-                    if constraint.active(p) {
-                        constraint.project(p + c)
-                    } else {
-                        p
-                    }
-                };
+            .for_each(|(b, (pc, list))| {
                 let first = b * chunk;
-                if apply {
-                    // The listed nodes not active take their value from the step's (kept in
-                    // the list, which the next update pass clears; NaN marks the others),
-                    // every other node is offset.
-                    for (i, delta) in list.iter_mut() {
-                        let p = pc[*i - first];
-                        *delta = if constraint.active(p) {
-                            f64::NAN
-                        } else {
-                            constraint.project(p - *delta + c)
-                        };
-                    }
-                    pc.iter_mut().for_each(|p| *p = offset(*p));
-                    for &(i, v) in list.iter() {
-                        if !v.is_nan() {
-                            pc[i - first] = v;
+                for (i, kept) in list.iter_mut() {
+                    let p = &mut pc[*i - first];
+                    if !unproject {
+                        if !kept.is_nan() {
+                            *p = *kept;
                         }
-                    }
-                    return;
-                }
-                let (mut sum, mut count) = ([0.0; 4], [0.0; 4]);
-                for (k, &p) in pc.iter().enumerate() {
-                    let v = offset(p);
-                    sum[k % 4] += v;
-                    count[k % 4] += if constraint.active(v) { 1.0 } else { 0.0 };
-                }
-                let mut fixes = (0.0, 0.0);
-                for &(i, delta) in list.iter() {
-                    let p = pc[i - first];
-                    if !constraint.active(p) {
-                        let v = constraint.project(p - delta + c);
-                        fixes.0 += v - p;
-                        fixes.1 += if constraint.active(v) { 1.0 } else { 0.0 };
+                    } else if constraint.active(*p) {
+                        *kept = f64::NAN;
+                    } else {
+                        (*p, *kept) = (*p - *kept, *p);
                     }
                 }
-                *sums = [sum.iter().sum::<f64>() + fixes.0, 0.0, 0.0, 0.0];
-                *counts = [count.iter().sum::<f64>() + fixes.1, 0.0, 0.0, 0.0];
             });
-        self.offset_acc
-            .iter()
-            .fold((0.0, 0.0), |(s, k), [sums, counts]| {
-                (s + sums[0], k + counts[0])
-            })
     }
 
-    /// [`Solver::start`] under a ceiling: the last solution scaled to the new load and
-    /// projected (else the uniform pressure), offset to the load, and its exact deflection.
+    /// Whether the last solution's contact set cannot carry the load `target` even at the
+    /// ceiling (`target · n > p_max · #{p > 0}`): then no scaling of it, nor offset of its
+    /// active nodes, reaches the load, and the start takes a projected gradient step
+    /// instead ([`Self::gap_start`]).
+    pub(super) fn beyond_contact_set(&self, target: f64) -> bool {
+        C::BOUNDED
+            && self.has_solution
+            && self.separation_exact
+            && target * self.pressure.len() as f64
+                > self.constraint.ceiling() * self.contact_count() as f64
+    }
+
+    /// [`Solver::start`] under a ceiling: where the last solution's contact set can carry
+    /// the load, that solution (extrapolated by [`Solver::warm_start`]) scaled to the load
+    /// and projected, else the uniform pressure, offset to the load; where it cannot, the
+    /// [`Self::gap_start`]. Then the exact deflection.
     pub(super) fn bounded_start(&mut self, target: f64, report: &mut SolveReport) -> GradientStats {
+        report.convolutions += 1;
+        if self.beyond_contact_set(target) {
+            return self.gap_start(target);
+        }
         let len = self.pressure.len();
         let previous_total: f64 = self.chunked_sum(|p| p);
         let c = self.constraint;
@@ -294,8 +343,44 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             self.pressure.fill(target);
         }
         let total = self.chunked_sum(|p| p);
-        report.convolutions += 1;
         self.deflection_at_load(target, total, 0.0, &mut false)
+    }
+
+    /// The start of a load beyond the last solution's contact set (a load mostly carried
+    /// on the ceiling grows by new contact, not by higher pressures): one projected
+    /// gradient step from that solution, `P(p − τ (w − ℓ) + c)` with `ℓ` its level, the
+    /// step `τ` [`GAP_STEP`] over the self-influence, and the offset `c` of every node that
+    /// brings the mean to `target` (the nodes closest to contact enter first, the saturated
+    /// ones stay). `w` must be exact for `p`.
+    fn gap_start(&mut self, target: f64) -> GradientStats {
+        let c = self.constraint;
+        let (tau, level) = (GAP_STEP / self.op.self_influence(), self.gap_level);
+        self.pressure
+            .par_iter_mut()
+            .zip(self.separation.par_iter())
+            .for_each(|(p, &w)| *p -= tau * (w - level));
+        let total = self.chunked_sum(|x| c.project(x));
+        // Offsets of ±(p_max + the furthest step past a bound) take every node to a bound.
+        let past = self
+            .pressure
+            .par_iter()
+            .map(|&x| (x - c.project(x)).abs())
+            .reduce(|| 0.0, f64::max);
+        let load = target * self.pressure.len() as f64;
+        let slope = self.shifted_sum(0.0, true).1;
+        let span = c.ceiling() + past;
+        let within = OFFSET_ROUNDING * load;
+        match offset_to_load(load, total, slope, span, within, |o| {
+            self.shifted_sum(o, true)
+        }) {
+            Some(offset) => self.offset_deflection(offset, true, 1.0, 0.0),
+            // Every load from 0 to n p_max is within that reach; the uniform pressure
+            // stands in should rounding say otherwise.
+            None => {
+                self.pressure.fill(target);
+                self.exact_deflection(1.0, 0.0)
+            }
+        }
     }
 }
 
@@ -313,10 +398,21 @@ fn offset_to_load(
     mut eval: impl FnMut(f64) -> (f64, f64),
 ) -> Option<f64> {
     let close = |sum: f64| (sum - load).abs() <= within;
-    let (mut low, mut high) = if total > load {
-        (-span, 0.0)
-    } else {
-        (0.0, span)
+    let below = total > load;
+    let (mut low, mut high) = if below { (-span, 0.0) } else { (0.0, span) };
+    // Whether the load lies within reach (`sum(±span)` on the other side of it), found by
+    // one pass the first time Newton's step leaves the bracket: a load out of reach sends
+    // every step there, and bisecting towards it would take all the steps.
+    let mut reach: Option<bool> = None;
+    let mut reachable = |eval: &mut dyn FnMut(f64) -> (f64, f64)| {
+        *reach.get_or_insert_with(|| {
+            let end = eval(if below { -span } else { span }).0;
+            if below {
+                end <= load
+            } else {
+                end >= load
+            }
+        })
     };
     let (mut c, mut sum, mut slope) = (0.0f64, total, slope);
     for _ in 0..OFFSET_STEPS {
@@ -326,10 +422,14 @@ fn offset_to_load(
         let newton = c - (sum - load) / slope;
         let next = if slope > 0.0 && newton > low && newton < high {
             newton
-        } else {
+        } else if reachable(&mut eval) {
             0.5 * (low + high)
+        } else {
+            return None;
         };
-        if next == c {
+        // The bracket has shrunk below the rounding of the pressures: the sum cannot come
+        // closer than its own rounding.
+        if next == c || high - low <= f64::EPSILON * span {
             break;
         }
         (c, (sum, slope)) = (next, eval(next));
@@ -339,13 +439,6 @@ fn offset_to_load(
             low = c;
         }
     }
-    // Not within `within` after the steps (the bracket has shrunk below the rounding of the
-    // sum): the offset stands if the load lies within reach at all.
-    let end_sum = eval(if total > load { -span } else { span }).0;
-    let reachable = if total > load {
-        end_sum <= load
-    } else {
-        end_sum >= load
-    };
-    reachable.then_some(c)
+    // Not within `within` after the steps: the offset stands if the load lies within reach.
+    reachable(&mut eval).then_some(c)
 }

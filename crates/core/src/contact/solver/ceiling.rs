@@ -45,22 +45,20 @@ impl Ceiling {
 impl Constraint for Ceiling {
     const BOUNDED: bool = true;
 
+    /// Written as two selects (as [`Self::project_avx2`]), which compile without branches.
     #[inline(always)]
     fn project(self, p: f64) -> f64 {
-        if p > 0.0 {
-            if p < self.max {
-                p
-            } else {
-                self.max
-            }
+        let positive = if p > 0.0 { p } else { 0.0 };
+        if positive < self.max {
+            positive
         } else {
-            0.0
+            self.max
         }
     }
 
     #[inline(always)]
     fn active(self, p: f64) -> bool {
-        p > 0.0 && p < self.max
+        (p > 0.0) & (p < self.max)
     }
 
     #[inline(always)]
@@ -77,21 +75,22 @@ impl Constraint for Ceiling {
     /// (`w < entry`), and those on the ceiling whose gradient is positive (`w > mean`).
     #[inline(always)]
     fn free(self, p: f64, w: f64, entry: f64, mean: f64) -> bool {
-        if p >= self.max {
-            w > mean
-        } else {
-            p > 0.0 || w < entry
-        }
+        // Without branches (as `free_avx2`): the bounds are scattered over the grid.
+        let saturated = p >= self.max;
+        (saturated & (w > mean)) | (!saturated & ((p > 0.0) | (w < entry)))
     }
 
-    /// Only the active nodes move, unless `wide`: a node at 0 stays out of contact and one
-    /// on the ceiling stays saturated (moving them by the offset would undo the iteration's
-    /// last step on them at every restoration, and it cycles). `wide` is the projection
-    /// `P(p + c)` of every node, for when the active nodes cannot carry the load.
+    /// Only the nodes off the bounds move (in an admissible field, the active ones), unless
+    /// `wide`: a node at 0 stays out of contact and one on the ceiling stays saturated
+    /// (moving them by the offset would undo the iteration's last step on them at every
+    /// restoration, and it cycles). `wide` is the projection `P(p + c)` of every node, for
+    /// when the active nodes cannot carry the load.
     #[inline(always)]
     fn offset(self, p: f64, c: f64, wide: bool) -> f64 {
-        if wide || self.active(p) {
-            self.project(p + c)
+        // Both sides computed and selected (no branch on the scattered bounds).
+        let moved = self.project(p + c);
+        if wide | ((p != 0.0) & (p != self.max)) {
+            moved
         } else {
             p
         }

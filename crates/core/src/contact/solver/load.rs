@@ -145,7 +145,7 @@ avx2_dispatch! {
     /// Adds the offset pressure ([`Constraint::offset`]) and whether it is active (for
     /// `p ≥ 0`: `max(p + c, 0)` and `[p + c > 0]`) over `p` to the lane sums `sums` and `counts` (the load of an offset
     /// pressure and its slope in `c`, [`Solver::load_offset`]).
-    fn dispatch_offset_sums<C: Constraint>(
+    pub(super) fn dispatch_offset_sums<C: Constraint>(
         constraint: C,
         c: f64,
         wide: bool,

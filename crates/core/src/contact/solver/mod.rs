@@ -201,6 +201,9 @@ pub struct Solver<'a, C: Constraint = NonNegative, O: Operator = ElasticOperator
     /// node order, up to the list's capacity (one node in [`CHANGES_PER_NODE`] of the
     /// block; never reallocated).
     changes: Vec<Vec<(usize, f64)>>,
+    /// Per block, under a ceiling: the pressures a load offset moves, and the sum of the
+    /// others (`Solver::gather_moving`); empty until then.
+    moving: Vec<(Vec<f64>, f64)>,
     sparse: Vec<(usize, f64)>,
     /// The preconditioner (module `preconditioner`; none for the plain iteration), chosen
     /// at the first solve and again only when the settings that choose it change.
@@ -287,6 +290,7 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
                     Vec::with_capacity(listed.max(MAX_SPARSE))
                 })
                 .collect(),
+            moving: vec![(Vec::new(), 0.0); if C::BOUNDED { blocks } else { 0 }],
             sparse: Vec::with_capacity(MAX_SPARSE),
             preconditioner: None,
             choice: None,
@@ -429,7 +433,13 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
                 continue;
             }
             if let Some(status) = it.verdict(error, cfg, &mut report) {
-                report.status = status;
+                // A state that does not carry the load is no solution, whatever its error.
+                let off_load = (stats.sum_p - target * len).abs() > LOAD_ROUNDING * target * len;
+                report.status = if status == Status::Converged && off_load {
+                    Status::Stalled
+                } else {
+                    status
+                };
                 break;
             }
             report.iterations += 1;
@@ -464,6 +474,10 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
         Ok(report)
     }
 }
+
+/// A converged state carries the load to this relative rounding (every exact state is
+/// brought to it to 1e-12 or closer); beyond it the solve reports a stall, never convergence.
+const LOAD_ROUNDING: f64 = 1e-10;
 
 /// An error for a load or settings the solver cannot take.
 fn check_request(mean_pressure: f64, cfg: &SolverConfig) -> Result<(), ContactError> {

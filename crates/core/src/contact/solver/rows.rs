@@ -63,28 +63,36 @@ impl GradientLanes {
     pub(super) fn add<C: Constraint>(&mut self, c: C, p: &[f64; LANES], g: &[f64; LANES]) {
         for l in 0..LANES {
             let m = if c.active(p[l]) { 1.0 } else { 0.0 };
-            if C::BOUNDED && c.saturated(p[l]) {
-                // Off the minimum: the level is that of the unsaturated nodes.
-                self.sat_n[l] += 1.0;
-                self.sat_g[l] += g[l];
-                self.sat_max[l] = if g[l] > self.sat_max[l] {
+            if C::BOUNDED {
+                // Without branches (the saturated nodes are many and scattered): a saturated
+                // node enters the saturated sums, the others the minimum (the level is that
+                // of the unsaturated nodes) and Σpg.
+                let saturated = c.saturated(p[l]);
+                let s = if saturated { 1.0 } else { 0.0 };
+                self.sat_n[l] += s;
+                self.sat_g[l] += s * g[l];
+                self.sat_max[l] = if saturated & (g[l] > self.sat_max[l]) {
                     g[l]
                 } else {
                     self.sat_max[l]
                 };
+                self.min[l] = if !saturated & (g[l] < self.min[l]) {
+                    g[l]
+                } else {
+                    self.min[l]
+                };
+                self.spg[l] += (1.0 - s) * (p[l] * g[l]);
             } else {
                 self.min[l] = if g[l] < self.min[l] {
                     g[l]
                 } else {
                     self.min[l]
                 };
+                self.spg[l] += p[l] * g[l];
             }
             self.n[l] += m;
             self.sg[l] += m * g[l];
             self.sg2[l] += m * g[l] * g[l];
-            if !(C::BOUNDED && c.saturated(p[l])) {
-                self.spg[l] += p[l] * g[l];
-            }
             self.sp[l] += p[l];
         }
     }

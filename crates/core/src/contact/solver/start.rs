@@ -12,9 +12,13 @@ use super::{SolveReport, Solver, SolverConfig};
 impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// The start of a load after a converged one: extrapolated from the last two solutions
     /// ([`SolverConfig::extrapolate_start`]), else the history is forgotten (and
-    /// [`Solver::start`] scales the last solution).
+    /// [`Solver::start`] scales the last solution, or under a ceiling may step from it).
     pub(super) fn warm_start(&mut self, target: f64, cfg: &SolverConfig) {
-        if cfg.extrapolate_start && self.has_solution && self.separation_exact {
+        if cfg.extrapolate_start
+            && self.has_solution
+            && self.separation_exact
+            && !self.beyond_contact_set(target)
+        {
             if self.history.advance(
                 self.constraint,
                 &mut self.pressure,
