@@ -111,25 +111,39 @@ fn rough_surface_meets_the_optimality_conditions() {
 }
 
 /// A sweep of loads warm-started under a ceiling converges at each load to the optimality
-/// conditions (the start scales, projects and offsets the last solution).
+/// conditions, from both starts: the last solution scaled, projected and offset, and (for a
+/// load its contact set cannot carry at the ceiling) one projected gradient step from it.
 #[test]
 fn warm_sweep_under_a_ceiling() {
     let (op, h, slope) = rough(12);
-    let max = 0.2 * E_STAR * slope;
-    let mut solver = Solver::with_constraint(&op, &h, Ceiling::new(max).unwrap()).unwrap();
-    for load in [0.01, 0.02, 0.05, 0.1, 0.15] {
-        let mean = load * E_STAR * slope;
-        let report = solver.solve(mean, &config(true)).unwrap();
-        assert_eq!(report.status, Status::Converged, "W/W0 {load}: {report:?}");
-        check_optimality(
-            &op,
-            &h,
-            solver.pressure(),
-            mean,
-            max,
-            1e-6 * solver.height_std(),
-        );
+    let mut starts = [0, 0];
+    for hardness in [0.2, 2.0] {
+        let max = hardness * E_STAR * slope;
+        let mut solver = Solver::with_constraint(&op, &h, Ceiling::new(max).unwrap()).unwrap();
+        for load in [0.002, 0.004, 0.01, 0.02, 0.05, 0.1, 0.15] {
+            let mean = load * E_STAR * slope;
+            starts[usize::from(solver.beyond_contact_set(mean))] += 1;
+            let report = solver.solve(mean, &config(true)).unwrap();
+            assert_eq!(
+                report.status,
+                Status::Converged,
+                "hardness {hardness}, W/W0 {load}: {report:?}"
+            );
+            check_optimality(
+                &op,
+                &h,
+                solver.pressure(),
+                mean,
+                max,
+                1e-6 * solver.height_std(),
+            );
+        }
     }
+    // Each sweep's first load starts from the uniform pressure: it counts with the scaled.
+    assert!(
+        starts[0] >= 3 && starts[1] >= 1,
+        "scaled / step starts: {starts:?}"
+    );
 }
 
 /// k spikes of distinct heights far above a flat floor, apart by more than the elastic
