@@ -152,27 +152,26 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// to a third of them). Returns how many of them are active (the sum's slope at `c = 0`).
     fn gather_moving(&mut self) -> f64 {
         let constraint = self.constraint;
-        let max = constraint.ceiling();
-        self.pressure
+        let active: usize = self
+            .pressure
             .par_chunks(self.chunk)
             .zip(self.moving.par_iter_mut())
-            .for_each(|(pc, (moving, fixed))| {
+            .map(|(pc, (moving, fixed))| {
                 moving.clear();
-                let mut rest = [0.0; 4];
+                let (mut rest, mut active) = ([0.0; 4], 0);
                 for (k, &p) in pc.iter().enumerate() {
-                    if p != 0.0 && p != max {
+                    if constraint.moves(p, false) {
                         moving.push(p);
+                        active += usize::from(constraint.active(p));
                     } else {
                         rest[k % 4] += p;
                     }
                 }
                 *fixed = rest.iter().sum();
-            });
-        self.moving
-            .iter()
-            .flat_map(|(m, _)| m)
-            .filter(|&&x| constraint.active(x))
-            .count() as f64
+                active
+            })
+            .sum();
+        active as f64
     }
 
     /// The sum of the pressures with the moving ones ([`Self::gather_moving`]) offset by
@@ -319,7 +318,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             && self.has_solution
             && self.separation_exact
             && target * self.pressure.len() as f64
-                > self.constraint.ceiling() * self.contact_count() as f64
+                > self.constraint.ceiling() * self.solved_contact as f64
     }
 
     /// [`Solver::start`] under a ceiling: where the last solution's contact set can carry
@@ -359,13 +358,21 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             .par_iter_mut()
             .zip(self.separation.par_iter())
             .for_each(|(p, &w)| *p -= tau * (w - level));
-        let total = self.chunked_sum(|x| c.project(x));
-        // Offsets of ±(p_max + the furthest step past a bound) take every node to a bound.
-        let past = self
+        // The projected total, and the furthest step past a bound: offsets of ±(p_max + it)
+        // take every node to a bound. Block by block, so that the sum's bits do not depend
+        // on the thread count.
+        let (total, past) = self
             .pressure
-            .par_iter()
-            .map(|&x| (x - c.project(x)).abs())
-            .reduce(|| 0.0, f64::max);
+            .par_chunks(self.chunk)
+            .map(|pc| {
+                pc.iter().fold((0.0, 0.0f64), |(sum, past), &x| {
+                    let kept = c.project(x);
+                    (sum + kept, past.max((x - kept).abs()))
+                })
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold((0.0, 0.0f64), |(sum, past), (s, p)| (sum + s, past.max(p)));
         let load = target * self.pressure.len() as f64;
         let slope = self.shifted_sum(0.0, true).1;
         let span = c.ceiling() + past;

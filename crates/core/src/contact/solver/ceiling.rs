@@ -83,17 +83,11 @@ impl Constraint for Ceiling {
     /// Only the nodes off the bounds move (in an admissible field, the active ones), unless
     /// `wide`: a node at 0 stays out of contact and one on the ceiling stays saturated
     /// (moving them by the offset would undo the iteration's last step on them at every
-    /// restoration, and it cycles). `wide` is the projection `P(p + c)` of every node, for
-    /// when the active nodes cannot carry the load.
+    /// restoration, and it cycles). `wide` is every node, for when the active nodes cannot
+    /// carry the load.
     #[inline(always)]
-    fn offset(self, p: f64, c: f64, wide: bool) -> f64 {
-        // Both sides computed and selected (no branch on the scattered bounds).
-        let moved = self.project(p + c);
-        if wide | ((p != 0.0) & (p != self.max)) {
-            moved
-        } else {
-            p
-        }
+    fn moves(self, p: f64, wide: bool) -> bool {
+        wide | ((p != 0.0) & (p != self.max))
     }
 
     /// Also lowers a node the projection left on the ceiling where its gradient is positive

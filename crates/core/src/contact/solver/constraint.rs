@@ -51,12 +51,25 @@ pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static
         self.active(p) || w < entry
     }
 
-    /// A node of pressure `p` offset by `c` when the load is restored
-    /// (`Solver::load_offset`): `P(p + c)`, which for `c ≤ 0` leaves the nodes at 0 there.
-    /// `wide` asks for the offset of every node, where a constraint would move fewer.
+    /// Whether a load offset moves a node of pressure `p` ([`Self::offset`]); `wide` asks
+    /// for every node, where a constraint would move fewer.
     #[inline(always)]
-    fn offset(self, p: f64, c: f64, _wide: bool) -> f64 {
-        self.project(p + c)
+    fn moves(self, _p: f64, _wide: bool) -> bool {
+        true
+    }
+
+    /// A node of pressure `p` offset by `c` when the load is restored
+    /// (`Solver::load_offset`): `P(p + c)` where it [`Self::moves`], which for `c ≤ 0`
+    /// leaves the nodes at 0 there; `p` elsewhere.
+    #[inline(always)]
+    fn offset(self, p: f64, c: f64, wide: bool) -> f64 {
+        // Both sides computed and selected (no branch on scattered nodes).
+        let moved = self.project(p + c);
+        if self.moves(p, wide) {
+            moved
+        } else {
+            p
+        }
     }
 
     /// The plain iteration's re-admission after the step: `kept` is the projected pressure,

@@ -212,6 +212,9 @@ pub struct Solver<'a, C: Constraint = NonNegative, O: Operator = ElasticOperator
     has_solution: bool,
     /// The mean pressure of the last solution (when `has_solution`).
     solved_mean: f64,
+    /// Under a ceiling, the nodes of positive pressure when the gap was last levelled
+    /// (`Solver::finish_gap`, after every solve): the last solution's contact set.
+    solved_contact: usize,
     /// The solution before the last, for the extrapolated start.
     history: history::History,
     /// Whether `separation` is `K p − h` for the current `pressure`, computed exactly (after
@@ -296,6 +299,7 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
             choice: None,
             has_solution: false,
             solved_mean: 0.0,
+            solved_contact: 0,
             history: history::History::new(),
             separation_exact: false,
         })

@@ -328,18 +328,27 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     }
 
     /// Record `min w` (over the unsaturated nodes under a ceiling), the rigid-body level of the
-    /// gap `w − min w` ([`Solver::gap`]; `w = u − h` must be exact).
+    /// gap `w − min w` ([`Solver::gap`]; `w = u − h` must be exact), and under a ceiling the
+    /// size of the contact set.
     pub(super) fn finish_gap(&mut self) {
         let c = self.constraint;
         self.gap_level = if C::BOUNDED {
-            // The level of the unsaturated nodes; with every node saturated (the mean at
-            // the ceiling) the highest `w`, so that no node has a gap.
-            let unsaturated = self
+            // The level of the unsaturated nodes, and the contact set, in one pass; with
+            // every node saturated (the mean at the ceiling) the highest `w`, so that no
+            // node has a gap.
+            let (unsaturated, contact) = self
                 .pressure
                 .par_iter()
                 .zip(self.separation.par_iter())
-                .map(|(&p, &w)| if c.saturated(p) { f64::INFINITY } else { w })
-                .reduce(|| f64::INFINITY, f64::min);
+                .map(|(&p, &w)| {
+                    let level = if c.saturated(p) { f64::INFINITY } else { w };
+                    (level, usize::from(p > 0.0))
+                })
+                .reduce(
+                    || (f64::INFINITY, 0),
+                    |(w1, k1), (w2, k2)| (w1.min(w2), k1 + k2),
+                );
+            self.solved_contact = contact;
             if unsaturated.is_finite() {
                 unsaturated
             } else {
