@@ -8,7 +8,8 @@ use super::level::Level;
 use super::operator::Operator;
 use super::parts;
 use super::passes::UpdateTotals;
-use super::preconditioner::Fields;
+use super::preconditioner::{Fields, Preconditioner};
+use super::restricted::Restricted;
 use super::rows::GradientStats;
 use super::{SolveReport, Solver, SolverConfig, Status};
 
@@ -22,6 +23,11 @@ pub(super) const RESTART_FRACTION: f64 = 0.03;
 /// preconditioned gradient, `⟨g, t⟩ ≥ DESCENT_FRACTION ⟨g, z⟩`; otherwise the iteration
 /// restarts.
 pub(super) const DESCENT_FRACTION: f64 = 0.5;
+
+/// Iterations without a new least error after which a bounded solve gives up the extended
+/// preconditioner for `P K⁻¹ P` ([`Solver::fall_back`]); converging solves make a new least
+/// error every few iterations.
+pub(super) const FALLBACK_WINDOW: usize = 10;
 
 /// What one iteration of [`Solver::solve`] hands to the next.
 pub(super) struct Iteration {
@@ -113,10 +119,33 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// only when the settings that choose it changed: a sweep keeps its part, and the state
     /// of the part's layers, from load to load.
     pub(super) fn prepare_parts(&mut self, cfg: &SolverConfig) {
+        if let Some(extended) = self.suspended.take() {
+            self.preconditioner = Some(extended);
+        }
         let choice = parts::choice(cfg);
         if self.choice != Some(choice) {
             self.preconditioner = parts::choose(cfg, self.op);
             self.choice = Some(choice);
+        }
+    }
+
+    /// Under a ceiling, once the error has not improved for [`FALLBACK_WINDOW`] iterations
+    /// with the extended preconditioner, sets it aside for the rest of the solve and goes on
+    /// with `P K⁻¹ P` from a fresh direction. Where a large part of the contact set is
+    /// saturated, the extension's long modes can make each step move a quarter of the
+    /// active set across the bounds and back, and the error cycles near 5e-3 for good
+    /// (a 1024² surface of one λ_l at 𝓗 = 0.5, W/W0 = 0.035: the `it` test
+    /// `extension_stagnation_under_a_ceiling_falls_back`); `P K⁻¹ P` converges there.
+    pub(super) fn fall_back(&mut self, it: &mut Iteration, report: &SolveReport) {
+        let extended = matches!(self.choice, Some((true, Some(_))));
+        if C::BOUNDED
+            && extended
+            && self.suspended.is_none()
+            && report.iterations - it.best_at >= FALLBACK_WINDOW
+        {
+            let restricted: Box<dyn Preconditioner<C, O>> = Box::new(Restricted::new(self.op));
+            self.suspended = self.preconditioner.replace(restricted);
+            it.restart = true;
         }
     }
 

@@ -209,6 +209,9 @@ pub struct Solver<'a, C: Constraint = NonNegative, O: Operator = ElasticOperator
     /// at the first solve and again only when the settings that choose it change.
     preconditioner: Option<Box<dyn preconditioner::Preconditioner<C, O>>>,
     choice: Option<parts::Choice>,
+    /// The extended preconditioner, set aside for the rest of a solve that stagnated with
+    /// it under a ceiling (`Solver::fall_back`); restored at the next solve.
+    suspended: Option<Box<dyn preconditioner::Preconditioner<C, O>>>,
     has_solution: bool,
     /// The mean pressure of the last solution (when `has_solution`).
     solved_mean: f64,
@@ -297,6 +300,7 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
             sparse: Vec::with_capacity(MAX_SPARSE),
             preconditioner: None,
             choice: None,
+            suspended: None,
             has_solution: false,
             solved_mean: 0.0,
             solved_contact: 0,
@@ -446,6 +450,7 @@ impl<'a, C: Constraint, O: Operator> Solver<'a, C, O> {
                 };
                 break;
             }
+            self.fall_back(&mut it, &report);
             report.iterations += 1;
             // The direction (fused with the forward FFT), then K t and the curvature ⟨t, K t⟩
             // (Parseval), and the exact line search.
