@@ -208,6 +208,42 @@ def area_load(store, out):
     )
 
 
+PLASTIC = [("plastic_elastic", "∞"), ("plastic_h2", "2"), ("plastic_h1", "1"), ("plastic_h05", "0.5"), ("plastic_h02", "0.2")]
+
+
+def plastic(store, out):
+    """The plastic family: α̂ by both estimators at the Fig. 3 loads, 𝒦 and K at W/W0 = 0.06
+    for two thresholds, and the saturated share of the contact area, per hardness."""
+    for study, h in PLASTIC:
+        alpha_rows(store, study, FIG3_LOADS, out, f"plastic_alpha_H{h}")
+        regime(store, study, out, f"plastic_regime_H{h}")
+        wear = store.table("statistics", study, "wear.parquet")
+        if wear is None:
+            continue
+        w_max = wear.w_over_w0.max()
+        last = wear[wear.w_over_w0 == w_max]
+        cells = []
+        for a_star in [2.0, 32.0, 128.0]:
+            r = last[last.a_star_over_ls2 == a_star].iloc[0]
+            cells.append(f"A* = {fmt(a_star, 3)} λ_s²: K {fmt(r.k_archard_pooled, 2)}, 𝒦 {fmt(r.k_upscaled_pooled)}")
+        out[f"plastic_wear_H{h}"] = "; ".join(cells) + f" at W/W0 = {fmt(w_max, 2)}"
+        lt = store.table("statistics", study, "loads.parquet")
+        if lt is not None:
+            out[f"plastic_area_H{h}"] = "; ".join(
+                f"A_c/L² {fmt(r.area_fraction_mean)} at W/W0 = {fmt(r.w_over_w0, 2)}"
+                for r in [lt.iloc[0], lt.iloc[-1]]
+            ) + f"; N {fmt(lt.n_clusters_mean.iloc[-1], 3)} and largest cluster {fmt(lt.largest_area_over_ls2_mean.iloc[-1], 3)} λ_s² at {fmt(lt.w_over_w0.iloc[-1], 2)}"
+        rows = store.index[(store.index.stage == "contact") & (store.index.studies == study) & (store.index.file == "loads.parquet")]
+        shares = []
+        for path in rows.path:
+            t = pd.read_parquet(store._path(path))
+            if "n_saturated_px" in t:
+                shares.append((t.n_saturated_px / t.n_contact_px).values)
+        if shares:
+            m = np.mean(shares, axis=0)
+            out[f"plastic_saturated_H{h}"] = f"{fmt(m[0], 2)} at W/W0 = {fmt(t.w_over_w0.iloc[0], 2)} to {fmt(m[-1], 2)} at {fmt(t.w_over_w0.iloc[-1], 2)}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("data")
@@ -226,6 +262,7 @@ def main():
     area_load(store, out)
     settings(store, "figB1", out, "b1")
     settings(store, "figB2", out, "b2")
+    plastic(store, out)
     for k, v in out.items():
         print(f"{k}: {v}")
     if args.json:

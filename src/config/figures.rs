@@ -36,6 +36,10 @@ pub enum FigureKind {
     /// Load resolution of a sweep (`chosen`) against a finer sweep of the same realizations
     /// (`fine`).
     LoadResolution,
+    /// Not in the paper: the same surfaces under several hardnesses (`studies`, an elastic
+    /// one among them or not): α̂ against 1/𝓗 at `loads`, and K, 𝒦 and the saturated
+    /// fraction over the sweep for each 𝓗.
+    Plastic,
 }
 
 impl FigureKind {
@@ -51,6 +55,7 @@ impl FigureKind {
             AppendixB2 => "appendix_b2",
             Convergence => "convergence",
             LoadResolution => "load_resolution",
+            Plastic => "plastic",
         }
     }
 }
@@ -79,7 +84,7 @@ pub struct FigureDecl {
     #[serde(default)]
     pub hurst: Vec<String>,
     /// Loads W/W0 the figure draws (fig2: the maps; fig3_fig4a: the PDFs and CCDFs;
-    /// appendix: every setting's). A study whose own loads are a sweep (`min/max/count`)
+    /// appendix: every setting's; plastic: α̂ against 𝓗). A study whose own loads are a sweep (`min/max/count`)
     /// gives its nearest load (in ln W); otherwise the study computes exactly these.
     #[serde(default)]
     pub loads: Vec<f64>,
@@ -175,7 +180,7 @@ impl FigureDecl {
         let (study, list, fig3, pair) = match self.kind {
             Fig6 => (false, false, false, false),
             Fig2 | Fig45 => (true, false, false, false),
-            AppendixB1 | AppendixB2 | Convergence => (false, true, false, false),
+            AppendixB1 | AppendixB2 | Convergence | Plastic => (false, true, false, false),
             Fig3Fig4a => (false, false, true, false),
             LoadResolution => (false, false, false, true),
         };
@@ -222,7 +227,10 @@ impl FigureDecl {
         let invalid = |field: &str, value: String, allowed: String| {
             invalid_field(origin, name, field, value, allowed)
         };
-        let wants_loads = matches!(self.kind, Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2);
+        let wants_loads = matches!(
+            self.kind,
+            Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2 | Plastic
+        );
         if wants_loads && self.loads.is_empty() {
             return Err(invalid(
                 ".loads",
@@ -409,6 +417,12 @@ pub fn file_stems(name: &str, kind: FigureKind) -> Vec<String> {
         ],
         Fig3Fig4a => &["fig3", "fig4a"],
         Fig45 => &["fig4b", "fig5a", "fig5b", "fig45_dn_dac"],
+        Plastic => &[
+            "plastic_alpha",
+            "plastic_k",
+            "plastic_k_upscaled",
+            "plastic_saturated",
+        ],
         AppendixB1 | AppendixB2 | Convergence | LoadResolution => {
             return vec![name.to_string(), format!("{name}_convergence")]
         }
@@ -432,7 +446,7 @@ pub(super) fn check_file_names(
                         field: format!("figures.{name}"),
                         value: fig.kind.name().to_string(),
                         allowed: format!(
-                            "figure '{other}' of profile '{p}' also writes {stem}.*: the same files; a profile holds one figure of each of the kinds fig2, fig3_fig4a, fig45, fig6, and other figures are named so that their files differ"
+                            "figure '{other}' of profile '{p}' also writes {stem}.*: the same files; a profile holds one figure of each of the kinds fig2, fig3_fig4a, fig45, fig6, plastic, and other figures are named so that their files differ"
                         ),
                     });
                 }
@@ -457,6 +471,7 @@ mod tests {
             AppendixB2,
             Convergence,
             LoadResolution,
+            Plastic,
         ] {
             let parsed: FigureKind = serde_saphyr::from_str(kind.name()).unwrap();
             assert_eq!(parsed, kind);

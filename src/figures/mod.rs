@@ -16,6 +16,7 @@ pub mod convergence;
 pub mod fig2;
 pub mod fig3_4a;
 pub mod fig45;
+pub mod plastic;
 pub mod plot;
 
 use plot::{LinePlot, Panels, RasterPlot, Series};

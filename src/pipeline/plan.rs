@@ -385,6 +385,7 @@ fn figure_instances(
         FigureKind::AppendixB1 | FigureKind::AppendixB2 => appendix_instances(b, &c),
         FigureKind::Convergence => convergence_instances(b, &c),
         FigureKind::LoadResolution => load_resolution_instances(b, &c),
+        FigureKind::Plastic => plastic_instances(b, &c),
     }
 }
 
@@ -566,6 +567,38 @@ fn load_resolution_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Resu
         figure: c.name.to_string(),
     };
     b.add::<Figures>(&job, vec![audit], &studies, None, fig);
+    Ok(())
+}
+
+/// The plastic family: the settings ordered by 1/𝓗 (elastic first, at 0); inputs are
+/// each setting's statistics, then each setting's contact sweeps (the saturated nodes).
+fn plastic_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
+    let (decl, fig) = (c.decl, Some(c.name));
+
+    let inverse = |k: &StudyKeys| k.plan.hardness.map_or(0.0, |h| 1.0 / h);
+    let mut studies = c.used(&decl.studies)?;
+    studies.sort_by(|a, b| inverse(a).total_cmp(&inverse(b)));
+    let settings: Vec<StudyRef> = studies
+        .iter()
+        .map(|k| {
+            let label = match k.plan.hardness {
+                Some(h) => format!("𝓗 = {h}"),
+                None => "elastic".to_string(),
+            };
+            study_ref(k, label, inverse(k))
+        })
+        .collect();
+    let mut inputs: Vec<InputRef> = studies.iter().map(|k| k.statistics.clone()).collect();
+    let realizations = studies.iter().map(|k| k.contacts.len()).collect();
+    for k in &studies {
+        inputs.extend(k.contacts.iter().cloned());
+    }
+    let job = FigureJob::Plastic {
+        settings,
+        realizations,
+        loads: decl.loads.clone(),
+    };
+    b.add::<Figures>(&job, inputs, &names(&studies), None, fig);
     Ok(())
 }
 

@@ -82,6 +82,14 @@ pub enum FigureJob {
     },
     /// The load-resolution chart. Input: the audit.
     LoadResolution { figure: String },
+    /// The plastic family: α̂ against 1/𝓗 at `loads` (the `settings`' values), and K, 𝒦 and
+    /// the saturated fraction over each sweep. Inputs: each setting's statistics, then each
+    /// setting's contact sweeps (`realizations` of them per setting).
+    Plastic {
+        settings: Vec<StudyRef>,
+        realizations: Vec<usize>,
+        loads: Vec<f64>,
+    },
 }
 
 impl Stage for Figures {
@@ -119,6 +127,11 @@ impl Stage for Figures {
                 settings,
             } => draw::convergence::convergence(inputs, figure, *hurst, settings)?,
             FigureJob::LoadResolution { figure } => draw::fig45::load_resolution(inputs, figure)?,
+            FigureJob::Plastic {
+                settings,
+                realizations,
+                loads,
+            } => draw::plastic::plastic(inputs, settings, realizations, loads)?,
         };
         draw::write(drawn, dir)
     }

@@ -137,6 +137,10 @@ pub fn caption(stem: &str) -> &'static str {
         "figB1_convergence" | "figB2_convergence" => "Not in the paper: KS distance and exponent difference of each setting to the finest, and of the first r realizations to all, against the 0.05 tolerance that decides the sizes used elsewhere.",
         "fig128_discretisation" => "Not in the paper: the λ<sub>l</sub>/λ<sub>s</sub> = 128 study of Figs. 3–5 against one discretisation finer (λ<sub>s</sub>/Δl = 16): KS distance of the pooled areas with its 95 % critical value, exponent difference, ensemble CCDFs, realizations.",
         s if s.starts_with("fig128_convergence") => "Not in the paper: the λ<sub>l</sub>/λ<sub>s</sub> = 128 sizes against the convergence rule's reference (KS distance of the pooled areas, exponent difference, ensemble CCDFs, realizations).",
+        "plastic_alpha" => "Not in the paper: the cluster-area exponent α̂ of one λ<sub>l</sub>/λ<sub>s</sub> = 128 surface (fig3_ll128's first, at its sizes) under a perfectly plastic interface of hardness 𝓗, against E*h'<sub>rms</sub>/𝓗 (0: elastic), at three loads, by both estimators with their 95 % intervals (bootstrap of the truncated fit, profile likelihood of the paper's). The dotted line is α = 2, above which the power-law model's 𝒦 tends to a limit below 1 (the paper's §5 question).",
+        "plastic_k" => "Not in the paper: Archard's K = P(A > A*) against load for each hardness, at A* = 2 λ<sub>s</sub>² (solid) and 32 λ<sub>s</sub>² (dashed); one realization, so no band.",
+        "plastic_k_upscaled" => "Not in the paper: the up-scaled 𝒦 = A<sub>c</sub>*/A<sub>c</sub> against load for each hardness, at the two A* of the K panel.",
+        "plastic_saturated" => "Not in the paper: the share of the contact area where the pressure sits on the hardness, against load.",
         s if s.contains("load_resolution") => "Not in the paper: Figs. 4b and 5 from fewer loads, interpolated, against a finer sweep of the same realizations, in units of the 95 % band.",
         _ => "",
     }
