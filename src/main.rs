@@ -69,11 +69,14 @@ enum Command {
     /// area fraction). Areas in any one unit.
     Model(cli::tools::ModelArgs),
 
-    /// Fit α to a table of cluster areas: discrete truncated power law by maximum
-    /// likelihood, x_min by the KS criterion, a bootstrap 95 % interval; per load.
+    /// Fit α to a table of cluster areas, per load: discrete truncated power law by maximum
+    /// likelihood (x_min by the KS criterion, a bootstrap 95 % interval) and the paper's
+    /// plateau + power law (profile-likelihood interval, A_s, A_m); with --a-star the
+    /// counted K and 𝒦.
     Fit(cli::fit::FitArgs),
 
-    /// Label the contact clusters of a map, or of each map of a stack, on the periodic torus.
+    /// Label the contact clusters of a map, or of each map of a stack, on the periodic torus
+    /// (--out: one Parquet row per cluster).
     Clusters(cli::tools::ClustersArgs),
 
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).

@@ -1,4 +1,5 @@
-//! `wearcoef fit`: the exponent of a table of cluster areas, per load.
+//! `wearcoef fit`: the exponent of a table of cluster areas, per load, by both estimators
+//! (the truncated power law, and the paper's plateau + power law with its A_s and A_m).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -24,6 +25,12 @@ pub struct FitArgs {
     /// Seed of the bootstrap.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Thresholds A* in grid cells (comma separated): per load, also the counted wear
+    /// coefficients K = P(A > A*) (eq. 5) and 𝒦 = A_c*/A_c (eq. 7) of the same clusters
+    /// (percolating ones left out, as the statistics stage does). From an area in λ_s²,
+    /// multiply by (λ_s/Δl)².
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub a_star: Vec<f64>,
     #[arg(long)]
     pub json: bool,
 }
@@ -81,8 +88,20 @@ type LoadGroups = std::collections::BTreeMap<Option<u32>, (f64, Vec<u64>, usize)
 
 fn group_by_load(df: &polars::prelude::DataFrame, cells: &[u64]) -> anyhow::Result<LoadGroups> {
     use wearcoef::store::table;
+    // Any integer type (pandas writes int64): cast, refusing what is not a load index.
     let loads: Vec<Option<u32>> = match df.column("load_index") {
-        Ok(_) => table::u32_column(df, "load_index")?,
+        Ok(c) => c
+            .strict_cast(&polars::prelude::DataType::UInt32)
+            .map_err(|_| {
+                InputError(format!(
+                    "column 'load_index' ({}) must hold whole numbers from 0 to {}",
+                    c.dtype(),
+                    u32::MAX
+                ))
+            })?
+            .u32()?
+            .iter()
+            .collect(),
         Err(_) => vec![None; df.height()],
     };
     let w: Vec<f64> =
@@ -117,7 +136,7 @@ fn fit_row(
         .max()
         .ok_or(powerlaw::FitError::Empty)
         .and_then(|m| powerlaw::fit_discrete_tail(data, Some(m)).map(|t| (t, m)));
-    match fit {
+    let mut row = match fit {
         Ok((t, m)) => {
             let f = t.fit;
             let ci =
@@ -136,7 +155,21 @@ fn fit_row(
             "clusters": data.len(), "percolating_left_out": excluded,
             "alpha": null, "note": format!("no fit: {e}"),
         }),
-    }
+    };
+    // The paper's plateau + power law: its α, 95 % profile-likelihood interval, and the
+    // plateau's end A_s and cut-off A_m that `wearcoef model` takes.
+    row["plateau"] = match powerlaw::fit_plateau_power_law(data) {
+        Ok(p) => {
+            let ci = powerlaw::plateau_alpha_interval(data, &p).ok();
+            json!({
+                "alpha": p.alpha,
+                "profile_ci95_low": ci.map(|c| c.low), "profile_ci95_high": ci.map(|c| c.high),
+                "a_s_px": p.k_s, "a_m_px": p.k_m, "n_fitted": p.n,
+            })
+        }
+        Err(e) => json!({"alpha": null, "note": format!("no fit: {e}")}),
+    };
+    row
 }
 
 /// `fit`'s rows as text, one line per load.
@@ -159,6 +192,25 @@ fn print_fit_rows(out: &[serde_json::Value]) -> anyhow::Result<()> {
                 )?,
                 None => out!("{load}: {} ({} clusters)", r["note"].as_str().unwrap_or(""), r["clusters"])?,
             }
+        let p = &r["plateau"];
+        match p["alpha"].as_f64() {
+            Some(a) => out!(
+                "{load}: plateau + power law (the paper's): α = {a:.4} (95 % profile likelihood [{:.4}, {:.4}]), A_s = {:.2} px, A_m = {} px",
+                p["profile_ci95_low"].as_f64().unwrap_or(f64::NAN),
+                p["profile_ci95_high"].as_f64().unwrap_or(f64::NAN),
+                p["a_s_px"].as_f64().unwrap_or(f64::NAN),
+                p["a_m_px"],
+            )?,
+            None => out!("{load}: plateau + power law: {}", p["note"].as_str().unwrap_or(""))?,
+        }
+        for m in r["wear"].as_array().into_iter().flatten() {
+            out!(
+                "{load}: A* = {} px: K = {:.6}, 𝒦 = {:.6}",
+                m["a_star_px"],
+                m["k_archard"].as_f64().unwrap_or(f64::NAN),
+                m["k_upscaled"].as_f64().unwrap_or(f64::NAN),
+            )?;
+        }
     }
     Ok(())
 }
@@ -169,8 +221,15 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
         column,
         resamples,
         seed,
+        a_star,
         json,
     } = args;
+    if let Some(bad) = a_star.iter().find(|a| !(a.is_finite() && **a >= 0.0)) {
+        return Err(InputError(format!(
+            "--a-star {bad}: thresholds are areas in grid cells, finite and ≥ 0"
+        ))
+        .into());
+    }
     if resamples < 10 {
         return Err(InputError(format!(
             "--resamples {resamples}: at least 10 are needed for a 95 % interval"
@@ -189,7 +248,18 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     let groups = group_by_load(&df, &cells)?;
     let out: Vec<serde_json::Value> = groups
         .into_iter()
-        .map(|(load, (w, data, excluded))| fit_row(load, w, &data, excluded, resamples, seed))
+        .map(|(load, (w, data, excluded))| {
+            let mut row = fit_row(load, w, &data, excluded, resamples, seed);
+            row["wear"] = a_star
+                .iter()
+                .map(|&a| {
+                    let m = wearcoef::statistics::wear_at(&data, a);
+                    json!({"a_star_px": a, "k_archard": m.k_archard,
+                           "k_upscaled": m.k_upscaled, "area_above_px": m.area_above_px})
+                })
+                .collect();
+            row
+        })
         .collect();
     if json {
         out!("{}", serde_json::to_string(&out)?)?;

@@ -147,6 +147,66 @@ pub struct ClustersArgs {
     /// an array of them with `map_index`).
     #[arg(long)]
     pub json: bool,
+    /// Also write one row per cluster to this Parquet table, the clusters stage's columns:
+    /// `load_index` (the map's index in a stack, 0 for one map), `cluster_id`, `area_px`,
+    /// `perimeter_px`, `extent_x_px`, `extent_y_px`, `wraps_x`, `wraps_y` (the cluster joins
+    /// itself across that edge of the periodic box), `percolating`; `wearcoef fit --areas`
+    /// reads it as it is.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// One row per cluster of every map, as `clusters --out` writes them.
+#[derive(Default)]
+struct ClusterRows {
+    load_index: Vec<u32>,
+    cluster_id: Vec<u32>,
+    area_px: Vec<u64>,
+    perimeter_px: Vec<u64>,
+    extent_x_px: Vec<u32>,
+    extent_y_px: Vec<u32>,
+    wraps_x: Vec<bool>,
+    wraps_y: Vec<bool>,
+    percolating: Vec<bool>,
+}
+
+impl ClusterRows {
+    fn push(&mut self, map: usize, labelling: &clusters::Labelling) {
+        for (k, c) in labelling.clusters.iter().enumerate() {
+            self.load_index.push(map as u32);
+            self.cluster_id.push(k as u32 + 1);
+            self.area_px.push(c.area_px);
+            self.perimeter_px.push(c.perimeter_px);
+            self.extent_x_px.push(c.extent_x_px);
+            self.extent_y_px.push(c.extent_y_px);
+            self.wraps_x.push(c.wraps_x);
+            self.wraps_y.push(c.wraps_y);
+            self.percolating.push(c.percolating());
+        }
+    }
+
+    fn write(self, path: &std::path::Path) -> anyhow::Result<()> {
+        use polars::prelude::{DataFrame, ParquetWriter};
+        use wearcoef::store::table::col;
+        let mut df = DataFrame::new(
+            self.area_px.len(),
+            vec![
+                col("load_index", self.load_index),
+                col("cluster_id", self.cluster_id),
+                col("area_px", self.area_px),
+                col("perimeter_px", self.perimeter_px),
+                col("extent_x_px", self.extent_x_px),
+                col("extent_y_px", self.extent_y_px),
+                col("wraps_x", self.wraps_x),
+                col("wraps_y", self.wraps_y),
+                col("percolating", self.percolating),
+            ],
+        )?;
+        write_atomically(path, |tmp| {
+            ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
+            Ok(())
+        })
+    }
 }
 
 pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
@@ -154,9 +214,20 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
         contact,
         connectivity,
         json,
+        out,
     } = args;
     let conn = Connectivity::from_neighbours(connectivity)
         .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
+    if let Some(path) = &out {
+        if path.extension().is_none_or(|e| e != "parquet") {
+            return Err(InputError(format!(
+                "--out {}: the table is Parquet; name it FILE.parquet",
+                path.display()
+            ))
+            .into());
+        }
+        check_outputs(&[("--out", path)], &[("--contact", &contact)])?;
+    }
     // One map, or a stack of maps (one per load of a `solve --contact-out` sweep): one
     // result per map, a JSON array for a stack.
     let (_, shape) = wearcoef::io::npy_header(&contact)?;
@@ -175,9 +246,11 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
     let maps = wearcoef::io::read_contact_maps(&contact)?;
     let stacked = maps.len() > 1;
     let mut results = Vec::new();
+    let mut table = ClusterRows::default();
     for (index, (rows, cols, map, format)) in maps.into_iter().enumerate() {
         let labelling = clusters::label(&map, rows, cols, conn)
             .map_err(|e| InputError(format!("{}: {e}", contact.display())))?;
+        table.push(index, &labelling);
         let mut areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
         areas.sort_unstable_by(|a, b| b.cmp(a));
         let percolating = labelling.clusters.iter().any(|c| c.percolating());
@@ -218,6 +291,9 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
             results.remove(0)
         };
         out!("{}", serde_json::to_string(&doc)?)?;
+    }
+    if let Some(path) = &out {
+        table.write(path)?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -791,3 +791,148 @@ fn catalog_into_a_closed_pipe_exits_0() {
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
 }
+
+/// The single-stage tools chain: `solve --contact-out` → `clusters --out` → `fit`, whose
+/// table has one row per cluster of each map (the areas `--json` prints), which `fit` reads
+/// as it is and also with pandas' int64 `load_index`, reporting the paper's A_s and the
+/// counted K and 𝒦 at `--a-star`, each recomputed here from the table; a table not named
+/// `.parquet` is refused with exit 2 and nothing written.
+#[test]
+fn clusters_table_feeds_fit_with_a_s_and_counted_coefficients() {
+    use polars::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    write_surface(dir.path(), 128);
+    let run = |args: &[&str]| {
+        let out = run_in(dir.path(), args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    run(&[
+        "solve",
+        "--surface",
+        "h.npy",
+        "--loads",
+        "0.02,0.06",
+        "--contact-out",
+        "maps.npy",
+    ]);
+    let printed = stdout_json(&run(&[
+        "clusters",
+        "--contact",
+        "maps.npy",
+        "--json",
+        "--out",
+        "clusters.parquet",
+    ]));
+    let table =
+        ParquetReader::new(std::fs::File::open(dir.path().join("clusters.parquet")).unwrap())
+            .finish()
+            .unwrap();
+    let index: Vec<u32> = table
+        .column("load_index")
+        .unwrap()
+        .u32()
+        .unwrap()
+        .into_no_null_iter()
+        .collect();
+    let area: Vec<u64> = table
+        .column("area_px")
+        .unwrap()
+        .u64()
+        .unwrap()
+        .into_no_null_iter()
+        .collect();
+    let percolating: Vec<bool> = table
+        .column("percolating")
+        .unwrap()
+        .bool()
+        .unwrap()
+        .iter()
+        .map(|v| v.unwrap())
+        .collect();
+    for (m, map) in printed.as_array().unwrap().iter().enumerate() {
+        let mut mine: Vec<u64> = (0..area.len())
+            .filter(|&i| index[i] == m as u32)
+            .map(|i| area[i])
+            .collect();
+        mine.sort_unstable_by(|a, b| b.cmp(a));
+        let listed: Vec<u64> = map["areas_px"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_u64().unwrap())
+            .collect();
+        assert_eq!(mine, listed, "map {m}");
+    }
+    // pandas writes whole numbers as int64.
+    let mut wide = table.clone();
+    let cast = wide
+        .column("load_index")
+        .unwrap()
+        .cast(&DataType::Int64)
+        .unwrap();
+    wide.with_column(cast).unwrap();
+    ParquetWriter::new(std::fs::File::create(dir.path().join("int64.parquet")).unwrap())
+        .finish(&mut wide)
+        .unwrap();
+    let fits = |file: &str| {
+        stdout_json(&run(&[
+            "fit", "--areas", file, "--a-star", "4,40", "--json",
+        ]))
+    };
+    let (fit, fit64) = (fits("clusters.parquet"), fits("int64.parquet"));
+    assert_eq!(fit, fit64, "int64 load_index reads the same");
+    for (m, row) in fit.as_array().unwrap().iter().enumerate() {
+        assert_eq!(row["load_index"], m as u64);
+        let kept: Vec<u64> = (0..area.len())
+            .filter(|&i| index[i] == m as u32 && !percolating[i])
+            .map(|i| area[i])
+            .collect();
+        let total: u64 = kept.iter().sum();
+        for wear in row["wear"].as_array().unwrap() {
+            let a_star = wear["a_star_px"].as_f64().unwrap();
+            let above: Vec<u64> = kept
+                .iter()
+                .copied()
+                .filter(|&a| a as f64 > a_star)
+                .collect();
+            let k = above.len() as f64 / kept.len() as f64;
+            let kk = above.iter().sum::<u64>() as f64 / total as f64;
+            assert_eq!(
+                wear["k_archard"].as_f64().unwrap(),
+                k,
+                "map {m}, A* {a_star}"
+            );
+            assert!((wear["k_upscaled"].as_f64().unwrap() - kk).abs() <= 1e-15);
+        }
+        // The plateau's end lies within the sample, its cut-off is the largest cluster.
+        let plateau = &row["plateau"];
+        let a_s = plateau["a_s_px"].as_f64().unwrap();
+        assert_eq!(
+            plateau["a_m_px"].as_u64().unwrap(),
+            *kept.iter().max().unwrap()
+        );
+        assert!(
+            a_s >= 1.0 && a_s < plateau["a_m_px"].as_f64().unwrap(),
+            "{plateau}"
+        );
+        let (low, high) = (
+            plateau["profile_ci95_low"].as_f64().unwrap(),
+            plateau["profile_ci95_high"].as_f64().unwrap(),
+        );
+        assert!(
+            low < plateau["alpha"].as_f64().unwrap() && plateau["alpha"].as_f64().unwrap() < high
+        );
+    }
+    let out = run_in(
+        dir.path(),
+        &["clusters", "--contact", "maps.npy", "--out", "clusters.csv"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--out clusters.csv"));
+    assert!(!dir.path().join("clusters.csv").exists());
+}
