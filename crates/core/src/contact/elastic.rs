@@ -39,6 +39,26 @@ pub struct OperatorWorkspace {
     partials: Vec<f64>,
 }
 
+impl OperatorWorkspace {
+    /// A workspace of `scratch` and `columns` partial sums (one per half-spectrum column).
+    pub(crate) fn new(scratch: Fft2Scratch, columns: usize) -> Self {
+        Self {
+            scratch,
+            partials: vec![0.0; columns],
+        }
+    }
+
+    pub(crate) fn scratch_mut(&mut self) -> &mut Fft2Scratch {
+        &mut self.scratch
+    }
+
+    /// The partial sums (`columns` of them) and the scratch.
+    pub(crate) fn parts_mut(&mut self, columns: usize) -> (&mut [f64], &mut Fft2Scratch) {
+        debug_assert_eq!(self.partials.len(), columns);
+        (&mut self.partials, &mut self.scratch)
+    }
+}
+
 impl ElasticOperator {
     /// Plan the operator for `grid` and effective modulus `e_star` (> 0).
     pub fn new(grid: Grid, e_star: f64) -> Self {
@@ -275,7 +295,11 @@ impl ElasticOperator {
 /// (`m[n/2−1] … m[1]`), and the sum in four interleaved partial sums, so that the loop
 /// vectorises; the order is fixed, so the result does not depend on the thread count.
 #[inline(always)]
-fn multiply_column<T: Real>(col: &mut [Complex<T>], m: &[f64], gain: &impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn multiply_column<T: Real>(
+    col: &mut [Complex<T>],
+    m: &[f64],
+    gain: &impl Fn(f64) -> f64,
+) -> f64 {
     let n = col.len();
     let half = n / 2;
     debug_assert_eq!(m.len(), half + 1);

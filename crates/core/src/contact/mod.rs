@@ -3,6 +3,7 @@
 //! sweeps and contact-map packing ([`sweep`]) and analytic references ([`reference`]).
 
 pub mod elastic;
+pub mod padded;
 pub mod reference;
 pub mod solver;
 pub mod sweep;

@@ -2,8 +2,9 @@
 //! halves of a convolution (so that the passes over the fields run inside them), its inverse
 //! in single precision for the preconditioner, direct summation for a few point loads, and
 //! its diagonal. [`ElasticOperator`] (the periodic half-space, FFT boundary elements) is
-//! today's; a non-periodic one (a measured surface on a padded grid) implements the same
-//! trait and is given to [`super::Solver::with_constraint`].
+//! one; `crate::contact::padded::PaddedOperator` (the free-boundary half-space of a
+//! measured surface, on a zero-padded grid) is another, given to
+//! [`super::Solver::with_constraint`].
 
 use rayon::prelude::*;
 
