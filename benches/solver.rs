@@ -1,9 +1,11 @@
 //! Criterion benchmarks of the elastic operator and the contact solver on a 512² rough
-//! surface (the peer comparison with Tamaas is `make bench-peers`).
+//! surface, periodic and free-boundary (`PaddedOperator`, the same surface taken as a
+//! measured, non-periodic one); the peer comparison with Tamaas is `make bench-peers`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use wearcoef::contact::elastic::ElasticOperator;
-use wearcoef::contact::solver::{Solver, SolverConfig};
+use wearcoef::contact::padded::PaddedOperator;
+use wearcoef::contact::solver::{NonNegative, Solver, SolverConfig};
 use wearcoef::grid::Grid;
 use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceParams};
@@ -25,6 +27,7 @@ fn solver(c: &mut Criterion) {
         .unwrap()
         .heights;
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
+    let padded = PaddedOperator::new(Grid::unit(n).unwrap(), 1.0);
     let mut ws = op.make_workspace();
     let mut out = vec![0.0; n * n];
     for threads in [1usize, 2] {
@@ -54,6 +57,18 @@ fn solver(c: &mut Criterion) {
             pool.install(|| {
                 b.iter(|| {
                     let mut s = Solver::new(&op, &h).unwrap();
+                    s.solve(0.01, &cfg).unwrap()
+                })
+            })
+        });
+        group.bench_function("solve_512_w0.01_tol1e-10_cold_padded", |b| {
+            let cfg = SolverConfig {
+                tolerance: 1e-10,
+                ..SolverConfig::default()
+            };
+            pool.install(|| {
+                b.iter(|| {
+                    let mut s = Solver::with_constraint(&padded, &h, NonNegative).unwrap();
                     s.solve(0.01, &cfg).unwrap()
                 })
             })
