@@ -76,7 +76,7 @@ enum Command {
     Fit(cli::fit::FitArgs),
 
     /// Label the contact clusters of a map, or of each map of a stack, on the periodic torus
-    /// (--out: one Parquet row per cluster).
+    /// or with open edges (--open, a measured surface); --out: one Parquet row per cluster.
     Clusters(cli::tools::ClustersArgs),
 
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).

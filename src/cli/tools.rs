@@ -154,6 +154,10 @@ pub struct ClustersArgs {
     /// reads it as it is.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// The map's edges are open (a measured, non-periodic surface): clusters never join
+    /// across them and never wrap; by default the map is one period of a periodic field.
+    #[arg(long)]
+    pub open: bool,
 }
 
 /// One row per cluster of every map, as `clusters --out` writes them.
@@ -215,7 +219,13 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
         connectivity,
         json,
         out,
+        open,
     } = args;
+    let boundary = if open {
+        clusters::Boundary::Open
+    } else {
+        clusters::Boundary::Periodic
+    };
     let conn = Connectivity::from_neighbours(connectivity)
         .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
     if let Some(path) = &out {
@@ -248,7 +258,7 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
     let mut results = Vec::new();
     let mut table = ClusterRows::default();
     for (index, (rows, cols, map, format)) in maps.into_iter().enumerate() {
-        let labelling = clusters::label(&map, rows, cols, conn)
+        let labelling = clusters::label_with(&map, rows, cols, conn, boundary)
             .map_err(|e| InputError(format!("{}: {e}", contact.display())))?;
         table.push(index, &labelling);
         let mut areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();

@@ -266,3 +266,97 @@ fn random_maps_match_breadth_first_search() {
         "the sample must exercise winding clusters"
     );
 }
+
+/// Reference for open edges: breadth-first search on the rectangle, neighbours beyond the
+/// edges absent (and each border edge of a contact pixel counted in the perimeter).
+fn open_bfs(
+    contact: &[bool],
+    rows: usize,
+    cols: usize,
+    conn: Connectivity,
+) -> (Vec<u32>, Vec<Cluster>) {
+    let reach: i64 = 1;
+    let (r, c) = (rows as i64, cols as i64);
+    let inside = |y: i64, x: i64| (0..r).contains(&y) && (0..c).contains(&x);
+    let mut labels = vec![0u32; rows * cols];
+    let mut clusters = Vec::new();
+    for start in 0..rows * cols {
+        if !contact[start] || labels[start] != 0 {
+            continue;
+        }
+        let id = clusters.len() as u32 + 1;
+        let mut cl = Cluster {
+            area_px: 0,
+            perimeter_px: 0,
+            extent_x_px: 0,
+            extent_y_px: 0,
+            wraps_x: false,
+            wraps_y: false,
+        };
+        let (mut min_x, mut max_x, mut min_y, mut max_y) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
+        labels[start] = id;
+        let mut queue = VecDeque::from([start]);
+        while let Some(i) = queue.pop_front() {
+            let (py, px) = ((i / cols) as i64, (i % cols) as i64);
+            cl.area_px += 1;
+            (min_x, max_x, min_y, max_y) =
+                (min_x.min(px), max_x.max(px), min_y.min(py), max_y.max(py));
+            for (dy, dx) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                let (y, x) = (py + dy, px + dx);
+                if !inside(y, x) || !contact[(y * c + x) as usize] {
+                    cl.perimeter_px += 1;
+                }
+            }
+            for dy in -reach..=reach {
+                for dx in -reach..=reach {
+                    let diagonal = dy != 0 && dx != 0;
+                    if (dy, dx) == (0, 0) || (diagonal && conn == Connectivity::Four) {
+                        continue;
+                    }
+                    let (y, x) = (py + dy, px + dx);
+                    if !inside(y, x) {
+                        continue;
+                    }
+                    let j = (y * c + x) as usize;
+                    if contact[j] && labels[j] == 0 {
+                        labels[j] = id;
+                        queue.push_back(j);
+                    }
+                }
+            }
+        }
+        cl.extent_x_px = (max_x - min_x + 1) as u32;
+        cl.extent_y_px = (max_y - min_y + 1) as u32;
+        clusters.push(cl);
+    }
+    (labels, clusters)
+}
+
+/// Open edges: a band across the map is one cluster on the torus (winding) but, with open
+/// edges, the pixels on opposite edges stay apart; on random maps of every density, shape
+/// and both connectivities, labels and clusters equal the open breadth-first search.
+#[test]
+fn open_edges_never_join_and_match_an_open_search() {
+    use wearcoef::clusters::{label_with, Boundary};
+    let (m, r, c) = map(&["#...#", ".....", "#...#", "#...."]);
+    let torus = label_with(&m, r, c, Connectivity::Eight, Boundary::Periodic).unwrap();
+    let open = label_with(&m, r, c, Connectivity::Eight, Boundary::Open).unwrap();
+    assert_eq!(torus.clusters.len(), 1, "the corners meet on the torus");
+    assert_eq!(open.clusters.len(), 4);
+    assert!(open.clusters.iter().all(|cl| !cl.percolating()));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    for trial in 0..200 {
+        let (rows, cols) = (rng.random_range(1..40usize), rng.random_range(1..40usize));
+        let density = rng.random_range(0.05..0.95);
+        let m: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(density)).collect();
+        for conn in [Connectivity::Four, Connectivity::Eight] {
+            let l = label_with(&m, rows, cols, conn, Boundary::Open).unwrap();
+            let (labels, clusters) = open_bfs(&m, rows, cols, conn);
+            assert_eq!(l.labels, labels, "trial {trial}, {rows} × {cols}, {conn:?}");
+            assert_eq!(
+                l.clusters, clusters,
+                "trial {trial}, {rows} × {cols}, {conn:?}"
+            );
+        }
+    }
+}

@@ -1,7 +1,10 @@
-//! Connected components ("contact clusters") of a boolean map on the periodic torus.
+//! Connected components ("contact clusters") of a boolean map on the periodic torus, or of
+//! a map with open edges (a measured surface, [`Boundary::Open`]: no joins across the
+//! edges, no wrapping, the border counted in perimeters).
 //!
 //! Conventions (docs/CONVENTIONS.md):
-//! - The map is row-major `rows × cols` (row = y, column = x), periodic in both directions.
+//! - The map is row-major `rows × cols` (row = y, column = x), periodic in both directions
+//!   unless [`label_with`] says [`Boundary::Open`].
 //! - Connectivity 8 (default, as the paper's flood fill) links the 8 surrounding pixels,
 //!   including diagonal ones; connectivity 4 links edge neighbours only.
 //! - Cluster ids are `1, 2, …` in the order in which a row-major scan first meets a pixel
@@ -238,10 +241,33 @@ pub fn label(
     cols: usize,
     connectivity: Connectivity,
 ) -> Result<Labelling, ClusterError> {
+    label_with(contact, rows, cols, connectivity, Boundary::Periodic)
+}
+
+/// What lies beyond the map's edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Boundary {
+    /// The map is one period of a periodic field (a generated surface): clusters join
+    /// across the edges, and one that winds around the box is flagged.
+    Periodic,
+    /// Nothing is known beyond the edges (a measured surface): clusters never join across
+    /// them, never wrap, and a cluster's edge on the map's border counts in its perimeter.
+    Open,
+}
+
+/// [`label`] with the map's `boundary` stated.
+pub fn label_with(
+    contact: &[bool],
+    rows: usize,
+    cols: usize,
+    connectivity: Connectivity,
+    boundary: Boundary,
+) -> Result<Labelling, ClusterError> {
     check_shape(contact, rows, cols)?;
     let eight = connectivity == Connectivity::Eight;
+    let periodic = boundary == Boundary::Periodic;
     let (runs, row_start) = find_runs(contact, rows, cols);
-    let (mut forest, pairs) = join_runs(&runs, &row_start, rows, cols, eight);
+    let (mut forest, pairs) = join_runs(&runs, &row_start, (rows, cols), eight, periodic);
     let (labels, clusters) = collect_clusters(&runs, &mut forest, &pairs, rows, cols);
     Ok(Labelling {
         rows,
@@ -270,15 +296,15 @@ fn check_shape(contact: &[bool], rows: usize, cols: usize) -> Result<(), Cluster
 }
 
 /// The union–find over runs: runs of consecutive rows joined where they touch (overlap, or
-/// also touch at a corner for 8-connectivity), across the periodic edges with the shift of
-/// the periodic copy; and per run its adjacent pixel pairs (4-neighbour edges inside
+/// also touch at a corner for 8-connectivity), across the periodic edges (if `periodic`)
+/// with the shift of the periodic copy; and per run its adjacent pixel pairs (4-neighbour edges inside
 /// contact), for perimeters.
 fn join_runs(
     runs: &[Run],
     row_start: &[usize],
-    rows: usize,
-    cols: usize,
+    (rows, cols): (usize, usize),
     eight: bool,
+    periodic: bool,
 ) -> (ShiftForest, Vec<u64>) {
     let last_col = (cols - 1) as u32;
     let mut forest = ShiftForest::new(runs.len());
@@ -291,7 +317,7 @@ fn join_runs(
         for r in a..b {
             pairs[r] += (runs[r].x1 - runs[r].x0) as u64;
         }
-        if b > a && runs[b - 1].x1 == last_col && runs[a].x0 == 0 {
+        if periodic && b > a && runs[b - 1].x1 == last_col && runs[a].x0 == 0 {
             pairs[b - 1] += 1;
             forest.union((b - 1) as u32, a as u32, (1, 0));
         }
@@ -323,7 +349,7 @@ fn join_runs(
                 j += 1;
             }
         }
-        if eight {
+        if eight && periodic {
             // (ya, last column) – (yb, first column), and (ya, first) – (yb, last).
             if runs[a1 - 1].x1 == last_col && runs[b0].x0 == 0 {
                 forest.union((a1 - 1) as u32, b0 as u32, (1, dy));
@@ -336,7 +362,9 @@ fn join_runs(
     for y in 1..rows {
         join_rows(y - 1, y, 0, &mut forest);
     }
-    join_rows(rows - 1, 0, 1, &mut forest);
+    if periodic {
+        join_rows(rows - 1, 0, 1, &mut forest);
+    }
 
     (forest, pairs)
 }
