@@ -35,3 +35,4 @@ pub mod powerlaw;
 pub mod spectral;
 pub mod statistics;
 pub mod surface;
+pub mod topography;

@@ -1,0 +1,355 @@
+//! A measured topography: heights on a rectangular grid with its pixel sizes, not periodic,
+//! possibly with missing points, and its preparation before contact — the form removed
+//! (mean, plane or curvature, by least squares) and the missing points counted. Lengths are
+//! in metres (docs/CONVENTIONS.md); readers convert to them.
+
+use thiserror::Error;
+
+/// Heights `h[y · cols + x]` (metres, NaN where the instrument recorded nothing) with pixel
+/// sizes `dx`, `dy` (metres).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Topography {
+    pub rows: usize,
+    pub cols: usize,
+    pub dx: f64,
+    pub dy: f64,
+    pub heights: Vec<f64>,
+}
+
+/// The form removed by [`Topography::remove_form`]: the least-squares polynomial in `x`,
+/// `y` of that degree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Form {
+    /// The mean height (degree 0).
+    Mean,
+    /// A tilted plane `a + b x + c y` (degree 1, the usual levelling).
+    Plane,
+    /// A quadric `a + b x + c y + d x² + e x y + f y²` (degree 2: a curved sample).
+    Curvature,
+}
+
+#[derive(Debug, Error, PartialEq)]
+pub enum TopographyError {
+    #[error("{rows} × {cols} heights given {got} values")]
+    BadLength {
+        rows: usize,
+        cols: usize,
+        got: usize,
+    },
+    #[error("pixel sizes must be finite and positive, got dx = {dx}, dy = {dy}")]
+    BadPixel { dx: f64, dy: f64 },
+    #[error(
+        "{missing} of {total} points are missing (NaN), the first at row {row}, column {col}; \
+         choose a fill rule, or crop them away"
+    )]
+    Missing {
+        missing: usize,
+        total: usize,
+        row: usize,
+        col: usize,
+    },
+    #[error("{value} at row {row}, column {col} is not a height (infinite)")]
+    Infinite { row: usize, col: usize, value: f64 },
+    #[error("the form cannot be fitted: {why}")]
+    Singular { why: String },
+}
+
+impl Topography {
+    /// Checks the shape and the pixel sizes; missing points (NaN) are allowed here and
+    /// counted by [`Self::missing`].
+    pub fn new(
+        rows: usize,
+        cols: usize,
+        dx: f64,
+        dy: f64,
+        heights: Vec<f64>,
+    ) -> Result<Self, TopographyError> {
+        if heights.len() != rows * cols || rows == 0 || cols == 0 {
+            return Err(TopographyError::BadLength {
+                rows,
+                cols,
+                got: heights.len(),
+            });
+        }
+        if !(dx.is_finite() && dx > 0.0 && dy.is_finite() && dy > 0.0) {
+            return Err(TopographyError::BadPixel { dx, dy });
+        }
+        if let Some(i) = heights.iter().position(|h| h.is_infinite()) {
+            return Err(TopographyError::Infinite {
+                row: i / cols,
+                col: i % cols,
+                value: heights[i],
+            });
+        }
+        Ok(Self {
+            rows,
+            cols,
+            dx,
+            dy,
+            heights,
+        })
+    }
+
+    /// How many points are missing (NaN).
+    pub fn missing(&self) -> usize {
+        self.heights.iter().filter(|h| h.is_nan()).count()
+    }
+
+    /// An error naming the count and the first missing point, if any is missing.
+    pub fn refuse_missing(&self) -> Result<(), TopographyError> {
+        match self.heights.iter().position(|h| h.is_nan()) {
+            None => Ok(()),
+            Some(i) => Err(TopographyError::Missing {
+                missing: self.missing(),
+                total: self.heights.len(),
+                row: i / self.cols,
+                col: i % self.cols,
+            }),
+        }
+    }
+
+    /// Subtracts the least-squares `form` fitted to the present points (missing ones stay
+    /// missing) and returns its coefficients in the order of [`Form`]'s terms, for
+    /// coordinates `x = (col − (cols − 1)/2)·dx`, `y = (row − (rows − 1)/2)·dy` (metres
+    /// from the centre).
+    pub fn remove_form(&mut self, form: Form) -> Result<Vec<f64>, TopographyError> {
+        let terms = match form {
+            Form::Mean => 1,
+            Form::Plane => 3,
+            Form::Curvature => 6,
+        };
+        let (cx, cy) = (
+            0.5 * (self.cols - 1) as f64 * self.dx,
+            0.5 * (self.rows - 1) as f64 * self.dy,
+        );
+        // Fitted in coordinates scaled to the half-widths (a well-conditioned system
+        // whatever the unit), the coefficients converted back to metres at the end.
+        let (sx, sy) = (cx.max(self.dx), cy.max(self.dy));
+        let basis = |row: usize, col: usize| -> [f64; 6] {
+            let (x, y) = (
+                (col as f64 * self.dx - cx) / sx,
+                (row as f64 * self.dy - cy) / sy,
+            );
+            [1.0, x, y, x * x, x * y, y * y]
+        };
+        // Normal equations, accumulated row by row in a fixed order.
+        let mut a = vec![0.0; terms * terms];
+        let mut b = vec![0.0; terms];
+        for row in 0..self.rows {
+            for col in 0..self.cols {
+                let h = self.heights[row * self.cols + col];
+                if h.is_nan() {
+                    continue;
+                }
+                let f = basis(row, col);
+                for i in 0..terms {
+                    b[i] += f[i] * h;
+                    for j in 0..terms {
+                        a[i * terms + j] += f[i] * f[j];
+                    }
+                }
+            }
+        }
+        let c =
+            solve_symmetric(&mut a, &mut b, terms).ok_or_else(|| TopographyError::Singular {
+                why: format!(
+                    "{} present points do not determine a {form:?} (too few, or all on a line)",
+                    self.heights.len() - self.missing()
+                ),
+            })?;
+        for row in 0..self.rows {
+            for col in 0..self.cols {
+                let f = basis(row, col);
+                let fit: f64 = (0..terms).map(|i| c[i] * f[i]).sum();
+                self.heights[row * self.cols + col] -= fit;
+            }
+        }
+        let unscale = [
+            1.0,
+            1.0 / sx,
+            1.0 / sy,
+            1.0 / (sx * sx),
+            1.0 / (sx * sy),
+            1.0 / (sy * sy),
+        ];
+        Ok(c.iter().zip(unscale).map(|(c, u)| c * u).collect())
+    }
+
+    /// The rms slope `√⟨(∂h/∂x)² + (∂h/∂y)²⟩` by forward differences over the pairs of
+    /// present neighbours (no wrap-around: the map is not periodic). Dimensionless.
+    pub fn rms_slope(&self) -> f64 {
+        let (mut sx, mut nx, mut sy, mut ny) = (0.0, 0usize, 0.0, 0usize);
+        for row in 0..self.rows {
+            for col in 0..self.cols {
+                let h = self.heights[row * self.cols + col];
+                if col + 1 < self.cols {
+                    let d = (self.heights[row * self.cols + col + 1] - h) / self.dx;
+                    if d.is_finite() {
+                        (sx, nx) = (sx + d * d, nx + 1);
+                    }
+                }
+                if row + 1 < self.rows {
+                    let d = (self.heights[(row + 1) * self.cols + col] - h) / self.dy;
+                    if d.is_finite() {
+                        (sy, ny) = (sy + d * d, ny + 1);
+                    }
+                }
+            }
+        }
+        let mean = |s: f64, n: usize| if n > 0 { s / n as f64 } else { 0.0 };
+        (mean(sx, nx) + mean(sy, ny)).sqrt()
+    }
+}
+
+/// Solves `A c = b` (`A` symmetric positive definite, `n × n`) by Cholesky; `None` if `A`
+/// is singular to rounding.
+fn solve_symmetric(a: &mut [f64], b: &mut [f64], n: usize) -> Option<Vec<f64>> {
+    let scale = (0..n).map(|i| a[i * n + i]).fold(0.0f64, f64::max);
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        // Also refuses a NaN pivot.
+        if d.is_nan() || d <= 1e-12 * scale {
+            return None;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = s / d;
+        }
+    }
+    // L y = b, then Lᵀ c = y.
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= a[i * n + k] * b[k];
+        }
+        b[i] = s / a[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= a[k * n + i] * b[k];
+        }
+        b[i] = s / a[i * n + i];
+    }
+    Some(b.to_vec())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field with a known form added to a zero-mean pattern orthogonal to it is returned
+    /// to that pattern, the form's coefficients recovered; missing points are left out of
+    /// the fit and stay missing.
+    fn pattern(rows: usize, cols: usize) -> Vec<f64> {
+        // A product of sines with whole periods in both directions: orthogonal to 1, x, y
+        // and the quadrics on the grid only approximately, so the fitted form is compared
+        // with a tolerance; on the form alone it must be exact.
+        (0..rows * cols)
+            .map(|i| {
+                let (r, c) = ((i / cols) as f64, (i % cols) as f64);
+                1e-7 * (2.0 * std::f64::consts::PI * 3.0 * c / cols as f64).sin()
+                    * (2.0 * std::f64::consts::PI * 2.0 * r / rows as f64).sin()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn removes_each_form_exactly() {
+        let (rows, cols, dx, dy) = (30, 47, 2e-7, 3e-7);
+        let truth = [4e-6, 0.02, -0.01, 3e3, -1e3, 2e3];
+        for (form, terms) in [(Form::Mean, 1), (Form::Plane, 3), (Form::Curvature, 6)] {
+            let (cx, cy) = (0.5 * (cols - 1) as f64 * dx, 0.5 * (rows - 1) as f64 * dy);
+            let heights: Vec<f64> = (0..rows * cols)
+                .map(|i| {
+                    let (x, y) = ((i % cols) as f64 * dx - cx, (i / cols) as f64 * dy - cy);
+                    let f = [1.0, x, y, x * x, x * y, y * y];
+                    (0..terms).map(|k| truth[k] * f[k]).sum()
+                })
+                .collect();
+            let mut t = Topography::new(rows, cols, dx, dy, heights).unwrap();
+            t.heights[17] = f64::NAN;
+            let c = t.remove_form(form).unwrap();
+            for k in 0..terms {
+                assert!(
+                    (c[k] - truth[k]).abs() <= 1e-9 * truth[k].abs(),
+                    "{form:?} term {k}: {} vs {}",
+                    c[k],
+                    truth[k]
+                );
+            }
+            let worst = t
+                .heights
+                .iter()
+                .filter(|h| !h.is_nan())
+                .fold(0.0f64, |m, h| m.max(h.abs()));
+            assert!(worst <= 1e-18, "{form:?}: residual {worst}");
+            assert!(t.heights[17].is_nan());
+        }
+        // On a pattern plus a tilt, the plane removal leaves the pattern to within its
+        // small overlap with the plane.
+        let p = pattern(rows, cols);
+        let tilted: Vec<f64> = p
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.05 * (i % cols) as f64 * dx)
+            .collect();
+        let mut t = Topography::new(rows, cols, dx, dy, tilted).unwrap();
+        let c = t.remove_form(Form::Plane).unwrap();
+        assert!((c[1] - 0.05).abs() < 1e-3, "slope {}", c[1]);
+    }
+
+    /// A plane's rms slope is the norm of its gradient; missing points and a singular fit
+    /// are errors naming what is wrong.
+    #[test]
+    fn rms_slope_and_errors() {
+        let (rows, cols) = (9, 12);
+        let heights: Vec<f64> = (0..rows * cols)
+            .map(|i| 0.3 * (i % cols) as f64 * 1e-6 - 0.4 * (i / cols) as f64 * 2e-6)
+            .collect();
+        let mut t = Topography::new(rows, cols, 1e-6, 2e-6, heights).unwrap();
+        assert!((t.rms_slope() - 0.5).abs() < 1e-12, "{}", t.rms_slope());
+        assert!(t.refuse_missing().is_ok());
+        t.heights[2 * cols + 5] = f64::NAN;
+        t.heights[7 * cols + 1] = f64::NAN;
+        assert_eq!(
+            t.refuse_missing(),
+            Err(TopographyError::Missing {
+                missing: 2,
+                total: rows * cols,
+                row: 2,
+                col: 5
+            })
+        );
+        assert!(
+            (t.rms_slope() - 0.5).abs() < 1e-12,
+            "missing pairs are skipped"
+        );
+        let line = Topography::new(1, 5, 1.0, 1.0, vec![0.0, 1.0, 2.0, 3.0, 4.0]).unwrap();
+        assert!(matches!(
+            line.clone().remove_form(Form::Plane),
+            Err(TopographyError::Singular { .. })
+        ));
+        assert!(matches!(
+            Topography::new(2, 2, 1.0, 1.0, vec![0.0, f64::INFINITY, 0.0, 0.0]),
+            Err(TopographyError::Infinite { row: 0, col: 1, .. })
+        ));
+        assert!(matches!(
+            Topography::new(2, 2, 0.0, 1.0, vec![0.0; 4]),
+            Err(TopographyError::BadPixel { .. })
+        ));
+        assert!(matches!(
+            Topography::new(2, 3, 1.0, 1.0, vec![0.0; 4]),
+            Err(TopographyError::BadLength { .. })
+        ));
+    }
+}
