@@ -144,6 +144,101 @@ pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
     Ok((rows, values))
 }
 
+/// Read a 2-D `.npy` map of heights of any shape, float32 or float64 (either byte order, C
+/// or Fortran order), as `(rows, cols, values row-major in f64)`; NaN stays NaN (a missing
+/// point). The header is checked first: another type or rank is refused with what it holds.
+pub fn read_map_npy(path: &Path) -> Result<(usize, usize, Vec<f64>), IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let (descr, shape) = npy_header(path)?;
+    if shape.len() != 2 || shape[0] == 0 || shape[1] == 0 {
+        return Err(err(format!(
+            "holds an array of shape ({}), not a non-empty 2-D map of heights",
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    let row_major = |a: Array2<f64>| -> Vec<f64> {
+        if a.is_standard_layout() {
+            a.into_raw_vec_and_offset().0
+        } else {
+            a.iter().copied().collect()
+        }
+    };
+    let values = match &descr[1..] {
+        "f8" => {
+            row_major(read_npy(path).map_err(|e| err(format!("cannot be read as float64 ({e})")))?)
+        }
+        "f4" => {
+            let a: Array2<f32> =
+                read_npy(path).map_err(|e| err(format!("cannot be read as float32 ({e})")))?;
+            row_major(a.mapv(f64::from))
+        }
+        _ => {
+            return Err(err(format!(
+                "holds values of type '{descr}', not float32 or float64 heights"
+            )))
+        }
+    };
+    Ok((shape[0], shape[1], values))
+}
+
+/// Read a plain-text matrix of heights: one row of the map per line, values separated by
+/// spaces, tabs, commas or semicolons; blank lines and lines starting with `#` or `%` are
+/// skipped; `nan` (any case) is a missing point. Every row must have the same length.
+pub fn read_map_text(path: &Path) -> Result<(usize, usize, Vec<f64>), IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| err(format!("cannot be read as text ({e})")))?;
+    let (mut values, mut cols, mut rows) = (Vec::new(), None, 0usize);
+    for (line_no, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') || line.starts_with('%') {
+            continue;
+        }
+        let before = values.len();
+        for token in line
+            .split(|c: char| c.is_whitespace() || c == ',' || c == ';')
+            .filter(|t| !t.is_empty())
+        {
+            let v: f64 = token
+                .parse()
+                .map_err(|_| err(format!("line {}: '{token}' is not a number", line_no + 1)))?;
+            if v.is_infinite() {
+                return Err(err(format!(
+                    "line {}: '{token}' is not a height",
+                    line_no + 1
+                )));
+            }
+            values.push(v);
+        }
+        let n = values.len() - before;
+        match cols {
+            None => cols = Some(n),
+            Some(c) if c != n => {
+                return Err(err(format!(
+                    "line {} has {n} values where the rows before have {c}: not a matrix",
+                    line_no + 1
+                )))
+            }
+            _ => {}
+        }
+        rows += 1;
+    }
+    match cols {
+        Some(c) if c > 0 => Ok((rows, c, values)),
+        _ => Err(err("holds no heights".into())),
+    }
+}
+
 /// Write any float64 array of the given shape (C order) as `.npy`.
 pub fn write_f64(path: &Path, shape: &[usize], values: Vec<f64>) -> Result<(), IoError> {
     write_array(path, shape, values)

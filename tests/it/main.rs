@@ -18,6 +18,7 @@ mod store_cli;
 mod store_integrity;
 mod submit;
 mod surface;
+mod topography;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

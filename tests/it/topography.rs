@@ -1,0 +1,112 @@
+//! Measured maps read from plain files: `.npy` of any 2-D shape in float32 or float64 (C or
+//! Fortran order), and text matrices; each bad file refused naming it and what is wrong.
+
+use ndarray::{Array2, ShapeBuilder};
+use wearcoef::io::{read_map_npy, read_map_text};
+
+/// A 5 × 7 map with a missing point: row-major values `(r, c) ↦ r − 0.25 c`.
+fn expected() -> Vec<f64> {
+    let mut v: Vec<f64> = (0..35)
+        .map(|i| (i / 7) as f64 - 0.25 * (i % 7) as f64)
+        .collect();
+    v[9] = f64::NAN;
+    v
+}
+
+fn same(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x == y || (x.is_nan() && y.is_nan()))
+}
+
+#[test]
+fn npy_maps_of_any_shape_and_float_type() {
+    let dir = tempfile::tempdir().unwrap();
+    let want = expected();
+    let c64 = Array2::from_shape_vec((5, 7), want.clone()).unwrap();
+    let f64_fortran = {
+        let mut a = Array2::<f64>::zeros((5, 7).f());
+        a.assign(&c64);
+        a
+    };
+    let c32 = c64.mapv(|v| v as f32);
+    for (name, write) in [
+        (
+            "c64.npy",
+            Box::new(|p: &std::path::Path| ndarray_npy::write_npy(p, &c64))
+                as Box<dyn Fn(&std::path::Path) -> Result<(), ndarray_npy::WriteNpyError>>,
+        ),
+        (
+            "f64.npy",
+            Box::new(|p: &std::path::Path| ndarray_npy::write_npy(p, &f64_fortran)),
+        ),
+        (
+            "c32.npy",
+            Box::new(|p: &std::path::Path| ndarray_npy::write_npy(p, &c32)),
+        ),
+    ] {
+        let path = dir.path().join(name);
+        write(&path).unwrap();
+        let (rows, cols, values) = read_map_npy(&path).unwrap();
+        assert_eq!((rows, cols), (5, 7), "{name}");
+        assert!(same(&values, &want), "{name}: {values:?}");
+    }
+    // A 3-D array and integers are refused, naming the file and what it holds.
+    let cube = dir.path().join("cube.npy");
+    ndarray_npy::write_npy(&cube, &ndarray::Array3::<f64>::zeros((2, 3, 4))).unwrap();
+    let e = read_map_npy(&cube).unwrap_err().to_string();
+    assert!(
+        e.contains("cube.npy") && e.contains("shape (2, 3, 4)"),
+        "{e}"
+    );
+    let ints = dir.path().join("ints.npy");
+    ndarray_npy::write_npy(&ints, &Array2::<i32>::zeros((3, 3))).unwrap();
+    let e = read_map_npy(&ints).unwrap_err().to_string();
+    assert!(
+        e.contains("ints.npy") && e.contains("not float32 or float64"),
+        "{e}"
+    );
+}
+
+#[test]
+fn text_matrices_with_comments_separators_and_missing_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let want = expected();
+    let mut text = String::from("# a profilometer export\n% units: m\n\n");
+    for r in 0..5 {
+        let row: Vec<String> = (0..7)
+            .map(|c| {
+                let v = want[r * 7 + c];
+                if v.is_nan() {
+                    "NaN".to_string()
+                } else {
+                    format!("{v}")
+                }
+            })
+            .collect();
+        // Mixed separators, as exports write them.
+        text += &row.join(if r % 2 == 0 { "\t" } else { ", " });
+        text += "\n";
+    }
+    let path = dir.path().join("map.txt");
+    std::fs::write(&path, &text).unwrap();
+    let (rows, cols, values) = read_map_text(&path).unwrap();
+    assert_eq!((rows, cols), (5, 7));
+    assert!(same(&values, &want), "{values:?}");
+    for (name, body, says) in [
+        (
+            "ragged.txt",
+            "1 2 3\n4 5\n",
+            "line 2 has 2 values where the rows before have 3",
+        ),
+        ("word.txt", "1 2\n3 x\n", "line 2: 'x' is not a number"),
+        ("inf.txt", "1 inf\n", "'inf' is not a height"),
+        ("empty.txt", "# nothing\n", "holds no heights"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, body).unwrap();
+        let e = read_map_text(&path).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(says), "{name}: {e}");
+    }
+}
