@@ -81,6 +81,11 @@ enum Command {
 
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).
     Surface(cli::tools::SurfaceArgs),
+
+    /// Prepare a measured map: read it (.npy or text), state its units, refuse missing
+    /// points, remove its form (mean, plane or curvature) and report its rms height and
+    /// slope; -o writes the prepared heights in metres.
+    Topography(cli::topography::TopographyArgs),
 }
 
 fn main() -> ExitCode {
@@ -152,6 +157,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Clusters(args) => cli::tools::clusters(args),
         Command::Fit(args) => cli::fit::fit(args),
         Command::Surface(args) => cli::tools::surface(args),
+        Command::Topography(args) => cli::topography::topography(args),
     }?;
     std::io::stdout().flush().ok();
     Ok(code)

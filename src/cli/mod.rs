@@ -23,6 +23,7 @@ pub mod plan;
 pub mod store;
 pub mod submit;
 pub mod tools;
+pub mod topography;
 
 #[derive(clap::Args, Clone)]
 pub struct StoreArgs {

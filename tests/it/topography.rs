@@ -110,3 +110,84 @@ fn text_matrices_with_comments_separators_and_missing_points() {
         assert!(e.contains(name) && e.contains(says), "{name}: {e}");
     }
 }
+
+/// `wearcoef topography`: a tilted map in µm with 0.5 µm pixels has its plane removed (the
+/// tilt recovered as a slope, the prepared heights in metres), and its rms slope is that of
+/// the pattern left; a missing point, or a format not read, is exit 2 naming the file.
+#[test]
+fn topography_command_states_units_and_removes_the_plane() {
+    use crate::{run_in, stdout_json};
+    let dir = tempfile::tempdir().unwrap();
+    let (rows, cols) = (40, 60);
+    // Heights in µm: a tilt of 0.01 µm per pixel in x plus ridges along x, ±0.1 µm in rows
+    // of the pattern + − − + (orthogonal to 1, x and y on 40 rows, so the plane fit is the
+    // tilt alone).
+    let pattern = |r: usize| if matches!(r % 4, 0 | 3) { 0.1 } else { -0.1 };
+    let mut map = Array2::<f64>::zeros((rows, cols));
+    for ((r, c), v) in map.indexed_iter_mut() {
+        *v = 0.01 * c as f64 + pattern(r);
+    }
+    ndarray_npy::write_npy(dir.path().join("map.npy"), &map).unwrap();
+    let out = run_in(
+        dir.path(),
+        &[
+            "topography",
+            "--input",
+            "map.npy",
+            "--height-unit",
+            "um",
+            "--pixel-size",
+            "0.5",
+            "-o",
+            "prep.npy",
+            "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = stdout_json(&out);
+    let slope_x = v["form_coefficients_m"][1].as_f64().unwrap();
+    assert!((slope_x - 0.02).abs() < 1e-12, "tilt {slope_x}");
+    // Left: the ridges. Of the 39 pairs of rows 0.5 µm apart, 20 differ by 0.2 µm, none
+    // along x: rms slope √(20 · 0.4² / 39).
+    let rms_slope = v["rms_slope"].as_f64().unwrap();
+    let expected = (20.0 * 0.16 / 39.0f64).sqrt();
+    assert!(
+        (rms_slope - expected).abs() < 1e-9,
+        "rms slope {rms_slope} vs {expected}"
+    );
+    let prepared: Array2<f64> = ndarray_npy::read_npy(dir.path().join("prep.npy")).unwrap();
+    assert_eq!(prepared.dim(), (rows, cols));
+    assert!(
+        (prepared[[0, 0]] - 0.1e-6).abs() < 1e-15,
+        "{}",
+        prepared[[0, 0]]
+    );
+    let mut holes = map.clone();
+    holes[[3, 4]] = f64::NAN;
+    ndarray_npy::write_npy(dir.path().join("holes.npy"), &holes).unwrap();
+    std::fs::write(dir.path().join("map.x3p"), b"PK").unwrap();
+    for (file, says) in [
+        ("holes.npy", "1 of 2400 points are missing"),
+        ("map.x3p", "not read yet"),
+    ] {
+        let out = run_in(
+            dir.path(),
+            &[
+                "topography",
+                "--input",
+                file,
+                "--height-unit",
+                "um",
+                "--pixel-size",
+                "0.5",
+            ],
+        );
+        assert_eq!(out.status.code(), Some(2), "{file}");
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(e.contains(file) && e.contains(says), "{e}");
+    }
+}
