@@ -106,10 +106,16 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
         | "x_quantity" | "y_quantity" | "status" | "error_message" | "state" | "failure"
         | "solver_status" => "text",
         "last_error" => "1 (relative complementarity error)",
-        "converged" | "percolating" | "at_transition" | "within_rule" | "cached" => "boolean",
+        "converged" | "percolating" | "at_transition" | "within_rule" | "cached" | "saturated" => {
+            "boolean"
+        }
         // Loads and pressures.
         "w_over_w0" | "count_peak_w_over_w0" => "W₀ = E*·h′rms·L²",
-        "mean_pressure" => "E*",
+        "mean_pressure" | "hardness_pressure" => "E*",
+        // The hardness 𝓗 of a study, in the units of W/W0 (p̄/𝓗 = (W/W0)/hardness).
+        "hardness" => "E*·h′rms",
+        "inverse_hardness" => "1 (E*·h′rms/𝓗; 0: elastic)",
+        "w_over_w0_solved" => "W₀ = E*·h′rms·L²",
         // Areas, lengths and counts on the grid.
         "area_px" | "width_px" | "k_min_px" | "k_max_px" | "k_s_px" | "n_contact_px" => {
             "Δl² (grid cells)"

@@ -69,6 +69,10 @@ CONVERGENCE = [
     ("w_over_w0", F64), ("n_clusters", U64), ("n_clusters_reference", U64),
     ("ks_distance", F64), ("ks_critical_95", F64), ("alpha", F64), ("alpha_reference", F64),
     ("alpha_difference", F64), ("alpha_estimator", STR)]
+PLASTIC_ALPHA = [
+    ("study", STR), ("inverse_hardness", F64), ("w_over_w0", F64), ("w_over_w0_solved", F64),
+    ("estimator", STR), ("alpha", F64), ("ci95_low", F64), ("ci95_high", F64),
+    ("k_max_over_ls2", F64), ("n_fitted", U64)]
 FIG2_CONVERGENCE = [("realizations", U32)] + [
     (f"{q}_{m}", F64) for m in ["max_rel_deviation", "max_rel_ci95"]
     for q in ["area", "count", "largest"]] + [
@@ -364,7 +368,11 @@ def main(data_dir, profile):
     # Contact: loads table, one packed map per load, pressure fields where kept.
     contact_loads = {}
     for _, r in rows("contact", "loads.parquet").iterrows():
-        check_schema(r.path, SCHEMAS[("contact", "loads.parquet")])
+        # Under a hardness (docs/CONVENTIONS.md) the table also holds the ceiling and the
+        # saturated nodes, and each saturated map is packed as the contact map is.
+        plastic = "hardness_pressure" in pq.read_schema(r.path).names
+        check_schema(r.path, SCHEMAS[("contact", "loads.parquet")]
+                     + ([("hardness_pressure", F64), ("n_saturated_px", U64)] if plastic else []))
         df = pd.read_parquet(r.path)
         parquet_files += 1
         d = os.path.dirname(r.path)
@@ -381,6 +389,13 @@ def main(data_dir, profile):
             check(unpacked_count(m, n) == int(df["n_contact_px"].iloc[i]),
                   f"{d}/{f}: {unpacked_count(m, n)} contact pixels, table says "
                   f"{df['n_contact_px'].iloc[i]}")
+            if plastic:
+                sf = os.path.join(d, f.replace("contact_", "saturated_"))
+                s = np.load(sf)
+                check(unpacked_count(s, n) == int(df["n_saturated_px"].iloc[i])
+                      and df["n_saturated_px"].iloc[i] <= df["n_contact_px"].iloc[i],
+                      f"{sf}: {unpacked_count(s, n)} saturated pixels, table says "
+                      f"{df['n_saturated_px'].iloc[i]} of {df['n_contact_px'].iloc[i]} in contact")
             pf = os.path.join(d, f.replace("contact_", "pressure_"))
             if os.path.exists(pf):
                 p = np.load(pf)
@@ -514,6 +529,24 @@ def main(data_dir, profile):
                 return pd.read_parquet(path) if os.path.exists(path) else None
 
             check_load_resolution(r.path, wear_of)
+        elif r.file == "plastic_alpha.parquet":
+            # The plastic family's fits: each the statistics stage's own at the solved load.
+            check_schema(r.path, PLASTIC_ALPHA)
+            parquet_files += 1
+            df = pd.read_parquet(r.path)
+            check(len(df) > 0 and (df["inverse_hardness"] >= 0).all(),
+                  f"{r.path}: no rows, or a negative 1/hardness")
+            for study, group in df.groupby("study"):
+                src = rows("statistics", "alpha.parquet", study=study)
+                if not check(len(src) == 1, f"{r.path}: {study} has {len(src)} alpha tables"):
+                    continue
+                alpha = pd.read_parquet(src.path.iloc[0])
+                for _, f in group.iterrows():
+                    same = alpha[(alpha["w_over_w0"] == f["w_over_w0_solved"])
+                                 & (alpha["estimator"] == f["estimator"])]
+                    check(len(same) == 1 and (same["alpha"].iloc[0] == f["alpha"]
+                                              or (pd.isna(same["alpha"].iloc[0]) and pd.isna(f["alpha"]))),
+                          f"{r.path}: {study} {f['estimator']} at {f['w_over_w0_solved']} is not the stored fit")
         elif r.file == "fig2_convergence.parquet":
             check_schema(r.path, FIG2_CONVERGENCE)
             parquet_files += 1
