@@ -22,6 +22,8 @@ use crate::spectral::{Fft2, Fft2Scratch, Real};
 /// `u = K p` on the `n × n` window of a free-boundary half-space.
 pub struct PaddedOperator {
     grid: Grid,
+    /// The padded `2n` grid (the half spectrum's column weights).
+    padded: Grid,
     e_star: f64,
     /// Plans on the padded `2n` grid (double, and single for the inverse).
     fft: Fft2,
@@ -95,6 +97,7 @@ impl PaddedOperator {
         }
         Self {
             grid,
+            padded: Grid::unit(big).expect("an even side"),
             e_star,
             fft,
             fft_single: Fft2::new(big),
@@ -163,7 +166,7 @@ impl PaddedOperator {
         F: Fn(&mut S, usize, &mut [T]) + Sync,
     {
         let (n, rpb, h) = (self.grid.n(), self.rows_per_block(), self.grid.n() + 1);
-        let big = Grid::unit(2 * n).expect("an even side");
+        let big = &self.padded;
         let (partials, scratch) = ws.parts_mut(h);
         fft.convolve_start(
             self.padded_blocks(blocks),
