@@ -133,14 +133,7 @@ pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
                 .join(", ")
         )));
     }
-    let array: Array2<f64> =
-        read_npy(path).map_err(|e| err(format!("cannot be read as float64 heights ({e})")))?;
-    let rows = array.nrows();
-    let values = if array.is_standard_layout() {
-        array.into_raw_vec_and_offset().0
-    } else {
-        array.iter().copied().collect()
-    };
+    let (rows, _, values) = read_map_npy(path)?;
     Ok((rows, values))
 }
 
