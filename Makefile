@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
+.PHONY: figures build test test-client test-measured test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -21,12 +21,18 @@ test:
 	cargo test --locked --workspace
 	cargo test --locked --release --test it -- --ignored
 	$(MAKE) test-client
+	$(MAKE) test-measured
 	$(MAKE) test-report
 	$(MAKE) test-slurm
 
 # Real client: the quick profile end to end, every artifact opened with pandas, numpy, Pillow.
 test-client: build
 	bash tests/client/run.sh
+
+# Measured surfaces against SurfaceTopography and ContactMechanics (PyPI, venv installed if
+# missing): readers, preparation, the non-periodic solve.
+test-measured: build
+	bash tests/measured/run.sh
 
 # The committed report figures/default/index.html in headless Chromium (installed if missing):
 # every image decodes; a copy with a truncated image must fail.

@@ -4,6 +4,9 @@
 use std::path::Path;
 
 pub mod atomic;
+pub mod measured;
+mod netcdf;
+mod x3p;
 
 use ndarray::{Array2, Array3, Axis};
 use ndarray_npy::{read_npy, write_npy};

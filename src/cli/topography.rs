@@ -1,10 +1,12 @@
 //! `wearcoef topography`: a measured map read, its units stated, its form removed and its
-//! missing points counted; the prepared heights written in metres with what was done.
+//! missing points counted or filled; the prepared heights written in metres with what was
+//! done. [`prepare`] is shared with `wearcoef wear`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use serde_json::json;
+use wearcoef::io::measured::{read_measured, READ_EXTENSIONS};
 use wearcoef::topography::{Form, Topography};
 
 use super::{check_outputs, write_atomically, InputError};
@@ -32,33 +34,159 @@ impl Unit {
 /// The form removed, as `pipeline.yaml` and the output spell it.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum FormArg {
+    /// Nothing removed (the heights as read, scaled to metres).
+    None,
     Mean,
     Plane,
     Curvature,
 }
 
-#[derive(clap::Args)]
-pub struct TopographyArgs {
-    /// The map: a 2-D .npy (float32 or float64, any shape) or a text matrix (.txt, .csv,
-    /// .asc, .dat: one row per line), NaN for a missing point.
+/// What is done with missing points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FillArg {
+    /// Refuse a map with missing points, naming how many and the first.
+    None,
+    /// Harmonic (Laplace) interpolation from the present points, after the form removal.
+    Harmonic,
+    /// Keep them missing (NaN) in the prepared map: `topography` only, for inspection;
+    /// contact needs every height.
+    Keep,
+}
+
+/// Reading and preparing a measured map (shared by `topography` and `wear`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct PrepareArgs {
+    /// The map: .x3p (ISO 25178-72, metres), .nc (NetCDF 3 as SurfaceTopography writes it,
+    /// its unit and lengths read), a 2-D .npy (float32 or float64, any shape) or a text
+    /// matrix (.txt, .csv, .asc, .dat: one row per line); NaN or an invalid flag marks a
+    /// missing point.
     #[arg(long)]
     pub input: PathBuf,
-    /// The unit of the heights in the file.
+    /// The unit of the heights: required when the file states none (.npy, text); given
+    /// for a file that states one, it overrides the file.
     #[arg(long, value_enum)]
-    pub height_unit: Unit,
-    /// The pixel size along x (columns), in --pixel-unit.
+    pub height_unit: Option<Unit>,
+    /// The pixel size along x (columns), in --pixel-unit: required when the file states
+    /// none; overrides the file's.
     #[arg(long)]
-    pub pixel_size: f64,
+    pub pixel_size: Option<f64>,
     /// The pixel size along y (rows), if not that of x.
     #[arg(long)]
     pub pixel_size_y: Option<f64>,
     /// The unit of the pixel sizes (default: that of the heights).
     #[arg(long, value_enum)]
     pub pixel_unit: Option<Unit>,
-    /// The form removed by least squares before contact.
+    /// The form removed by least squares (over the present points) before contact.
     #[arg(long, value_enum, default_value = "plane")]
     pub form: FormArg,
-    /// Write the prepared heights here (float64 .npy, metres).
+    /// What to do with missing points.
+    #[arg(long, value_enum, default_value = "none")]
+    pub fill: FillArg,
+}
+
+/// A prepared map and the record of its preparation (JSON, stored with every output).
+pub struct Prepared {
+    pub map: Topography,
+    pub report: serde_json::Value,
+}
+
+/// Read, scale to metres, remove the form and fill (or refuse) missing points.
+pub fn prepare(args: &PrepareArgs) -> anyhow::Result<Prepared> {
+    let input = &args.input;
+    let bad = |why: String| InputError(format!("--input {}: {why}", input.display()));
+    let read = read_measured(input)?;
+    let (height_scale, height_unit_from) = match (args.height_unit, read.height_unit_m) {
+        (Some(u), Some(file)) => (u.metres() / file, "--height-unit (overriding the file)"),
+        (Some(u), None) => (u.metres(), "--height-unit"),
+        (None, Some(_)) => (1.0, "the file"),
+        (None, None) => {
+            return Err(bad(format!(
+                "the file states no height unit; give --height-unit (m, mm, um, nm). Files that state theirs: {READ_EXTENSIONS}"
+            ))
+            .into())
+        }
+    };
+    let p_unit = args.pixel_unit.or(args.height_unit).map(Unit::metres);
+    let ((dx, dy), pixel_from) = match (args.pixel_size, read.pixel_m) {
+        (Some(px), file) => {
+            let Some(u) = p_unit else {
+                return Err(bad(
+                    "--pixel-size needs --pixel-unit (or --height-unit) to state its unit".into(),
+                )
+                .into());
+            };
+            let py = args.pixel_size_y.unwrap_or(px);
+            let from = if file.is_some() {
+                "--pixel-size (overriding the file)"
+            } else {
+                "--pixel-size"
+            };
+            ((px * u, py * u), from)
+        }
+        (None, Some(d)) => (d, "the file"),
+        (None, None) => {
+            return Err(bad(
+                "the file states no pixel size; give --pixel-size (and --pixel-unit)".into(),
+            )
+            .into())
+        }
+    };
+    let (rows, cols) = (read.rows, read.cols);
+    let heights = read.heights.into_iter().map(|h| h * height_scale).collect();
+    let mut map = Topography::new(rows, cols, dx, dy, heights).map_err(|e| bad(e.to_string()))?;
+    let missing = map.missing();
+    if args.fill == FillArg::None {
+        map.refuse_missing()
+            .map_err(|e| bad(format!("{e} (--fill harmonic)")))?;
+    }
+    let form = match args.form {
+        FormArg::None => None,
+        FormArg::Mean => Some(Form::Mean),
+        FormArg::Plane => Some(Form::Plane),
+        FormArg::Curvature => Some(Form::Curvature),
+    };
+    let coefficients = match form {
+        Some(form) => map.remove_form(form).map_err(|e| bad(e.to_string()))?,
+        None => Vec::new(),
+    };
+    let filled = match args.fill {
+        FillArg::Keep => 0,
+        _ => map.fill_harmonic().map_err(|e| bad(e.to_string()))?,
+    };
+    let present: Vec<f64> = map
+        .heights
+        .iter()
+        .copied()
+        .filter(|h| !h.is_nan())
+        .collect();
+    let mean = present.iter().sum::<f64>() / present.len().max(1) as f64;
+    let rms_height = (present.iter().map(|h| (h - mean) * (h - mean)).sum::<f64>()
+        / present.len().max(1) as f64)
+        .sqrt();
+    let rms_slope = map.rms_slope();
+    let report = json!({
+        "input": input.display().to_string(), "format": read.source,
+        "rows": rows, "cols": cols,
+        "pixel_size_x_m": dx, "pixel_size_y_m": dy, "pixel_size_from": pixel_from,
+        "height_unit_from": height_unit_from,
+        "missing_points": missing, "filled_points": filled,
+        "fill": match (args.fill, filled) {
+            (FillArg::Keep, _) => "keep",
+            (_, 0) => "none",
+            _ => "harmonic",
+        },
+        "form_removed": form.map_or("none".to_string(), |f| format!("{f:?}").to_lowercase()),
+        "form_coefficients_m": coefficients,
+        "rms_height_m": rms_height, "rms_slope": rms_slope,
+    });
+    Ok(Prepared { map, report })
+}
+
+#[derive(clap::Args)]
+pub struct TopographyArgs {
+    #[command(flatten)]
+    pub prepare: PrepareArgs,
+    /// Write the prepared heights here (float64 .npy, metres, rows along y).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Print the preparation as JSON.
@@ -67,8 +195,6 @@ pub struct TopographyArgs {
 }
 
 pub fn topography(args: TopographyArgs) -> anyhow::Result<ExitCode> {
-    let input = &args.input;
-    let bad = |why: String| InputError(format!("--input {}: {why}", input.display()));
     if let Some(out) = &args.output {
         if out.extension().is_none_or(|e| e != "npy") {
             return Err(InputError(format!(
@@ -77,61 +203,30 @@ pub fn topography(args: TopographyArgs) -> anyhow::Result<ExitCode> {
             ))
             .into());
         }
-        check_outputs(&[("--output", out)], &[("--input", input)])?;
+        check_outputs(&[("--output", out)], &[("--input", &args.prepare.input)])?;
     }
-    let ext = input
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let (rows, cols, raw) = match ext.as_str() {
-        "npy" => wearcoef::io::read_map_npy(input)?,
-        "txt" | "csv" | "asc" | "dat" => wearcoef::io::read_map_text(input)?,
-        other => {
-            return Err(bad(format!(
-                "a .{other} file is not read yet; give a 2-D .npy or a text matrix (.txt, .csv, .asc, .dat)"
-            ))
-            .into())
-        }
-    };
-    let h_unit = args.height_unit.metres();
-    let p_unit = args.pixel_unit.unwrap_or(args.height_unit).metres();
-    let (dx, dy) = (
-        args.pixel_size * p_unit,
-        args.pixel_size_y.unwrap_or(args.pixel_size) * p_unit,
-    );
-    let heights = raw.into_iter().map(|h| h * h_unit).collect();
-    let mut map = Topography::new(rows, cols, dx, dy, heights).map_err(|e| bad(e.to_string()))?;
-    map.refuse_missing().map_err(|e| bad(e.to_string()))?;
-    let form = match args.form {
-        FormArg::Mean => Form::Mean,
-        FormArg::Plane => Form::Plane,
-        FormArg::Curvature => Form::Curvature,
-    };
-    let coefficients = map.remove_form(form).map_err(|e| bad(e.to_string()))?;
-    let rms_height =
-        (map.heights.iter().map(|h| h * h).sum::<f64>() / map.heights.len() as f64).sqrt();
-    let rms_slope = map.rms_slope();
+    let Prepared { map, report } = prepare(&args.prepare)?;
     if let Some(out) = &args.output {
         let values = map.heights.clone();
         write_atomically(out, |tmp| {
-            wearcoef::io::write_f64(tmp, &[rows, cols], values)?;
+            wearcoef::io::write_f64(tmp, &[map.rows, map.cols], values)?;
             Ok(())
         })?;
     }
-    let report = json!({
-        "input": input.display().to_string(), "rows": rows, "cols": cols,
-        "pixel_size_x_m": dx, "pixel_size_y_m": dy,
-        "missing_points": 0, "form_removed": format!("{form:?}").to_lowercase(),
-        "form_coefficients_m": coefficients,
-        "rms_height_m": rms_height, "rms_slope": rms_slope,
-    });
     if args.json {
         out!("{}", serde_json::to_string(&report)?)?;
     } else {
         out!(
-            "{rows} × {cols} map, pixel {dx:.4e} × {dy:.4e} m, no missing point; {} removed; rms height {rms_height:.4e} m, rms slope {rms_slope:.4}",
-            report["form_removed"].as_str().unwrap_or("")
+            "{} × {} map, pixel {:.4e} × {:.4e} m, {} missing ({} filled); {} removed; rms height {:.4e} m, rms slope {:.4}",
+            map.rows,
+            map.cols,
+            map.dx,
+            map.dy,
+            report["missing_points"],
+            report["filled_points"],
+            report["form_removed"].as_str().unwrap_or(""),
+            report["rms_height_m"].as_f64().unwrap_or(f64::NAN),
+            report["rms_slope"].as_f64().unwrap_or(f64::NAN),
         )?;
     }
     Ok(ExitCode::SUCCESS)

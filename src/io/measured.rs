@@ -1,0 +1,140 @@
+//! Measured topography files, whatever their format, read into one [`MeasuredMap`]: the
+//! heights row-major with rows along y (NaN for a missing point), in metres when the file
+//! states a unit, and the pixel size when the file states one.
+
+use std::path::Path;
+
+use super::IoError;
+
+/// The format a map was read from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Source {
+    Npy,
+    Text,
+    X3p,
+    NetCdf,
+}
+
+/// A map as read from its file.
+#[derive(Debug, Clone)]
+pub struct MeasuredMap {
+    pub rows: usize,
+    pub cols: usize,
+    /// Row-major, row `i` along y; NaN marks a missing point. In metres when
+    /// `height_unit_m` is known (the file's values times it), else as in the file.
+    pub heights: Vec<f64>,
+    /// The metres per height unit of the file, when it states one.
+    pub height_unit_m: Option<f64>,
+    /// The pixel size `(Δx, Δy)` in metres, when the file states it.
+    pub pixel_m: Option<(f64, f64)>,
+    pub source: Source,
+}
+
+impl MeasuredMap {
+    /// The number of missing points.
+    pub fn missing(&self) -> usize {
+        self.heights.iter().filter(|h| h.is_nan()).count()
+    }
+}
+
+/// The file extensions read, for error messages and `--help`.
+pub const READ_EXTENSIONS: &str =
+    ".x3p (ISO 25178-72), .nc (NetCDF 3), .npy, text matrix (.txt, .csv, .asc, .dat)";
+
+/// Metres per unit for a length unit as files spell it (`m`, `mm`, `um`/`µm`/`μm`,
+/// `nm`, `pm`, `A`/`Å`); None if unknown.
+pub fn length_unit_m(unit: &str) -> Option<f64> {
+    Some(match unit {
+        "m" => 1.0,
+        "cm" => 1e-2,
+        "mm" => 1e-3,
+        "um" | "µm" | "μm" | "micrometer" | "micrometre" => 1e-6,
+        "nm" => 1e-9,
+        "A" | "\u{c5}" | "\u{212b}" => 1e-10,
+        "pm" => 1e-12,
+        _ => return None,
+    })
+}
+
+/// The units a text matrix states in its comment header, as SurfaceTopography writes it
+/// (`# Width: 30.0 µm`, `# Height: 18.0 µm`, `# Value units: µm`): applied to `map`.
+fn text_header(path: &Path, map: &mut MeasuredMap) -> Result<(), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot be read ({e})"))?;
+    let (mut width, mut height, mut unit) = (None, None, None);
+    for line in text
+        .lines()
+        .map(str::trim)
+        .take_while(|l| l.is_empty() || l.starts_with('#'))
+    {
+        let Some((key, value)) = line.trim_start_matches('#').split_once(':') else {
+            continue;
+        };
+        let length = |v: &str| -> Result<(f64, f64), String> {
+            let mut parts = v.split_whitespace();
+            let number = parts.next().and_then(|x| x.parse::<f64>().ok());
+            let scale = parts.next().map(|u| {
+                length_unit_m(u)
+                    .ok_or_else(|| format!("header '{}': unknown length unit '{u}'", line))
+            });
+            match (number, scale) {
+                (Some(x), Some(s)) if x > 0.0 && x.is_finite() => Ok((x, s?)),
+                _ => Err(format!("header '{line}' is not a length with its unit")),
+            }
+        };
+        match key.trim().to_ascii_lowercase().as_str() {
+            "width" => width = Some(length(value)?),
+            "height" => height = Some(length(value)?),
+            "value units" => {
+                let u = value.trim();
+                unit = Some(
+                    length_unit_m(u)
+                        .ok_or_else(|| format!("header '{line}': unknown length unit '{u}'"))?,
+                );
+            }
+            _ => {}
+        }
+    }
+    if let Some(u) = unit {
+        map.heights.iter_mut().for_each(|h| *h *= u);
+        map.height_unit_m = Some(u);
+    }
+    if let (Some((w, wu)), Some((h, hu))) = (width, height) {
+        map.pixel_m = Some((w * wu / map.cols as f64, h * hu / map.rows as f64));
+    }
+    Ok(())
+}
+
+/// Read a measured map by its extension; every failure names the file and what is wrong.
+pub fn read_measured(path: &Path) -> Result<MeasuredMap, IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let plain = |(rows, cols, heights): (usize, usize, Vec<f64>), source| MeasuredMap {
+        rows,
+        cols,
+        heights,
+        height_unit_m: None,
+        pixel_m: None,
+        source,
+    };
+    match ext.as_str() {
+        "npy" => Ok(plain(super::read_map_npy(path)?, Source::Npy)),
+        "txt" | "csv" | "asc" | "dat" => {
+            let mut map = plain(super::read_map_text(path)?, Source::Text);
+            text_header(path, &mut map).map_err(err)?;
+            Ok(map)
+        }
+        "x3p" => super::x3p::read(path).map_err(err),
+        "nc" => super::netcdf::read(path).map_err(err),
+        other => Err(err(format!(
+            "a .{other} file is not read; the formats read are {READ_EXTENSIONS}"
+        ))),
+    }
+}

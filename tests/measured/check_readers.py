@@ -1,0 +1,143 @@
+"""Every reader of `wearcoef topography` against SurfaceTopography (PyPI) on files that
+SurfaceTopography writes: the same heights (metres), missing points, pixel sizes and units;
+the rms slope after the plane is removed; and each corrupt file refused with exit 2 naming
+the file. Usage: python check_readers.py WEARCOEF_BIN WORKDIR"""
+import json
+import os
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import SurfaceTopography as st
+from SurfaceTopography import Topography, read_topography
+from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor
+
+BIN, WORK = sys.argv[1], sys.argv[2]
+os.makedirs(WORK, exist_ok=True)
+NX, NY, DX, DY = 60, 45, 0.5, 0.4  # points along x and y, pixel sizes in µm
+
+
+def surface(missing):
+    """Heights in µm indexed [x, y] as SurfaceTopography holds them: a random field with a
+    tilt, and `missing` masked points."""
+    rng = np.random.default_rng(7)
+    x, y = np.meshgrid(np.arange(NX) * DX, np.arange(NY) * DY, indexing="ij")
+    h = 0.2 * rng.standard_normal((NX, NY)) + 0.03 * x - 0.02 * y + 1.5
+    mask = np.zeros_like(h, dtype=bool)
+    mask.flat[rng.choice(NX * NY, missing, replace=False)] = True
+    return np.ma.masked_array(h, mask) if missing else h
+
+
+def ours(path, *extra):
+    out = os.path.join(WORK, "ours.npy")
+    run = subprocess.run(
+        [BIN, "topography", "--input", path, "--form", "none", "--fill", "keep",
+         "-o", out, "--json", *extra],
+        capture_output=True, text=True)
+    assert run.returncode == 0, f"{path}: exit {run.returncode}: {run.stderr}"
+    return np.load(out), json.loads(run.stdout)
+
+
+def compare(path, *extra, rtol=1e-12, rows_first=False, **theirs_given):
+    """Our map against SurfaceTopography's reading of the same file. `rows_first`: a .npy,
+    whose first axis SurfaceTopography takes as x and we take as y (rows, numpy's image
+    layout `h[y, x]`, docs/CONVENTIONS.md)."""
+    t = read_topography(path, **theirs_given)
+    to_m = get_unit_conversion_factor(t.unit, "m")
+    theirs = np.ma.filled(np.ma.asarray(t.heights(), dtype=float), np.nan) * to_m
+    pixel = np.array(t.physical_sizes) / np.array(t.nb_grid_pts) * to_m
+    if not rows_first:
+        theirs = theirs.T
+    else:
+        pixel = pixel[::-1]
+    mine, report = ours(path, *extra)
+    assert mine.shape == theirs.shape, f"{path}: shape {mine.shape} against {theirs.shape}"
+    assert np.array_equal(np.isnan(mine), np.isnan(theirs)), f"{path}: missing points differ"
+    ok = ~np.isnan(theirs)
+    scale = np.abs(theirs[ok]).max()
+    err = np.abs(mine[ok] - theirs[ok]).max() / scale
+    assert err <= rtol, f"{path}: heights differ by {err:.3g} of the largest"
+    got = np.array([report["pixel_size_x_m"], report["pixel_size_y_m"]])
+    assert np.allclose(got, pixel, rtol=1e-12, atol=0), f"{path}: pixel {got} against {pixel}"
+    assert report["missing_points"] == int((~ok).sum()), f"{path}: missing count"
+    print(f"{os.path.basename(path)}: {mine.shape[0]} × {mine.shape[1]}, "
+          f"{report['missing_points']} missing, heights within {err:.1e}, "
+          f"pixel {got[0]:.3e} × {got[1]:.3e} m: as SurfaceTopography reads it")
+
+
+def main():
+    print(f"SurfaceTopography {st.__version__}")
+    holed = Topography(surface(7), (NX * DX, NY * DY), unit="µm", periodic=False)
+    whole = Topography(surface(0), (NX * DX, NY * DY), unit="µm", periodic=False)
+    for dtype, rtol in [("D", 1e-12), ("F", 1e-12), ("L", 1e-12), ("I", 1e-12)]:
+        path = os.path.join(WORK, f"map_{dtype}.x3p")
+        holed.to_x3p(path, dtype=dtype)
+        compare(path, rtol=rtol)
+    path = os.path.join(WORK, "map.nc")
+    holed.to_netcdf(path)
+    compare(path)
+    path = os.path.join(WORK, "map.txt")
+    holed.to_matrix(path)
+    compare(path)
+    path = os.path.join(WORK, "map.npy")
+    np.save(path, np.ma.filled(holed.heights(), np.nan).T)
+    compare(path, "--height-unit", "um", "--pixel-size", str(DX), "--pixel-size-y", str(DY),
+            rows_first=True, physical_sizes=(NY * DY, NX * DX), unit="µm")
+
+    # The rms slope after the plane is removed, against SurfaceTopography's (upwind
+    # differences on the (nx − 1) × (ny − 1) pairs where ours averages every pair: they
+    # differ by O(1/n), 1 % here).
+    path = os.path.join(WORK, "whole.x3p")
+    whole.to_x3p(path)
+    theirs = read_topography(path).detrend("height").rms_gradient()
+    run = subprocess.run([BIN, "topography", "--input", path, "--json"],
+                         capture_output=True, text=True, check=True)
+    mine = json.loads(run.stdout)["rms_slope"]
+    assert abs(mine / theirs - 1) < 0.01, f"rms slope {mine} against {theirs}"
+    print(f"rms slope after the plane: {mine:.5f} against SurfaceTopography's {theirs:.5f}")
+
+    # Corrupt files: exit 2, the file named, what is wrong said.
+    good = os.path.join(WORK, "map_D.x3p")
+    cases = {}
+    raw = open(good, "rb").read()
+    cases["truncated.x3p"] = raw[: len(raw) * 2 // 3]
+    with zipfile.ZipFile(good) as z:
+        members = {n: z.read(n) for n in z.namelist()}
+    data = bytearray(members["bindata/data.bin"])
+    data[100] ^= 0xFF
+    tampered = os.path.join(WORK, "tampered.x3p")
+    with zipfile.ZipFile(tampered, "w") as z:
+        for n, b in members.items():
+            z.writestr(n, bytes(data) if n == "bindata/data.bin" else b)
+    short = os.path.join(WORK, "short.x3p")
+    with zipfile.ZipFile(short, "w") as z:
+        for n, b in members.items():
+            if n == "main.xml":
+                b = b.replace(b"<MD5ChecksumPointData>", b"<Unused>").replace(
+                    b"</MD5ChecksumPointData>", b"</Unused>")
+            z.writestr(n, b[:-8] if n == "bindata/data.bin" else b)
+    nc = open(os.path.join(WORK, "map.nc"), "rb").read()
+    cases["truncated.nc"] = nc[: len(nc) // 2]
+    cases["notes.sur"] = b"not a map"
+    for name, blob in cases.items():
+        with open(os.path.join(WORK, name), "wb") as f:
+            f.write(blob)
+    unitless = os.path.join(WORK, "map.npy")
+    expectations = [
+        (os.path.join(WORK, "truncated.x3p"), ["--"], "zip"),
+        (tampered, [], "MD5"),
+        (short, [], "truncated or mismatched"),
+        (os.path.join(WORK, "truncated.nc"), [], "truncated"),
+        (os.path.join(WORK, "notes.sur"), [], "not read"),
+        (unitless, [], "no height unit"),
+    ]
+    for path, _, said in expectations:
+        run = subprocess.run([BIN, "topography", "--input", path],
+                             capture_output=True, text=True)
+        assert run.returncode == 2, f"{path}: exit {run.returncode}, not 2: {run.stderr}"
+        assert path in run.stderr and said in run.stderr, f"{path}: {run.stderr!r}"
+        print(f"{os.path.basename(path)}: exit 2: {run.stderr.strip().splitlines()[-1][:150]}")
+
+
+main()
