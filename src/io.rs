@@ -414,3 +414,38 @@ pub fn cannot_write(path: &Path, cause: &str) -> String {
         .unwrap_or(Path::new("."));
     format!("cannot write {}: {cause}{}", path.display(), disk_note(dir))
 }
+
+/// Read a measured map by its extension; every failure names the file and what is wrong.
+pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
+    let err = |message: String| IoError::File {
+        path: path.display().to_string(),
+        message,
+    };
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let plain = |(rows, cols, heights): (usize, usize, Vec<f64>), source| measured::MeasuredMap {
+        rows,
+        cols,
+        heights,
+        height_unit_m: None,
+        pixel_m: None,
+        source,
+    };
+    match ext.as_str() {
+        "npy" => Ok(plain(read_map_npy(path)?, measured::Source::Npy)),
+        "txt" | "csv" | "asc" | "dat" => {
+            let mut map = plain(read_map_text(path)?, measured::Source::Text);
+            measured::text_header(path, &mut map).map_err(err)?;
+            Ok(map)
+        }
+        "x3p" => x3p::read(path).map_err(err),
+        "nc" => netcdf::read(path).map_err(err),
+        other => Err(err(format!(
+            "a .{other} file is not read; the formats read are {}",
+            measured::READ_EXTENSIONS
+        ))),
+    }
+}

@@ -82,10 +82,15 @@ enum Command {
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).
     Surface(cli::tools::SurfaceArgs),
 
-    /// Prepare a measured map: read it (.npy or text), state its units, refuse missing
-    /// points, remove its form (mean, plane or curvature) and report its rms height and
-    /// slope; -o writes the prepared heights in metres.
+    /// Prepare a measured map: read it (.x3p, .nc, .npy or text), state its units, refuse
+    /// or fill missing points, remove its form (mean, plane or curvature) and report its rms
+    /// height and slope; -o writes the prepared heights in metres.
     Topography(cli::topography::TopographyArgs),
+    /// A measured map to its wear coefficients in one command: prepared as `topography`
+    /// does, pressed on the free-boundary half-space at each load, its clusters labelled;
+    /// per load K, 𝒦, the wear rate and α̂ in physical units (loads.parquet/.csv,
+    /// clusters.parquet, preparation.json).
+    Wear(cli::wear::WearArgs),
 }
 
 fn main() -> ExitCode {
@@ -158,6 +163,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Fit(args) => cli::fit::fit(args),
         Command::Surface(args) => cli::tools::surface(args),
         Command::Topography(args) => cli::topography::topography(args),
+        Command::Wear(args) => cli::wear::wear(args),
     }?;
     std::io::stdout().flush().ok();
     Ok(code)

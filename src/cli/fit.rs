@@ -121,7 +121,7 @@ fn group_by_load(df: &polars::prelude::DataFrame, cells: &[u64]) -> anyhow::Resu
 }
 
 /// The truncated power law fitted to one load's areas, with its bootstrap interval, as JSON.
-fn fit_row(
+pub(crate) fn fit_row(
     load: Option<u32>,
     w: f64,
     data: &[u64],

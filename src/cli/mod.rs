@@ -24,6 +24,7 @@ pub mod store;
 pub mod submit;
 pub mod tools;
 pub mod topography;
+pub mod wear;
 
 #[derive(clap::Args, Clone)]
 pub struct StoreArgs {

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use serde_json::json;
-use wearcoef::io::measured::{read_measured, READ_EXTENSIONS};
+use wearcoef::io::measured::READ_EXTENSIONS;
+use wearcoef::io::read_measured;
 use wearcoef::topography::{Form, Topography};
 
 use super::{check_outputs, write_atomically, InputError};

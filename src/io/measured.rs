@@ -4,8 +4,6 @@
 
 use std::path::Path;
 
-use super::IoError;
-
 /// The format a map was read from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -59,7 +57,7 @@ pub fn length_unit_m(unit: &str) -> Option<f64> {
 
 /// The units a text matrix states in its comment header, as SurfaceTopography writes it
 /// (`# Width: 30.0 µm`, `# Height: 18.0 µm`, `# Value units: µm`): applied to `map`.
-fn text_header(path: &Path, map: &mut MeasuredMap) -> Result<(), String> {
+pub(super) fn text_header(path: &Path, map: &mut MeasuredMap) -> Result<(), String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot be read ({e})"))?;
     let (mut width, mut height, mut unit) = (None, None, None);
     for line in text
@@ -103,38 +101,4 @@ fn text_header(path: &Path, map: &mut MeasuredMap) -> Result<(), String> {
         map.pixel_m = Some((w * wu / map.cols as f64, h * hu / map.rows as f64));
     }
     Ok(())
-}
-
-/// Read a measured map by its extension; every failure names the file and what is wrong.
-pub fn read_measured(path: &Path) -> Result<MeasuredMap, IoError> {
-    let err = |message: String| IoError::File {
-        path: path.display().to_string(),
-        message,
-    };
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let plain = |(rows, cols, heights): (usize, usize, Vec<f64>), source| MeasuredMap {
-        rows,
-        cols,
-        heights,
-        height_unit_m: None,
-        pixel_m: None,
-        source,
-    };
-    match ext.as_str() {
-        "npy" => Ok(plain(super::read_map_npy(path)?, Source::Npy)),
-        "txt" | "csv" | "asc" | "dat" => {
-            let mut map = plain(super::read_map_text(path)?, Source::Text);
-            text_header(path, &mut map).map_err(err)?;
-            Ok(map)
-        }
-        "x3p" => super::x3p::read(path).map_err(err),
-        "nc" => super::netcdf::read(path).map_err(err),
-        other => Err(err(format!(
-            "a .{other} file is not read; the formats read are {READ_EXTENSIONS}"
-        ))),
-    }
 }

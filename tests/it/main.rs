@@ -19,6 +19,7 @@ mod store_integrity;
 mod submit;
 mod surface;
 mod topography;
+mod window;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -191,3 +191,80 @@ fn topography_command_states_units_and_removes_the_plane() {
         assert!(e.contains(file) && e.contains(says), "{e}");
     }
 }
+
+/// `wearcoef wear`: settings without a unit, a map with missing points and no fill rule,
+/// and an output directory that is not empty are each an input error (exit 2) naming what
+/// to fix, before any work, with nothing written; a valid run fills a new directory.
+#[test]
+fn wear_refuses_bad_settings_and_writes_nothing() {
+    use crate::run_in;
+    let dir = tempfile::tempdir().unwrap();
+    let (rows, cols) = (30, 40);
+    let mut map = Array2::<f64>::zeros((rows, cols));
+    for ((r, c), v) in map.indexed_iter_mut() {
+        let (x, y) = (c as f64, r as f64);
+        *v = 0.05 * ((0.7 * x).sin() + (0.9 * y + 0.3 * x).cos() + (0.31 * x * y).sin());
+    }
+    ndarray_npy::write_npy(dir.path().join("map.npy"), &map).unwrap();
+    map[[4, 5]] = f64::NAN;
+    ndarray_npy::write_npy(dir.path().join("holes.npy"), &map).unwrap();
+    std::fs::create_dir(dir.path().join("full")).unwrap();
+    std::fs::write(dir.path().join("full/keep.txt"), "mine").unwrap();
+    let base = |input: &'static str, out: &'static str, e_star: &'static str| {
+        vec![
+            "wear",
+            "--input",
+            input,
+            "--height-unit",
+            "um",
+            "--pixel-size",
+            "0.5",
+            "--e-star",
+            e_star,
+            "--loads",
+            "0.02,0.05",
+            "--d-star",
+            "1um",
+            "-o",
+            out,
+        ]
+    };
+    for (args, says) in [
+        (
+            base("map.npy", "a", "100"),
+            "--e-star \"100\": a modulus with its unit",
+        ),
+        (base("holes.npy", "b", "100GPa"), "--fill harmonic"),
+        (base("map.npy", "full", "100GPa"), "exists and is not empty"),
+    ] {
+        let out = run_in(dir.path(), &args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(e.contains(says), "{e}");
+    }
+    assert!(!dir.path().join("a").exists() && !dir.path().join("b").exists());
+    let kept: Vec<_> = std::fs::read_dir(dir.path().join("full"))
+        .unwrap()
+        .collect();
+    assert_eq!(kept.len(), 1);
+    let out = run_in(dir.path(), &base("map.npy", "c", "100GPa"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut written: Vec<String> = std::fs::read_dir(dir.path().join("c"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    assert_eq!(
+        written,
+        [
+            "clusters.parquet",
+            "loads.csv",
+            "loads.parquet",
+            "preparation.json"
+        ]
+    );
+}

@@ -22,3 +22,9 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$venv/bin/python" -W ignore "$repo/tests/measured/check_readers.py" "$bin" "$work/readers"
+# The non-periodic solve against ContactMechanics' free-boundary half-space.
+"$venv/bin/python" -W ignore "$repo/tests/measured/check_contact.py" "$bin" "$work/contact"
+# The worked example as a user runs it, then its numbers recomputed.
+(cd "$work" && MPLBACKEND=Agg "$venv/bin/python" "$repo/examples/measured_surface.py" \
+    --wearcoef "$bin" --out "$work/example")
+"$venv/bin/python" "$repo/tests/measured/check_wear.py" "$work/example"

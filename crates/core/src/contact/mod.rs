@@ -7,3 +7,4 @@ pub mod padded;
 pub mod reference;
 pub mod solver;
 pub mod sweep;
+pub mod window;

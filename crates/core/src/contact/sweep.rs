@@ -4,7 +4,7 @@
 
 use super::elastic::ElasticOperator;
 use super::solver::{
-    Ceiling, Constraint, ContactError, NonNegative, SolveReport, Solver, SolverConfig,
+    Ceiling, Constraint, ContactError, NonNegative, Operator, SolveReport, Solver, SolverConfig,
 };
 use crate::grid::{Grid, GridError};
 
@@ -240,14 +240,14 @@ pub fn check_rms_slope(rms_slope: f64) -> Result<(), SweepError> {
 /// converged load, `on_load(index, solver, result)` may store fields; the first load that
 /// does not converge stops the sweep with an error (nothing is passed on for it).
 #[allow(clippy::too_many_arguments)]
-pub fn sweep<C: Constraint>(
-    op: &ElasticOperator,
+pub fn sweep<C: Constraint, O: Operator>(
+    op: &O,
     heights: &[f64],
     rms_slope: f64,
     loads: &[f64],
     cfg: &SolverConfig,
     constraint: C,
-    mut on_load: impl FnMut(usize, &Solver<C>, &LoadResult) -> Result<(), String>,
+    mut on_load: impl FnMut(usize, &Solver<C, O>, &LoadResult) -> Result<(), String>,
 ) -> Result<Vec<LoadResult>, SweepError> {
     if let Some((index, &value)) = loads
         .iter()

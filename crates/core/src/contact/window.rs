@@ -1,0 +1,226 @@
+//! Contact of a measured map: rectangular, of any size, not periodic. The map (the window)
+//! is placed in the corner of a square of even side `s = max(rows, cols)` (rounded up to
+//! even) on the free-boundary half-space ([`PaddedOperator`], zero-padded to `2s`). The
+//! nodes of the square outside the window are held far below the lowest height (twice the
+//! window's height range), so they never touch: their pressure is zero, as beyond the
+//! window, and the solution on the window is the free-boundary one of the window alone.
+//! Every load is checked for it after the solve.
+//!
+//! The solver's error is relative to the standard deviation of the square's heights, which
+//! the far nodes inflate; the tolerance is scaled by the ratio of the window's deviation
+//! to the square's, so that it means what it means for the window alone.
+//!
+//! Loads are `W/W0` with `W0 = E*·rms slope·A`, `A = rows·cols·Δl²` the window's area and
+//! the rms slope that of the map without wrap-around ([`Topography::rms_slope`]): the
+//! window's mean pressure is `p̄ = (W/W0)·E*·rms slope`. Solved in units where the square
+//! is the unit box and `E* = 1`; pressures are returned in the unit of the `e_star` given.
+
+use super::padded::PaddedOperator;
+use super::solver::{Ceiling, ContactError, NonNegative, SolveReport, SolverConfig};
+use super::sweep::{check_rms_slope, sweep, LoadResult, SweepError};
+use crate::grid::Grid;
+use crate::topography::Topography;
+
+/// Relative difference of the pixel sides below which pixels are square.
+const SQUARE_PIXEL: f64 = 1e-6;
+
+/// One solved load of a window.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct WindowLoad {
+    /// Dimensionless load `W/W0`.
+    pub w_over_w0: f64,
+    /// Mean pressure on the window `p̄ = (W/W0)·E*·rms slope`, in the unit of E*.
+    pub mean_pressure: f64,
+    /// Nodes of the window with `p > 0`.
+    pub n_contact_px: usize,
+    /// `n_contact_px / (rows·cols)`.
+    pub area_fraction: f64,
+    /// Under a hardness: nodes at the pressure ceiling.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_saturated_px: Option<usize>,
+    /// The solve's report, its errors rescaled to the window's height deviation (comparable
+    /// with the tolerance requested) and its mean pressure the window's.
+    pub report: SolveReport,
+    pub seconds: f64,
+}
+
+/// How a window is solved (for the record of a run).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct WindowLayout {
+    /// Side of the square the window is placed in (even).
+    pub square_side: usize,
+    /// Side of the zero-padded FFT grid (`2·square_side`).
+    pub padded_side: usize,
+    /// The solver tolerance applied on the square (the requested one times the ratio of
+    /// the window's height deviation to the square's).
+    pub square_tolerance: f64,
+    /// The map's rms slope (dimensionless), which sets `W0`.
+    pub rms_slope: f64,
+}
+
+/// The contact of `map` (no missing point; square pixels) at every load `W/W0` of `loads`
+/// on the free-boundary half-space of modulus `e_star`, capped at `hardness·E*·rms slope`
+/// when a hardness (in the units of W/W0) is given. After each converged load,
+/// `on_load(index, window pressure row-major rows × cols, result)`.
+pub fn sweep_window(
+    map: &Topography,
+    e_star: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    hardness: Option<f64>,
+    mut on_load: impl FnMut(usize, &[f64], &WindowLoad) -> Result<(), String>,
+) -> Result<(WindowLayout, Vec<WindowLoad>), SweepError> {
+    let (rows, cols) = (map.rows, map.cols);
+    check_map(map, e_star)?;
+    let slope = map.rms_slope();
+    check_rms_slope(slope)?;
+    let (side, square, tolerance_scale) = embed(map);
+    let mut square_cfg = *cfg;
+    square_cfg.tolerance = cfg.tolerance * tolerance_scale;
+    let layout = WindowLayout {
+        square_side: side,
+        padded_side: 2 * side,
+        square_tolerance: square_cfg.tolerance,
+        rms_slope: slope,
+    };
+    // The square's mean pressure carries the window's load: p̄_square = p̄ · A / A_square.
+    let share = (rows * cols) as f64 / (side * side) as f64;
+    let square_loads: Vec<f64> = loads.iter().map(|w| w * share).collect();
+    let op = PaddedOperator::new(Grid::unit(side)?, 1.0);
+    let mut window = vec![0.0; rows * cols];
+    let to_window_error = cfg.tolerance / square_cfg.tolerance;
+    let mut pass_on = |i: usize, p: &[f64], r: &LoadResult, saturated: Option<usize>| {
+        let mut touching = 0usize;
+        for (k, &v) in p.iter().enumerate() {
+            let (row, col) = (k / side, k % side);
+            if row < rows && col < cols {
+                window[row * cols + col] = v * e_star;
+            } else if v > 0.0 {
+                touching += 1;
+            }
+        }
+        if touching > 0 {
+            return Err(format!(
+                "load {i}: {touching} nodes outside the map took pressure; the window's embedding failed"
+            ));
+        }
+        let n_contact_px = window.iter().filter(|&&v| v > 0.0).count();
+        let mut report = r.report.clone();
+        report.error *= to_window_error;
+        report
+            .error_history
+            .iter_mut()
+            .for_each(|e| *e *= to_window_error);
+        report.mean_pressure = loads[i] * slope * e_star;
+        let result = WindowLoad {
+            w_over_w0: loads[i],
+            mean_pressure: loads[i] * slope * e_star,
+            n_contact_px,
+            area_fraction: n_contact_px as f64 / (rows * cols) as f64,
+            n_saturated_px: saturated,
+            report,
+            seconds: r.seconds,
+        };
+        on_load(i, &window, &result)?;
+        Ok(result)
+    };
+    let mut out = Vec::with_capacity(loads.len());
+    match hardness.filter(|h| *h != f64::INFINITY) {
+        None => {
+            sweep(
+                &op,
+                &square,
+                slope,
+                &square_loads,
+                &square_cfg,
+                NonNegative,
+                |i, s, r| {
+                    out.push(pass_on(i, s.pressure(), r, None)?);
+                    Ok(())
+                },
+            )?;
+        }
+        Some(h) => {
+            if let Some((index, &w)) = loads.iter().enumerate().find(|(_, &w)| w > h) {
+                return Err(SweepError::AboveHardness {
+                    index,
+                    w_over_w0: w,
+                    hardness: h,
+                });
+            }
+            let ceiling = Ceiling::new(h * slope)?;
+            sweep(
+                &op,
+                &square,
+                slope,
+                &square_loads,
+                &square_cfg,
+                ceiling,
+                |i, s, r| {
+                    out.push(pass_on(i, s.pressure(), r, r.n_saturated_px)?);
+                    Ok(())
+                },
+            )?;
+        }
+    }
+    Ok((layout, out))
+}
+
+/// The map in the corner of the unit square of even side `s` (lengths divided by `s·Δl`),
+/// the rest held far below; and the ratio of the window's height deviation to the
+/// square's, which scales the tolerance.
+fn embed(map: &Topography) -> (usize, Vec<f64>, f64) {
+    let (rows, cols) = (map.rows, map.cols);
+    let side = rows.max(cols).max(2).next_multiple_of(2);
+    let to_unit = 1.0 / (side as f64 * map.dx);
+    let (lo, hi) = map
+        .heights
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
+            (a.min(h), b.max(h))
+        });
+    let far = (lo - 2.0 * (hi - lo).max(f64::MIN_POSITIVE)) * to_unit;
+    let mut square = vec![far; side * side];
+    for r in 0..rows {
+        for c in 0..cols {
+            square[r * side + c] = map.heights[r * cols + c] * to_unit;
+        }
+    }
+    let deviation = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    let (window_dev, square_dev) = (deviation(&map.heights) * to_unit, deviation(&square));
+    let scale = if square_dev > 0.0 && window_dev > 0.0 {
+        window_dev / square_dev
+    } else {
+        1.0
+    };
+    (side, square, scale)
+}
+
+/// Square pixels, every height a number, E* a positive modulus.
+fn check_map(map: &Topography, e_star: f64) -> Result<(), SweepError> {
+    let cols = map.cols;
+    if (map.dx - map.dy).abs() > SQUARE_PIXEL * map.dx.max(map.dy) {
+        return Err(ContactError::BadConfig(format!(
+            "pixels of {:e} × {:e} m: the half-space is solved on square pixels; resample the map",
+            map.dx, map.dy
+        ))
+        .into());
+    }
+    if let Some(i) = map.heights.iter().position(|h| !h.is_finite()) {
+        return Err(ContactError::NonFinite {
+            row: i / cols,
+            col: i % cols,
+            value: map.heights[i],
+        }
+        .into());
+    }
+    if !(e_star.is_finite() && e_star > 0.0) {
+        return Err(
+            ContactError::BadConfig(format!("E* = {e_star}: must be finite and > 0")).into(),
+        );
+    }
+    Ok(())
+}

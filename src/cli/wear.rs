@@ -1,0 +1,399 @@
+//! `wearcoef wear`: one measured topography file to its wear coefficients. The map is read
+//! and prepared (`topography`), pressed on the free-boundary half-space at each load W/W0
+//! (`contact::window`), its contact clusters labelled without wrap-around, and per load the
+//! counted K (eq. 5), 𝒦 (eq. 7), the wear rate (eq. 6) and α̂ are written in physical units
+//! beside the dimensionless ones.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use polars::prelude::{DataFrame, ParquetWriter};
+use serde_json::json;
+use wearcoef::clusters::{self, Boundary, Connectivity};
+use wearcoef::contact::solver::SolverConfig;
+use wearcoef::contact::window::sweep_window;
+use wearcoef::io::atomic::{write_all_atomically, FileWriter};
+use wearcoef::statistics::{wear_at, OMEGA};
+use wearcoef::store::table::col;
+
+use super::topography::{prepare, FillArg, PrepareArgs, Prepared};
+use super::InputError;
+
+#[derive(clap::Args)]
+pub struct WearArgs {
+    #[command(flatten)]
+    pub prepare: PrepareArgs,
+    /// The effective modulus E* = E/(1 − ν²) of the pair, with its unit: `210GPa`,
+    /// `7e10Pa`, `500MPa`.
+    #[arg(long)]
+    pub e_star: String,
+    /// The loads W/W0 (comma separated, ascending), W0 = E*·rms slope·A with A the map's
+    /// area; each is also written in newtons.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub loads: Vec<f64>,
+    /// The critical junction area A* with its unit (`2um2`, `1.5e-12m2`, `3000nm2`), or
+    /// give --d-star.
+    #[arg(long, conflicts_with = "d_star")]
+    pub a_star: Option<String>,
+    /// The critical length d* with its unit (`1.2um`): A* = π d*²/4.
+    #[arg(long)]
+    pub d_star: Option<String>,
+    /// A hardness (pressure with its unit, `3GPa`): the pressure is capped at it
+    /// (perfectly plastic junctions). Absent: elastic.
+    #[arg(long)]
+    pub hardness: Option<String>,
+    /// The solver's relative tolerance.
+    #[arg(long, default_value_t = 1e-8)]
+    pub tolerance: f64,
+    /// Bootstrap resamples of α̂'s interval.
+    #[arg(long, default_value_t = 200)]
+    pub resamples: usize,
+    /// Also write the contact pressure of every load: pressure.npy, float64 in Pa, shape
+    /// (loads, rows, cols).
+    #[arg(long)]
+    pub pressure_maps: bool,
+    /// The output directory (created; if it exists it must be empty).
+    #[arg(short, long)]
+    pub out: PathBuf,
+}
+
+/// A value with a unit: `number` then one of `units` (name, factor to SI), spaces allowed.
+fn quantity(
+    option: &str,
+    text: &str,
+    units: &[(&str, f64)],
+    what: &str,
+) -> Result<f64, InputError> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-')))
+        .unwrap_or(t.len());
+    let (number, unit) = (t[..split].trim(), t[split..].trim());
+    let names: Vec<&str> = units.iter().map(|(n, _)| *n).collect();
+    let bad = || {
+        InputError(format!(
+            "{option} {text:?}: {what} with its unit, one of {}",
+            names.join(", ")
+        ))
+    };
+    let value: f64 = number.parse().map_err(|_| bad())?;
+    let factor = units
+        .iter()
+        .find(|(n, _)| *n == unit)
+        .map(|(_, f)| *f)
+        .ok_or_else(bad)?;
+    let si = value * factor;
+    if !(si.is_finite() && si > 0.0) {
+        return Err(InputError(format!(
+            "{option} {text:?}: must be finite and > 0"
+        )));
+    }
+    Ok(si)
+}
+
+const PRESSURE: &[(&str, f64)] = &[("Pa", 1.0), ("kPa", 1e3), ("MPa", 1e6), ("GPa", 1e9)];
+const LENGTH: &[(&str, f64)] = &[
+    ("m", 1.0),
+    ("mm", 1e-3),
+    ("um", 1e-6),
+    ("µm", 1e-6),
+    ("nm", 1e-9),
+];
+const AREA: &[(&str, f64)] = &[
+    ("m2", 1.0),
+    ("mm2", 1e-6),
+    ("um2", 1e-12),
+    ("µm2", 1e-12),
+    ("µm²", 1e-12),
+    ("nm2", 1e-18),
+];
+
+/// The output directory: created, or an existing empty directory; never anything else.
+fn output_dir(out: &Path) -> Result<(), InputError> {
+    match std::fs::read_dir(out) {
+        Ok(mut entries) => {
+            if entries.next().is_some() {
+                return Err(InputError(format!(
+                    "--out {}: exists and is not empty; name a new directory (nothing is overwritten)",
+                    out.display()
+                )));
+            }
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => std::fs::create_dir_all(out)
+            .map_err(|e| InputError(format!("--out {}: cannot be created ({e})", out.display()))),
+        Err(e) => Err(InputError(format!("--out {}: {e}", out.display()))),
+    }
+}
+
+/// One load's rows: its clusters and its summary.
+#[derive(Default)]
+struct Tables {
+    // clusters.parquet
+    load_index: Vec<u32>,
+    area_px: Vec<u64>,
+    area_um2: Vec<f64>,
+    perimeter_px: Vec<u64>,
+    touches_edge: Vec<bool>,
+    // loads table
+    rows: Vec<serde_json::Value>,
+}
+
+/// The physical settings of `wear`, checked: E* (Pa), A* (m²), the hardness (Pa).
+fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>), InputError> {
+    let e_star = quantity("--e-star", &args.e_star, PRESSURE, "a modulus")?;
+    let a_star_m2 =
+        match (&args.a_star, &args.d_star) {
+            (Some(a), _) => quantity("--a-star", a, AREA, "an area")?,
+            (None, Some(d)) => {
+                let d = quantity("--d-star", d, LENGTH, "a length")?;
+                std::f64::consts::PI * d * d / 4.0
+            }
+            (None, None) => return Err(InputError(
+                "give the critical junction size: --a-star AREA (2um2) or --d-star LENGTH (1.2um)"
+                    .into(),
+            )),
+        };
+    let hardness_pa = args
+        .hardness
+        .as_deref()
+        .map(|h| quantity("--hardness", h, PRESSURE, "a hardness"))
+        .transpose()?;
+    if let Some((i, w)) = args
+        .loads
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w > 0.0))
+    {
+        return Err(InputError(format!(
+            "--loads: value {i} is {w}; loads W/W0 are finite and > 0"
+        )));
+    }
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0 && args.tolerance < 1e-2) {
+        return Err(InputError(format!(
+            "--tolerance {}: in (0, 1e-2)",
+            args.tolerance
+        )));
+    }
+    Ok((e_star, a_star_m2, hardness_pa))
+}
+
+pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
+    if args.prepare.fill == FillArg::Keep {
+        return Err(InputError(
+            "--fill keep: contact needs every height; choose --fill harmonic or none".into(),
+        )
+        .into());
+    }
+    let (e_star, a_star_m2, hardness_pa) = settings(&args)?;
+    let Prepared { map, mut report } = prepare(&args.prepare)?;
+    output_dir(&args.out)?;
+    let slope = map.rms_slope();
+    let pixel_m2 = map.dx * map.dy;
+    let area_m2 = (map.rows * map.cols) as f64 * pixel_m2;
+    let a_star_px = a_star_m2 / pixel_m2;
+    let hardness = hardness_pa.map(|h| h / (e_star * slope));
+    let cfg = SolverConfig {
+        tolerance: args.tolerance,
+        ..SolverConfig::default()
+    };
+    let bar = indicatif::ProgressBar::new(args.loads.len() as u64).with_style(
+        indicatif::ProgressStyle::with_template("contact {bar:30} {pos}/{len} loads, {elapsed}")
+            .expect("a valid template"),
+    );
+    let mut tables = Tables::default();
+    let mut pressures: Vec<f64> = Vec::new();
+    let (rows, cols) = (map.rows, map.cols);
+    let (layout, _) = sweep_window(&map, e_star, &args.loads, &cfg, hardness, |i, p, r| {
+        if args.pressure_maps {
+            pressures.extend_from_slice(p);
+        }
+        let contact: Vec<bool> = p.iter().map(|&v| v > 0.0).collect();
+        let labelling =
+            clusters::label_with(&contact, rows, cols, Connectivity::Eight, Boundary::Open)
+                .map_err(|e| e.to_string())?;
+        let mut edge = vec![false; labelling.clusters.len()];
+        for (k, &l) in labelling.labels.iter().enumerate() {
+            let (row, c) = (k / cols, k % cols);
+            if l > 0 && (row == 0 || c == 0 || row + 1 == rows || c + 1 == cols) {
+                edge[l as usize - 1] = true;
+            }
+        }
+        let areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
+        for (c, e) in labelling.clusters.iter().zip(&edge) {
+            tables.load_index.push(i as u32);
+            tables.area_px.push(c.area_px);
+            tables.area_um2.push(c.area_px as f64 * pixel_m2 * 1e12);
+            tables.perimeter_px.push(c.perimeter_px);
+            tables.touches_edge.push(*e);
+        }
+        let m = wear_at(&areas, a_star_px);
+        let fit = super::fit::fit_row(Some(i as u32), r.w_over_w0, &areas, 0, args.resamples, 0);
+        tables.rows.push(json!({
+            "w_over_w0": r.w_over_w0,
+            "force_n": r.w_over_w0 * e_star * slope * area_m2,
+            "mean_pressure_pa": r.mean_pressure,
+            "real_contact_area_um2": r.n_contact_px as f64 * pixel_m2 * 1e12,
+            "area_fraction": r.area_fraction,
+            "n_clusters": areas.len(),
+            "n_clusters_touching_edge": edge.iter().filter(|&&e| e).count(),
+            "largest_cluster_um2": areas.iter().max().copied().unwrap_or(0) as f64 * pixel_m2 * 1e12,
+            "k_archard": m.k_archard,
+            "k_upscaled": m.k_upscaled,
+            "wear_rate_mm3_per_m": OMEGA * m.area_above_px * pixel_m2 * 1e9,
+            "alpha": fit["alpha"], "alpha_ci95_low": fit["bootstrap_ci95_low"],
+            "alpha_ci95_high": fit["bootstrap_ci95_high"],
+            "alpha_plateau": fit["plateau"]["alpha"],
+            "alpha_plateau_ci95_low": fit["plateau"]["profile_ci95_low"],
+            "alpha_plateau_ci95_high": fit["plateau"]["profile_ci95_high"],
+            "n_saturated_px": r.n_saturated_px,
+            "iterations": r.report.iterations,
+            "solver_error": r.report.error,
+        }));
+        bar.inc(1);
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    report["contact"] = json!({
+        "half_space": "free boundary (zero-padded), the map's outside never in contact",
+        "e_star_pa": e_star, "hardness_pa": hardness_pa, "hardness_w_over_w0": hardness,
+        "tolerance": args.tolerance, "layout": layout,
+        "w0_n": e_star * slope * area_m2, "map_area_um2": area_m2 * 1e12,
+        "a_star_um2": a_star_m2 * 1e12, "a_star_px": a_star_px,
+        "clusters": "8-connected, no wrap-around; touches_edge marks clusters cut by the map's border",
+        "program": wearcoef::store::table::program(),
+    });
+    let maps = args
+        .pressure_maps
+        .then_some(([args.loads.len(), rows, cols], pressures));
+    write_outputs(&args.out, tables, &report, maps)?;
+    out!(
+        "{} loads on a {rows} × {cols} map written to {} (loads.parquet, loads.csv, clusters.parquet, preparation.json)",
+        args.loads.len(),
+        args.out.display()
+    )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The loads table's columns, in order, with their JSON keys (all numbers; nulls where no
+/// fit or elastic).
+const LOAD_COLUMNS: [&str; 20] = [
+    "w_over_w0",
+    "force_n",
+    "mean_pressure_pa",
+    "real_contact_area_um2",
+    "area_fraction",
+    "n_clusters",
+    "n_clusters_touching_edge",
+    "largest_cluster_um2",
+    "k_archard",
+    "k_upscaled",
+    "wear_rate_mm3_per_m",
+    "alpha",
+    "alpha_ci95_low",
+    "alpha_ci95_high",
+    "alpha_plateau",
+    "alpha_plateau_ci95_low",
+    "alpha_plateau_ci95_high",
+    "n_saturated_px",
+    "iterations",
+    "solver_error",
+];
+
+/// The loads table's integer columns (counts).
+const COUNT_COLUMNS: [&str; 4] = [
+    "n_clusters",
+    "n_clusters_touching_edge",
+    "n_saturated_px",
+    "iterations",
+];
+
+fn write_outputs(
+    out: &Path,
+    t: Tables,
+    report: &serde_json::Value,
+    maps: Option<([usize; 3], Vec<f64>)>,
+) -> anyhow::Result<()> {
+    let n = t.rows.len();
+    let mut columns = vec![col("load_index", (0..n as u32).collect::<Vec<_>>())];
+    for name in LOAD_COLUMNS {
+        if COUNT_COLUMNS.contains(&name) {
+            let values: Vec<Option<u64>> = t.rows.iter().map(|r| r[name].as_u64()).collect();
+            columns.push(col(name, values));
+        } else {
+            let values: Vec<Option<f64>> = t.rows.iter().map(|r| r[name].as_f64()).collect();
+            columns.push(col(name, values));
+        }
+    }
+    let loads = DataFrame::new(n, columns)?;
+    let clusters = DataFrame::new(
+        t.area_px.len(),
+        vec![
+            col("load_index", t.load_index),
+            col("area_px", t.area_px),
+            col("area_um2", t.area_um2),
+            col("perimeter_px", t.perimeter_px),
+            col("touches_edge", t.touches_edge),
+        ],
+    )?;
+    let text = serde_json::to_string_pretty(report)?;
+    let (lp, lc, cp, pj) = (
+        out.join("loads.parquet"),
+        out.join("loads.csv"),
+        out.join("clusters.parquet"),
+        out.join("preparation.json"),
+    );
+    let mut csv_text = csv::Writer::from_writer(Vec::new());
+    csv_text.write_record(std::iter::once("load_index").chain(LOAD_COLUMNS))?;
+    for (i, r) in t.rows.iter().enumerate() {
+        let cells = LOAD_COLUMNS.iter().map(|name| match &r[*name] {
+            serde_json::Value::Number(v) => v.to_string(),
+            _ => String::new(),
+        });
+        csv_text.write_record(std::iter::once(i.to_string()).chain(cells))?;
+    }
+    let csv_bytes = csv_text.into_inner()?;
+    let mut parquet_loads = loads;
+    let mut parquet_clusters = clusters;
+    let pressure_path = out.join("pressure.npy");
+    let mut files: Vec<(&Path, FileWriter)> = vec![
+        (
+            &lp,
+            Box::new(move |tmp: &Path| {
+                ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut parquet_loads)?;
+                Ok(())
+            }),
+        ),
+        (
+            &lc,
+            Box::new(move |tmp: &Path| {
+                std::fs::write(tmp, csv_bytes)?;
+                Ok(())
+            }),
+        ),
+        (
+            &cp,
+            Box::new(move |tmp: &Path| {
+                ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut parquet_clusters)?;
+                Ok(())
+            }),
+        ),
+        (
+            &pj,
+            Box::new(move |tmp: &Path| {
+                std::fs::write(tmp, text)?;
+                Ok(())
+            }),
+        ),
+    ];
+    if let Some((shape, values)) = maps {
+        files.push((
+            &pressure_path,
+            Box::new(move |tmp: &Path| {
+                wearcoef::io::write_f64(tmp, &shape, values)?;
+                Ok(())
+            }),
+        ));
+    }
+    write_all_atomically(files)
+}

@@ -1,0 +1,45 @@
+"""The output of examples/measured_surface.py (a 1000 × 750 X3P in µm with a tilt and 40
+missing points, written by SurfaceTopography, through `wearcoef wear`) checked with pandas:
+the preparation it states, and every number of the loads table recomputed from the cluster
+table and the stated constants. Usage: python check_wear.py EXAMPLE_OUT"""
+import json
+import os
+import sys
+
+import numpy as np
+import pandas as pd
+
+out = os.path.join(sys.argv[1], "wear")
+prep = json.load(open(os.path.join(out, "preparation.json")))
+assert (prep["rows"], prep["cols"]) == (750, 1000), prep
+assert prep["format"] == "x3p" and prep["height_unit_from"] == "the file"
+assert prep["pixel_size_x_m"] == prep["pixel_size_y_m"] and abs(prep["pixel_size_x_m"] / 0.5e-6 - 1) < 1e-12
+assert prep["missing_points"] == 40 and prep["filled_points"] == 40 and prep["fill"] == "harmonic"
+# The tilt written (0.01 along x, 0.005 along y) is what the plane removal found, to the
+# slope the random surface itself has over the map (rms slope 0.2 over 500 µm: ~1e-3).
+_, bx, by = prep["form_coefficients_m"]
+assert abs(bx - 0.01) < 1e-3 and abs(by - 0.005) < 1e-3, (bx, by)
+c = prep["contact"]
+loads = pd.read_parquet(os.path.join(out, "loads.parquet"))
+clusters = pd.read_parquet(os.path.join(out, "clusters.parquet"))
+assert list(loads["w_over_w0"]) == [0.005, 0.01, 0.02, 0.05, 0.1]
+csv = pd.read_csv(os.path.join(out, "loads.csv"))
+assert np.allclose(csv["k_upscaled"], loads["k_upscaled"], rtol=1e-15)
+pixel_um2 = prep["pixel_size_x_m"] * prep["pixel_size_y_m"] * 1e12
+for i, row in loads.iterrows():
+    a = clusters[clusters["load_index"] == i]
+    assert np.allclose(a["area_um2"], a["area_px"] * pixel_um2)
+    above = a[a["area_px"] > c["a_star_px"]]
+    assert row["n_clusters"] == len(a)
+    assert np.isclose(row["real_contact_area_um2"], a["area_um2"].sum(), rtol=1e-12)
+    assert np.isclose(row["k_archard"], len(above) / len(a), rtol=1e-12)
+    assert np.isclose(row["k_upscaled"], above["area_px"].sum() / a["area_px"].sum(), rtol=1e-12)
+    # eq. 6: ω Σ_{A > A*} A with ω = 1/3; 1 µm² = 1e-12 m³/m = 1e-3 mm³/m
+    assert np.isclose(row["wear_rate_mm3_per_m"], above["area_um2"].sum() / 3 * 1e-3, rtol=1e-12)
+    assert np.isclose(row["force_n"], row["w_over_w0"] * c["w0_n"], rtol=1e-12)
+    assert np.isclose(row["mean_pressure_pa"] * c["map_area_um2"] * 1e-12, row["force_n"], rtol=1e-12)
+    assert row["n_clusters_touching_edge"] == a["touches_edge"].sum()
+    assert row["solver_error"] <= c["tolerance"]
+    assert row["alpha_ci95_low"] <= row["alpha"] <= row["alpha_ci95_high"]
+print(f"wear: {len(loads)} loads, every K, 𝒦, wear rate and force recomputed from "
+      f"{len(clusters)} clusters; preparation as stated (tilt {bx:.4f}, {by:.4f})")
