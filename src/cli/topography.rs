@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use serde_json::json;
 use wearcoef::io::measured::READ_EXTENSIONS;
 use wearcoef::io::read_measured;
+use wearcoef::psd::{fit_self_affine, log_edges, radial_psd, PsdBin};
 use wearcoef::topography::{Form, Topography};
 
 use super::{check_outputs, write_atomically, InputError};
@@ -89,6 +90,36 @@ pub struct PrepareArgs {
 pub struct Prepared {
     pub map: Topography,
     pub report: serde_json::Value,
+    /// The radially averaged PSD (none when missing points were kept).
+    pub psd: Vec<PsdBin>,
+}
+
+/// The smallest λ_s/Δl at which the project's own discretisation study finds the contact
+/// area unbiased (docs/SIZES.md); below it a warning is given and recorded.
+const MIN_LAMBDA_S_PX: f64 = 8.0;
+
+/// The PSD of a complete map, its self-affine fit and the warnings it calls for.
+fn spectrum(map: &Topography) -> (Vec<PsdBin>, serde_json::Value, Vec<String>) {
+    let psd = radial_psd(map, &log_edges(map, 10));
+    let fit = fit_self_affine(&psd);
+    let mut warnings = Vec::new();
+    match fit {
+        Some(f) if f.lambda_s_m / map.dx.max(map.dy) < MIN_LAMBDA_S_PX => warnings.push(format!(
+            "the fitted λ_s = {:.3e} m is {:.1} pixels: below {MIN_LAMBDA_S_PX} the discretised contact area is biased (docs/SIZES.md); measure at a finer pixel",
+            f.lambda_s_m,
+            f.lambda_s_m / map.dx.max(map.dy)
+        )),
+        None => warnings.push(
+            "the PSD has no self-affine range of 5 bins (within a factor 2 of a power law): H, λ_l and λ_s are not fitted".into(),
+        ),
+        _ => {}
+    }
+    let fit = fit.map_or(serde_json::Value::Null, |f| {
+        json!({"hurst": f.hurst, "lambda_l_m": f.lambda_l_m, "lambda_s_m": f.lambda_s_m,
+               "lambda_s_px": f.lambda_s_m / map.dx.max(map.dy),
+               "max_log10_residual": f.max_log10_residual, "bins": f.bins})
+    });
+    (psd, fit, warnings)
 }
 
 /// Read, scale to metres, remove the form and fill (or refuse) missing points.
@@ -165,6 +196,14 @@ pub fn prepare(args: &PrepareArgs) -> anyhow::Result<Prepared> {
         / present.len().max(1) as f64)
         .sqrt();
     let rms_slope = map.rms_slope();
+    let (psd, fit, warnings) = if args.fill == FillArg::Keep && missing > 0 {
+        (Vec::new(), serde_json::Value::Null, Vec::new())
+    } else {
+        spectrum(&map)
+    };
+    for w in &warnings {
+        wearcoef::note!("warning: {}: {w}", input.display());
+    }
     let report = json!({
         "input": input.display().to_string(), "format": read.source,
         "rows": rows, "cols": cols,
@@ -179,8 +218,9 @@ pub fn prepare(args: &PrepareArgs) -> anyhow::Result<Prepared> {
         "form_removed": form.map_or("none".to_string(), |f| format!("{f:?}").to_lowercase()),
         "form_coefficients_m": coefficients,
         "rms_height_m": rms_height, "rms_slope": rms_slope,
+        "psd_fit": fit, "warnings": warnings,
     });
-    Ok(Prepared { map, report })
+    Ok(Prepared { map, report, psd })
 }
 
 #[derive(clap::Args)]
@@ -190,9 +230,32 @@ pub struct TopographyArgs {
     /// Write the prepared heights here (float64 .npy, metres, rows along y).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Write the radially averaged PSD here (Parquet: q_low_per_m, q_high_per_m,
+    /// q_mean_per_m in rad/m, c_m4 in m⁴, count).
+    #[arg(long)]
+    pub psd: Option<PathBuf>,
     /// Print the preparation as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The PSD bins as a table.
+pub fn psd_frame(psd: &[PsdBin]) -> anyhow::Result<polars::prelude::DataFrame> {
+    use wearcoef::store::table::col;
+    let get = |f: fn(&PsdBin) -> f64| psd.iter().map(f).collect::<Vec<f64>>();
+    Ok(polars::prelude::DataFrame::new(
+        psd.len(),
+        vec![
+            col("q_low_per_m", get(|b| b.q_low)),
+            col("q_high_per_m", get(|b| b.q_high)),
+            col("q_mean_per_m", get(|b| b.q_mean)),
+            col("c_m4", get(|b| b.c)),
+            col(
+                "count",
+                psd.iter().map(|b| b.count as u64).collect::<Vec<_>>(),
+            ),
+        ],
+    )?)
 }
 
 pub fn topography(args: TopographyArgs) -> anyhow::Result<ExitCode> {
@@ -206,7 +269,24 @@ pub fn topography(args: TopographyArgs) -> anyhow::Result<ExitCode> {
         }
         check_outputs(&[("--output", out)], &[("--input", &args.prepare.input)])?;
     }
-    let Prepared { map, report } = prepare(&args.prepare)?;
+    if let Some(out) = &args.psd {
+        if out.extension().is_none_or(|e| e != "parquet") {
+            return Err(InputError(format!(
+                "--psd {}: the PSD is a Parquet table; name it FILE.parquet",
+                out.display()
+            ))
+            .into());
+        }
+        check_outputs(&[("--psd", out)], &[("--input", &args.prepare.input)])?;
+    }
+    let Prepared { map, report, psd } = prepare(&args.prepare)?;
+    if let Some(out) = &args.psd {
+        let mut df = psd_frame(&psd)?;
+        write_atomically(out, |tmp| {
+            polars::prelude::ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
+            Ok(())
+        })?;
+    }
     if let Some(out) = &args.output {
         let values = map.heights.clone();
         write_atomically(out, |tmp| {

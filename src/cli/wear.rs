@@ -186,7 +186,11 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let (e_star, a_star_m2, hardness_pa) = settings(&args)?;
-    let Prepared { map, mut report } = prepare(&args.prepare)?;
+    let Prepared {
+        map,
+        mut report,
+        psd,
+    } = prepare(&args.prepare)?;
     output_dir(&args.out)?;
     let slope = map.rms_slope();
     let pixel_m2 = map.dx * map.dy;
@@ -266,9 +270,10 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     let maps = args
         .pressure_maps
         .then_some(([args.loads.len(), rows, cols], pressures));
-    write_outputs(&args.out, tables, &report, maps)?;
+    let psd = super::topography::psd_frame(&psd)?;
+    write_outputs(&args.out, tables, &report, maps, psd)?;
     out!(
-        "{} loads on a {rows} × {cols} map written to {} (loads.parquet, loads.csv, clusters.parquet, preparation.json)",
+        "{} loads on a {rows} × {cols} map written to {} (loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
         args.loads.len(),
         args.out.display()
     )?;
@@ -313,6 +318,7 @@ fn write_outputs(
     t: Tables,
     report: &serde_json::Value,
     maps: Option<([usize; 3], Vec<f64>)>,
+    mut psd: DataFrame,
 ) -> anyhow::Result<()> {
     let n = t.rows.len();
     let mut columns = vec![col("load_index", (0..n as u32).collect::<Vec<_>>())];
@@ -356,6 +362,7 @@ fn write_outputs(
     let mut parquet_loads = loads;
     let mut parquet_clusters = clusters;
     let pressure_path = out.join("pressure.npy");
+    let psd_path = out.join("psd.parquet");
     let mut files: Vec<(&Path, FileWriter)> = vec![
         (
             &lp,
@@ -386,6 +393,13 @@ fn write_outputs(
             }),
         ),
     ];
+    files.push((
+        &psd_path,
+        Box::new(move |tmp: &Path| {
+            ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut psd)?;
+            Ok(())
+        }),
+    ));
     if let Some((shape, values)) = maps {
         files.push((
             &pressure_path,

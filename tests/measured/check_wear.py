@@ -19,6 +19,13 @@ assert prep["missing_points"] == 40 and prep["filled_points"] == 40 and prep["fi
 # slope the random surface itself has over the map (rms slope 0.2 over 500 µm: ~1e-3).
 _, bx, by = prep["form_coefficients_m"]
 assert abs(bx - 0.01) < 1e-3 and abs(by - 0.005) < 1e-3, (bx, by)
+# The PSD's self-affine fit against the spectrum the example generated (H = 0.8, λ_l = 100
+# µm, λ_s = 4 µm; bins of a tenth of a decade, the Hann window blurring the lowest ones).
+fit = prep["psd_fit"]
+assert abs(fit["hurst"] - 0.8) < 0.1, fit
+assert 50e-6 < fit["lambda_l_m"] < 150e-6 and 3e-6 < fit["lambda_s_m"] < 6e-6, fit
+psd = pd.read_parquet(os.path.join(out, "psd.parquet"))
+assert (psd["c_m4"] > 0).all() and psd["q_low_per_m"].is_monotonic_increasing
 c = prep["contact"]
 loads = pd.read_parquet(os.path.join(out, "loads.parquet"))
 clusters = pd.read_parquet(os.path.join(out, "clusters.parquet"))
@@ -41,5 +48,7 @@ for i, row in loads.iterrows():
     assert row["n_clusters_touching_edge"] == a["touches_edge"].sum()
     assert row["solver_error"] <= c["tolerance"]
     assert row["alpha_ci95_low"] <= row["alpha"] <= row["alpha_ci95_high"]
+print(f"PSD fit: H = {fit['hurst']:.3f}, λ_l = {fit['lambda_l_m'] * 1e6:.1f} µm, "
+      f"λ_s = {fit['lambda_s_m'] * 1e6:.2f} µm (generated 0.8, 100 µm, 4 µm)")
 print(f"wear: {len(loads)} loads, every K, 𝒦, wear rate and force recomputed from "
       f"{len(clusters)} clusters; preparation as stated (tilt {bx:.4f}, {by:.4f})")

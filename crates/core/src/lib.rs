@@ -32,6 +32,7 @@ pub mod contact;
 pub mod grid;
 pub mod pages;
 pub mod powerlaw;
+pub mod psd;
 pub mod spectral;
 pub mod statistics;
 pub mod surface;
