@@ -264,7 +264,8 @@ fn wear_refuses_bad_settings_and_writes_nothing() {
             "clusters.parquet",
             "loads.csv",
             "loads.parquet",
-            "preparation.json"
+            "preparation.json",
+            "psd.parquet"
         ]
     );
 }
