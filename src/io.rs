@@ -4,8 +4,10 @@
 use std::path::Path;
 
 pub mod atomic;
+mod gsf;
 pub mod measured;
 mod netcdf;
+mod sdf;
 mod x3p;
 
 use ndarray::{Array2, Array3, Axis};
@@ -443,6 +445,8 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         }
         "x3p" => x3p::read(path).map_err(err),
         "nc" => netcdf::read(path).map_err(err),
+        "gsf" => gsf::read(path).map_err(err),
+        "sdf" => sdf::read(path).map_err(err),
         other => Err(err(format!(
             "a .{other} file is not read; the formats read are {}",
             measured::READ_EXTENSIONS

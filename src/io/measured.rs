@@ -12,6 +12,8 @@ pub enum Source {
     Text,
     X3p,
     NetCdf,
+    Gsf,
+    Sdf,
 }
 
 /// A map as read from its file.

@@ -175,4 +175,68 @@ def psd_against_surface_topography():
     print(f"PSD: {len(ours)} bins as SurfaceTopography's within {worst:.1e}")
 
 
+def write_sdf(path, h_um, binary, data_type):
+    """An ISO 25178-71 SDF file of the heights h_um ([x, y], µm, NaN missing), written here
+    from the standard (SurfaceTopography reads SDF but writes none): text with `BAD`, or
+    binary little-endian with NaN (DataType 7) or int16 and its reserved minimum (5)."""
+    import struct
+    z = h_um.T * 1e-6  # [y, x] in metres: profiles along y, points along x
+    zscale = 1e-9 if data_type == 5 else 1.0
+    raw = z / zscale
+    if data_type == 5:
+        raw = np.where(np.isnan(raw), -(2**15), np.round(raw)).astype("<i2")
+    fields = dict(NumPoints=NX, NumProfiles=NY, Xscale=DX * 1e-6, Yscale=DY * 1e-6,
+                  Zscale=zscale, Zresolution=-1.0, Compression=0, DataType=data_type,
+                  CheckType=0)
+    with open(path, "wb") as f:
+        if binary:
+            f.write(b"bISO-1.0" + b"wearcoef  " + b"281120261200" * 2)
+            f.write(struct.pack("<HHddddBBB", NX, NY, fields["Xscale"], fields["Yscale"],
+                                zscale, -1.0, 0, data_type, 0))
+            f.write(raw.astype("<f8" if data_type == 7 else "<i2").tobytes())
+        else:
+            head = "aISO-1.0\nManufacID = wearcoef\nCreateDate = 281120261200\n"
+            head += "".join(f"{k} = {v!r}\n" for k, v in fields.items()) + "*\n"
+            rows = "\n".join(" ".join("BAD" if np.isnan(v) else repr(float(v)) for v in r)
+                             for r in raw)
+            f.write((head + rows + "\n*\n").encode())
+    return raw
+
+
+def sdf_and_gsf():
+    """SDF (text, binary float64, binary int16) against SurfaceTopography's reader; GSF
+    written by gsffile (PyPI) against gsffile's own reader."""
+    holed = np.ma.filled(surface(7), np.nan)  # µm, [x, y]
+    for name, binary, data_type, rtol in [("text.sdf", False, 7, 1e-15),
+                                          ("float.sdf", True, 7, 0),
+                                          ("int16.sdf", True, 5, 0)]:
+        path = os.path.join(WORK, name)
+        write_sdf(path, holed, binary, data_type)
+        compare(path, rtol=max(rtol, 1e-15))
+    import gsffile
+    path = os.path.join(WORK, "map.gsf")
+    data = (np.ma.filled(surface(7), np.nan).T * 1e-6).astype(np.float32)
+    gsffile.write_gsf(path, data, {"XReal": NX * DX * 1e-6, "YReal": NY * DY * 1e-6,
+                                   "XYUnits": "m", "ZUnits": "m"})
+    theirs, meta = gsffile.read_gsf(path)
+    mine, report = ours(path)
+    assert np.array_equal(np.isnan(mine), np.isnan(theirs)), "GSF: missing points differ"
+    ok = ~np.isnan(theirs)
+    assert np.array_equal(mine[ok], theirs[ok].astype(float)), "GSF: heights differ"
+    pixel = [meta["XReal"] / NX, meta["YReal"] / NY]
+    assert np.allclose([report["pixel_size_x_m"], report["pixel_size_y_m"]], pixel, rtol=1e-12)
+    print(f"map.gsf: {mine.shape[0]} × {mine.shape[1]}, {int((~ok).sum())} missing, "
+          f"heights and pixel sizes as gsffile reads them")
+    for name, cut, said in [("float.sdf", 100, "truncated"), ("text.sdf", 300, "truncated"),
+                            ("map.gsf", 8, "truncated")]:
+        blob = open(os.path.join(WORK, name), "rb").read()
+        bad = os.path.join(WORK, "cut_" + name)
+        with open(bad, "wb") as f:
+            f.write(blob[:-cut])
+        run = subprocess.run([BIN, "topography", "--input", bad], capture_output=True, text=True)
+        assert run.returncode == 2 and bad in run.stderr and said in run.stderr, run.stderr
+        print(f"cut_{name}: exit 2: {run.stderr.strip()[:140]}")
+
+
 psd_against_surface_topography()
+sdf_and_gsf()

@@ -8,12 +8,12 @@ repo=$(cd "$(dirname "$0")/../.." && pwd)
 : "${CARGO_TARGET_DIR:=/var/tmp/wearcoef-target}"
 bin="${WEARCOEF_BIN:-$CARGO_TARGET_DIR/release/wearcoef}"
 venv="${MEASURED_VENV:-$CARGO_TARGET_DIR/measured-venv}"
-if ! "$venv/bin/python" -c "import SurfaceTopography, ContactMechanics, pandas" 2>/dev/null; then
-    echo "creating the peers' venv in $venv (SurfaceTopography, ContactMechanics from PyPI)"
+if ! "$venv/bin/python" -c "import SurfaceTopography, ContactMechanics, gsffile, pandas" 2>/dev/null; then
+    echo "creating the peers' venv in $venv (SurfaceTopography, ContactMechanics, gsffile from PyPI)"
     rm -rf "$venv"
     python3 -m venv "$venv"
     "$venv/bin/pip" install --quiet --disable-pip-version-check \
-        "SurfaceTopography==1.27.1" "ContactMechanics==1.8.3" "pandas>=2.2" "pyarrow>=16" \
+        "SurfaceTopography==1.27.1" "ContactMechanics==1.8.3" "gsffile" "pandas>=2.2" "pyarrow>=16" \
         "matplotlib>=3.8" || {
         echo "error: could not install SurfaceTopography and ContactMechanics (needs PyPI access)" >&2
         exit 1
