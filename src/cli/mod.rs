@@ -25,6 +25,7 @@ pub mod submit;
 pub mod tools;
 pub mod topography;
 pub mod wear;
+mod wear_page;
 
 #[derive(clap::Args, Clone)]
 pub struct StoreArgs {

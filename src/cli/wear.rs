@@ -270,10 +270,27 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     let maps = args
         .pressure_maps
         .then_some(([args.loads.len(), rows, cols], pressures));
+    // The page is drawn first into a staging directory, then moved in with the tables.
+    let staging = args.out.join(format!(".page.tmp-{}", std::process::id()));
+    std::fs::create_dir_all(&staging)?;
+    let mut areas_um2 = vec![Vec::new(); args.loads.len()];
+    for (&i, &a) in tables.load_index.iter().zip(&tables.area_um2) {
+        areas_um2[i as usize].push(a);
+    }
+    let page = super::wear_page::Page {
+        rows: &tables.rows,
+        areas_um2,
+        psd: &psd,
+        report: &report,
+    };
+    let drawn = super::wear_page::write(&page, &staging);
     let psd = super::topography::psd_frame(&psd)?;
-    write_outputs(&args.out, tables, &report, maps, psd)?;
+    let written =
+        drawn.and_then(|_| write_outputs(&args.out, tables, &report, maps, psd, &staging));
+    let _ = std::fs::remove_dir_all(&staging);
+    written?;
     out!(
-        "{} loads on a {rows} × {cols} map written to {} (loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
+        "{} loads on a {rows} × {cols} map written to {} (index.html, loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
         args.loads.len(),
         args.out.display()
     )?;
@@ -319,6 +336,7 @@ fn write_outputs(
     report: &serde_json::Value,
     maps: Option<([usize; 3], Vec<f64>)>,
     mut psd: DataFrame,
+    staging: &Path,
 ) -> anyhow::Result<()> {
     let n = t.rows.len();
     let mut columns = vec![col("load_index", (0..n as u32).collect::<Vec<_>>())];
@@ -363,6 +381,10 @@ fn write_outputs(
     let mut parquet_clusters = clusters;
     let pressure_path = out.join("pressure.npy");
     let psd_path = out.join("psd.parquet");
+    let page: Vec<(PathBuf, PathBuf)> = ["wear.png", "wear.svg", "index.html"]
+        .iter()
+        .map(|name| (out.join(name), staging.join(name)))
+        .collect();
     let mut files: Vec<(&Path, FileWriter)> = vec![
         (
             &lp,
@@ -400,6 +422,15 @@ fn write_outputs(
             Ok(())
         }),
     ));
+    for (to, from) in &page {
+        files.push((
+            to,
+            Box::new(move |tmp: &Path| {
+                std::fs::rename(from, tmp)?;
+                Ok(())
+            }),
+        ));
+    }
     if let Some((shape, values)) = maps {
         files.push((
             &pressure_path,

@@ -194,7 +194,8 @@ fn topography_command_states_units_and_removes_the_plane() {
 
 /// `wearcoef wear`: settings without a unit, a map with missing points and no fill rule,
 /// and an output directory that is not empty are each an input error (exit 2) naming what
-/// to fix, before any work, with nothing written; a valid run fills a new directory.
+/// to fix, before any work, with nothing written; a valid run fills a new directory (no
+/// staging directory of the page left behind).
 #[test]
 fn wear_refuses_bad_settings_and_writes_nothing() {
     use crate::run_in;
@@ -262,10 +263,13 @@ fn wear_refuses_bad_settings_and_writes_nothing() {
         written,
         [
             "clusters.parquet",
+            "index.html",
             "loads.csv",
             "loads.parquet",
             "preparation.json",
-            "psd.parquet"
+            "psd.parquet",
+            "wear.png",
+            "wear.svg"
         ]
     );
 }

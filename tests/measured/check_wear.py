@@ -48,6 +48,13 @@ for i, row in loads.iterrows():
     assert row["n_clusters_touching_edge"] == a["touches_edge"].sum()
     assert row["solver_error"] <= c["tolerance"]
     assert row["alpha_ci95_low"] <= row["alpha"] <= row["alpha_ci95_high"]
+# The page: index.html shows wear.png (which decodes) and every load's row.
+from PIL import Image
+html = open(os.path.join(out, "index.html"), encoding="utf-8").read()
+assert 'src="wear.png"' in html and html.count("<tr>") == len(loads) + 1
+with Image.open(os.path.join(out, "wear.png")) as im:
+    im.load()
+    assert im.size[0] > 1000, im.size
 print(f"PSD fit: H = {fit['hurst']:.3f}, λ_l = {fit['lambda_l_m'] * 1e6:.1f} µm, "
       f"λ_s = {fit['lambda_s_m'] * 1e6:.2f} µm (generated 0.8, 100 µm, 4 µm)")
 print(f"wear: {len(loads)} loads, every K, 𝒦, wear rate and force recomputed from "
