@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 import ContactMechanics as cm
 from ContactMechanics import FreeFFTElasticHalfSpace, make_system
-from SurfaceTopography import Topography
+from ContactMechanics.Factory import make_plastic_system
+from SurfaceTopography import PlasticTopography, Topography
 
 BIN, WORK = sys.argv[1], sys.argv[2]
 os.makedirs(WORK, exist_ok=True)
@@ -60,4 +61,42 @@ def main():
         assert abs(mine.sum() * DX * DX / force - 1) < 1e-9
 
 
+def plastic():
+    """`wear --hardness 4GPa` (0.2 E*·rms slope) against ContactMechanics' plastic system
+    (`make_plastic_system` with a `PlasticTopography`; `make_system` ignores the hardness)
+    on the free-boundary half-space: the same contact and saturated sets, pressures within
+    1e-5 relative L2, and no pressure above the hardness."""
+    h = surface()
+    path = os.path.join(WORK, "map.x3p")
+    out = os.path.join(WORK, "plastic")
+    hardness = 4e9
+    run = subprocess.run(
+        [BIN, "wear", "--input", path, "--form", "none", "--e-star", "100GPa",
+         "--loads", "0.02,0.05", "--a-star", "1um2", "--tolerance", "1e-10",
+         "--hardness", "4GPa", "--pressure-maps", "-o", out], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    loads = pd.read_parquet(os.path.join(out, "loads.parquet"))
+    ours = np.load(os.path.join(out, "pressure.npy"))
+    for i, force in enumerate(loads["force_n"]):
+        sub = FreeFFTElasticHalfSpace((NX, NY), E_STAR, physical_sizes=(NX * DX, NY * DX))
+        system = make_plastic_system(
+            surface=PlasticTopography(Topography(h, (NX * DX, NY * DX)), hardness),
+            substrate=sub)
+        res = system.minimize_proxy(external_force=force, pentol=1e-12, maxiter=20000)
+        assert res.success, f"ContactMechanics (plastic) did not converge at load {i}"
+        theirs = (res.jac / sub.area_per_pt).T
+        mine = ours[i]
+        assert mine.max() <= hardness, f"pressure {mine.max()} above the hardness"
+        at_h = lambda p: p >= hardness * (1 - 1e-9)  # noqa: E731
+        contact, saturated = int(((mine > 0) ^ (theirs > 0)).sum()), int((at_h(mine) ^ at_h(theirs)).sum())
+        assert saturated == 0 and contact == 0, f"{contact} contact, {saturated} saturated nodes differ"
+        assert at_h(mine).sum() == loads["n_saturated_px"][i]
+        l2 = np.sqrt(np.sum((mine - theirs) ** 2) / np.sum(theirs**2))
+        assert l2 <= 1e-5, f"plastic pressures differ by {l2:.2e}"
+        print(f"hardness 4 GPa, W/W0 = {loads['w_over_w0'][i]}: {int((mine > 0).sum())} nodes in "
+              f"contact, {int(at_h(mine).sum())} at the hardness, as ContactMechanics; "
+              f"pressure relative L2 {l2:.2e}")
+
+
 main()
+plastic()
