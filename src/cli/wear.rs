@@ -178,6 +178,23 @@ fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>), InputError> {
     Ok((e_star, a_star_m2, hardness_pa))
 }
 
+/// Refuse, before any work, a map whose solve needs more memory than the machine has.
+fn check_wear_memory(map: &wearcoef::topography::Topography) -> Result<(), InputError> {
+    // Measured: 126 MB peak for a 1000 × 750 map (square side 1000, padded 2000²), about
+    // 120 bytes per node of the square; 160 leaves room for the tables.
+    let side = map.rows.max(map.cols).next_multiple_of(2) as u64;
+    super::check_memory(
+        &format!(
+            "the contact of a {} × {} map (solved in a square of {side}², padded to {}²)",
+            map.rows,
+            map.cols,
+            2 * side
+        ),
+        160 * side * side,
+        "crop or downsample the map",
+    )
+}
+
 pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     if args.prepare.fill == FillArg::Keep {
         return Err(InputError(
@@ -191,6 +208,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         mut report,
         psd,
     } = prepare(&args.prepare)?;
+    check_wear_memory(&map)?;
     output_dir(&args.out)?;
     let slope = map.rms_slope();
     let pixel_m2 = map.dx * map.dy;
