@@ -130,7 +130,7 @@ pub fn read_square_f64(path: &Path) -> Result<(usize, Vec<f64>), IoError> {
     }
     if shape.len() != 2 || shape[0] != shape[1] || shape[0] == 0 {
         return Err(err(format!(
-            "holds an array of shape ({}), not a non-empty square 2-D array of heights",
+            "holds an array of shape ({}), not a non-empty square 2-D array of heights (one period of a periodic surface; a measured map of any shape goes through `wearcoef wear`, which solves it without wrap-around)",
             shape
                 .iter()
                 .map(|d| d.to_string())
