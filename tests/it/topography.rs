@@ -195,7 +195,7 @@ fn topography_command_states_units_and_removes_the_plane() {
 /// `wearcoef wear`: settings without a unit, a map with missing points and no fill rule,
 /// and an output directory that is not empty are each an input error (exit 2) naming what
 /// to fix, before any work, with nothing written; a valid run fills a new directory (no
-/// staging directory of the page left behind).
+/// staging directory of the page left behind), byte for byte the same on 1 and 2 threads.
 #[test]
 fn wear_refuses_bad_settings_and_writes_nothing() {
     use crate::run_in;
@@ -248,12 +248,22 @@ fn wear_refuses_bad_settings_and_writes_nothing() {
         .unwrap()
         .collect();
     assert_eq!(kept.len(), 1);
-    let out = run_in(dir.path(), &base("map.npy", "c", "100GPa"));
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // Two runs, on one thread and on two: the same bytes in every file.
+    for (threads, out_dir) in [("1", "c"), ("2", "d")] {
+        let mut args = base("map.npy", out_dir, "100GPa");
+        args.push("--pressure-maps");
+        let out = crate::bin()
+            .current_dir(dir.path())
+            .env("RAYON_NUM_THREADS", threads)
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
     let mut written: Vec<String> = std::fs::read_dir(dir.path().join("c"))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -267,9 +277,17 @@ fn wear_refuses_bad_settings_and_writes_nothing() {
             "loads.csv",
             "loads.parquet",
             "preparation.json",
+            "pressure.npy",
             "psd.parquet",
             "wear.png",
             "wear.svg"
         ]
     );
+    for name in &written {
+        let read = |d: &str| std::fs::read(dir.path().join(d).join(name)).unwrap();
+        assert!(
+            read("c") == read("d"),
+            "{name} differs between 1 and 2 threads"
+        );
+    }
 }
