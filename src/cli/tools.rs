@@ -150,8 +150,9 @@ pub struct ClustersArgs {
     /// Also write one row per cluster to this Parquet table, the clusters stage's columns:
     /// `load_index` (the map's index in a stack, 0 for one map), `cluster_id`, `area_px`,
     /// `perimeter_px`, `extent_x_px`, `extent_y_px`, `wraps_x`, `wraps_y` (the cluster joins
-    /// itself across that edge of the periodic box), `percolating`; `wearcoef fit --areas`
-    /// reads it as it is.
+    /// itself across that edge of the periodic box), `percolating`, and with `--open`
+    /// `touches_edge` (a pixel on the map's border: a cluster the window may have cut);
+    /// `wearcoef fit --areas` reads it as it is.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// The map's edges are open (a measured, non-periodic surface): clusters never join
@@ -160,9 +161,9 @@ pub struct ClustersArgs {
     pub open: bool,
 }
 
-/// One row per cluster of every map, as `clusters --out` writes them.
+/// One row per cluster of every map, as `clusters --out` and `wear` write them.
 #[derive(Default)]
-struct ClusterRows {
+pub(crate) struct ClusterRows {
     load_index: Vec<u32>,
     cluster_id: Vec<u32>,
     area_px: Vec<u64>,
@@ -172,10 +173,12 @@ struct ClusterRows {
     wraps_x: Vec<bool>,
     wraps_y: Vec<bool>,
     percolating: Vec<bool>,
+    touches_edge: Vec<bool>,
 }
 
 impl ClusterRows {
-    fn push(&mut self, map: usize, labelling: &clusters::Labelling) {
+    pub(crate) fn push(&mut self, map: usize, labelling: &clusters::Labelling) {
+        self.touches_edge.extend(labelling.touching_border());
         for (k, c) in labelling.clusters.iter().enumerate() {
             self.load_index.push(map as u32);
             self.cluster_id.push(k as u32 + 1);
@@ -189,23 +192,40 @@ impl ClusterRows {
         }
     }
 
-    fn write(self, path: &std::path::Path) -> anyhow::Result<()> {
-        use polars::prelude::{DataFrame, ParquetWriter};
+    /// The clusters' areas in pixels, in row order.
+    pub(crate) fn areas(&self) -> &[u64] {
+        &self.area_px
+    }
+
+    /// The maps' indices, in row order.
+    pub(crate) fn maps(&self) -> &[u32] {
+        &self.load_index
+    }
+
+    /// The table; `touches_edge` (a pixel on the map's border) only for `open` maps.
+    pub(crate) fn frame(self, open: bool) -> anyhow::Result<polars::prelude::DataFrame> {
         use wearcoef::store::table::col;
-        let mut df = DataFrame::new(
-            self.area_px.len(),
-            vec![
-                col("load_index", self.load_index),
-                col("cluster_id", self.cluster_id),
-                col("area_px", self.area_px),
-                col("perimeter_px", self.perimeter_px),
-                col("extent_x_px", self.extent_x_px),
-                col("extent_y_px", self.extent_y_px),
-                col("wraps_x", self.wraps_x),
-                col("wraps_y", self.wraps_y),
-                col("percolating", self.percolating),
-            ],
-        )?;
+        let rows = self.area_px.len();
+        let mut columns = vec![
+            col("load_index", self.load_index),
+            col("cluster_id", self.cluster_id),
+            col("area_px", self.area_px),
+            col("perimeter_px", self.perimeter_px),
+            col("extent_x_px", self.extent_x_px),
+            col("extent_y_px", self.extent_y_px),
+            col("wraps_x", self.wraps_x),
+            col("wraps_y", self.wraps_y),
+            col("percolating", self.percolating),
+        ];
+        if open {
+            columns.push(col("touches_edge", self.touches_edge));
+        }
+        Ok(polars::prelude::DataFrame::new(rows, columns)?)
+    }
+
+    fn write(self, path: &std::path::Path, open: bool) -> anyhow::Result<()> {
+        use polars::prelude::ParquetWriter;
+        let mut df = self.frame(open)?;
         write_atomically(path, |tmp| {
             ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
             Ok(())
@@ -303,7 +323,7 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
         out!("{}", serde_json::to_string(&doc)?)?;
     }
     if let Some(path) = &out {
-        table.write(path)?;
+        table.write(path, open)?;
     }
     Ok(ExitCode::SUCCESS)
 }

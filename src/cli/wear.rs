@@ -126,16 +126,10 @@ fn output_dir(out: &Path) -> Result<(), InputError> {
     }
 }
 
-/// One load's rows: its clusters and its summary.
+/// The loads' rows and their clusters.
 #[derive(Default)]
 struct Tables {
-    // clusters.parquet
-    load_index: Vec<u32>,
-    area_px: Vec<u64>,
-    area_um2: Vec<f64>,
-    perimeter_px: Vec<u64>,
-    touches_edge: Vec<bool>,
-    // loads table
+    clusters: super::tools::ClusterRows,
     rows: Vec<serde_json::Value>,
 }
 
@@ -234,21 +228,9 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         let labelling =
             clusters::label_with(&contact, rows, cols, Connectivity::Eight, Boundary::Open)
                 .map_err(|e| e.to_string())?;
-        let mut edge = vec![false; labelling.clusters.len()];
-        for (k, &l) in labelling.labels.iter().enumerate() {
-            let (row, c) = (k / cols, k % cols);
-            if l > 0 && (row == 0 || c == 0 || row + 1 == rows || c + 1 == cols) {
-                edge[l as usize - 1] = true;
-            }
-        }
         let areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
-        for (c, e) in labelling.clusters.iter().zip(&edge) {
-            tables.load_index.push(i as u32);
-            tables.area_px.push(c.area_px);
-            tables.area_um2.push(c.area_px as f64 * pixel_m2 * 1e12);
-            tables.perimeter_px.push(c.perimeter_px);
-            tables.touches_edge.push(*e);
-        }
+        let touching = labelling.touching_border().iter().filter(|&&t| t).count();
+        tables.clusters.push(i, &labelling);
         let m = wear_at(&areas, a_star_px);
         let fit = super::fit::fit_row(Some(i as u32), r.w_over_w0, &areas, 0, args.resamples, 0);
         tables.rows.push(json!({
@@ -258,7 +240,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
             "real_contact_area_um2": r.n_contact_px as f64 * pixel_m2 * 1e12,
             "area_fraction": r.area_fraction,
             "n_clusters": areas.len(),
-            "n_clusters_touching_edge": edge.iter().filter(|&&e| e).count(),
+            "n_clusters_touching_edge": touching,
             "largest_cluster_um2": areas.iter().max().copied().unwrap_or(0) as f64 * pixel_m2 * 1e12,
             "k_archard": m.k_archard,
             "k_upscaled": m.k_upscaled,
@@ -292,8 +274,8 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     let staging = args.out.join(format!(".page.tmp-{}", std::process::id()));
     std::fs::create_dir_all(&staging)?;
     let mut areas_um2 = vec![Vec::new(); args.loads.len()];
-    for (&i, &a) in tables.load_index.iter().zip(&tables.area_um2) {
-        areas_um2[i as usize].push(a);
+    for (&i, &a) in tables.clusters.maps().iter().zip(tables.clusters.areas()) {
+        areas_um2[i as usize].push(a as f64 * pixel_m2 * 1e12);
     }
     let page = super::wear_page::Page {
         rows: &tables.rows,
@@ -303,8 +285,8 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     };
     let drawn = super::wear_page::write(&page, &staging);
     let psd = super::topography::psd_frame(&psd)?;
-    let written =
-        drawn.and_then(|_| write_outputs(&args.out, tables, &report, maps, psd, &staging));
+    let written = drawn
+        .and_then(|_| write_outputs(&args.out, tables, &report, maps, psd, &staging, pixel_m2));
     let _ = std::fs::remove_dir_all(&staging);
     written?;
     out!(
@@ -355,6 +337,7 @@ fn write_outputs(
     maps: Option<([usize; 3], Vec<f64>)>,
     mut psd: DataFrame,
     staging: &Path,
+    pixel_m2: f64,
 ) -> anyhow::Result<()> {
     let n = t.rows.len();
     let mut columns = vec![col("load_index", (0..n as u32).collect::<Vec<_>>())];
@@ -368,16 +351,14 @@ fn write_outputs(
         }
     }
     let loads = DataFrame::new(n, columns)?;
-    let clusters = DataFrame::new(
-        t.area_px.len(),
-        vec![
-            col("load_index", t.load_index),
-            col("area_px", t.area_px),
-            col("area_um2", t.area_um2),
-            col("perimeter_px", t.perimeter_px),
-            col("touches_edge", t.touches_edge),
-        ],
-    )?;
+    let area_um2: Vec<f64> = t
+        .clusters
+        .areas()
+        .iter()
+        .map(|&a| a as f64 * pixel_m2 * 1e12)
+        .collect();
+    let mut clusters = t.clusters.frame(true)?;
+    clusters.with_column(col("area_um2", area_um2))?;
     let text = serde_json::to_string_pretty(report)?;
     let (lp, lc, cp, pj) = (
         out.join("loads.parquet"),

@@ -360,3 +360,34 @@ fn open_edges_never_join_and_match_an_open_search() {
         }
     }
 }
+
+/// A cluster with a pixel on any of the four edges touches the border; one inside does
+/// not; on random maps, against a direct scan of each cluster's pixels.
+#[test]
+fn clusters_touching_the_border_are_flagged() {
+    use wearcoef::clusters::{label_with, Boundary};
+    let (m, r, c) = map(&[
+        "..#....", ".......", "...##..", ".......", "#.....#", "...#...",
+    ]);
+    let l = label_with(&m, r, c, Connectivity::Eight, Boundary::Open).unwrap();
+    let touching = l.touching_border();
+    let inside: Vec<bool> = l.clusters.iter().map(|cl| cl.area_px == 2).collect();
+    assert_eq!(l.clusters.len(), 5);
+    for (t, i) in touching.iter().zip(&inside) {
+        assert_eq!(*t, !*i);
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    for _ in 0..100 {
+        let (rows, cols) = (rng.random_range(1..30usize), rng.random_range(1..30usize));
+        let m: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.4)).collect();
+        let l = label_with(&m, rows, cols, Connectivity::Eight, Boundary::Open).unwrap();
+        let mut expected = vec![false; l.clusters.len()];
+        for (k, &id) in l.labels.iter().enumerate() {
+            let (y, x) = (k / cols, k % cols);
+            if id > 0 && (y == 0 || x == 0 || y + 1 == rows || x + 1 == cols) {
+                expected[id as usize - 1] = true;
+            }
+        }
+        assert_eq!(l.touching_border(), expected);
+    }
+}

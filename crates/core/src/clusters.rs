@@ -102,6 +102,31 @@ pub struct Labelling {
     pub clusters: Vec<Cluster>,
 }
 
+impl Labelling {
+    /// Per cluster, whether one of its pixels lies on the map's border (row 0 or
+    /// `rows − 1`, column 0 or `cols − 1`): on an open map, a cluster the edge of the
+    /// measurement may have cut, whose true area is unknown.
+    pub fn touching_border(&self) -> Vec<bool> {
+        let mut touching = vec![false; self.clusters.len()];
+        let (rows, cols) = (self.rows, self.cols);
+        let mut mark = |k: usize| {
+            let l = self.labels[k];
+            if l > 0 {
+                touching[l as usize - 1] = true;
+            }
+        };
+        for c in 0..cols {
+            mark(c);
+            mark((rows - 1) * cols + c);
+        }
+        for r in 0..rows {
+            mark(r * cols);
+            mark(r * cols + cols - 1);
+        }
+        touching
+    }
+}
+
 /// Invalid input to the labelling.
 #[derive(Debug, Error, PartialEq, Eq)]
 pub enum ClusterError {
