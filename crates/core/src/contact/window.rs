@@ -89,7 +89,7 @@ pub fn sweep_window(
     let op = PaddedOperator::new(Grid::unit(side)?, 1.0);
     let mut window = vec![0.0; rows * cols];
     let to_window_error = cfg.tolerance / square_cfg.tolerance;
-    let mut pass_on = |i: usize, p: &[f64], r: &LoadResult, saturated: Option<usize>| {
+    let mut pass_on = |i: usize, p: &[f64], r: &LoadResult| {
         let mut touching = 0usize;
         for (k, &v) in p.iter().enumerate() {
             let (row, col) = (k / side, k % side);
@@ -117,7 +117,7 @@ pub fn sweep_window(
             mean_pressure: loads[i] * slope * e_star,
             n_contact_px,
             area_fraction: n_contact_px as f64 / (rows * cols) as f64,
-            n_saturated_px: saturated,
+            n_saturated_px: r.n_saturated_px,
             report,
             seconds: r.seconds,
         };
@@ -125,21 +125,23 @@ pub fn sweep_window(
         Ok(result)
     };
     let mut out = Vec::with_capacity(loads.len());
+    let mut each = |i: usize, p: &[f64], r: &LoadResult| {
+        out.push(pass_on(i, p, r)?);
+        Ok(())
+    };
+    let solve = |constraint, each: &mut EachLoad| {
+        run(
+            &op,
+            &square,
+            slope,
+            &square_loads,
+            &square_cfg,
+            constraint,
+            each,
+        )
+    };
     match hardness.filter(|h| *h != f64::INFINITY) {
-        None => {
-            sweep(
-                &op,
-                &square,
-                slope,
-                &square_loads,
-                &square_cfg,
-                NonNegative,
-                |i, s, r| {
-                    out.push(pass_on(i, s.pressure(), r, None)?);
-                    Ok(())
-                },
-            )?;
-        }
+        None => solve(Bound::Elastic, &mut each)?,
         Some(h) => {
             if let Some((index, &w)) = loads.iter().enumerate().find(|(_, &w)| w > h) {
                 return Err(SweepError::AboveHardness {
@@ -148,19 +150,7 @@ pub fn sweep_window(
                     hardness: h,
                 });
             }
-            let ceiling = Ceiling::new(h * slope)?;
-            sweep(
-                &op,
-                &square,
-                slope,
-                &square_loads,
-                &square_cfg,
-                ceiling,
-                |i, s, r| {
-                    out.push(pass_on(i, s.pressure(), r, r.n_saturated_px)?);
-                    Ok(())
-                },
-            )?;
+            solve(Bound::Ceiling(Ceiling::new(h * slope)?), &mut each)?
         }
     }
     Ok((layout, out))
@@ -223,4 +213,34 @@ fn check_map(map: &Topography, e_star: f64) -> Result<(), SweepError> {
         );
     }
     Ok(())
+}
+
+/// What is done with each converged load: its index, the square's pressure, its result.
+type EachLoad<'a> = dyn FnMut(usize, &[f64], &LoadResult) -> Result<(), String> + 'a;
+
+/// The constraint on the pressure: none above zero, or a ceiling.
+enum Bound {
+    Elastic,
+    Ceiling(Ceiling),
+}
+
+/// One sweep on the square under `bound`, each converged load handed to `each`.
+fn run(
+    op: &PaddedOperator,
+    square: &[f64],
+    slope: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    bound: Bound,
+    each: &mut EachLoad,
+) -> Result<(), SweepError> {
+    match bound {
+        Bound::Elastic => sweep(op, square, slope, loads, cfg, NonNegative, |i, s, r| {
+            each(i, s.pressure(), r)
+        }),
+        Bound::Ceiling(c) => sweep(op, square, slope, loads, cfg, c, |i, s, r| {
+            each(i, s.pressure(), r)
+        }),
+    }
+    .map(|_| ())
 }
