@@ -46,6 +46,24 @@ pub fn load(path: &Path) -> anyhow::Result<Pipeline> {
     Ok(Pipeline::load(path)?)
 }
 
+/// An output file of a given kind, checked before any work: `path` must end in `.{ext}`
+/// (the error says what the file is, `what`), then [`check_outputs`] against `inputs`.
+pub fn check_output_named(
+    option: &str,
+    path: &Path,
+    ext: &str,
+    what: &str,
+    inputs: &[(&str, &Path)],
+) -> Result<(), InputError> {
+    if path.extension().is_none_or(|e| e != ext) {
+        return Err(InputError(format!(
+            "{option} {}: {what}; name it FILE.{ext}",
+            path.display()
+        )));
+    }
+    check_outputs(&[(option, path)], inputs)
+}
+
 /// Check a command's output files before any work is done: each names a file (not a
 /// directory, a device or a pipe) in a directory that exists and can be written, no two name
 /// the same file, none is one of the command's `inputs` (under any name: hard links and

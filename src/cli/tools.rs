@@ -249,14 +249,13 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
     let conn = Connectivity::from_neighbours(connectivity)
         .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
     if let Some(path) = &out {
-        if path.extension().is_none_or(|e| e != "parquet") {
-            return Err(InputError(format!(
-                "--out {}: the table is Parquet; name it FILE.parquet",
-                path.display()
-            ))
-            .into());
-        }
-        check_outputs(&[("--out", path)], &[("--contact", &contact)])?;
+        super::check_output_named(
+            "--out",
+            path,
+            "parquet",
+            "the table is Parquet",
+            &[("--contact", &contact)],
+        )?;
     }
     // One map, or a stack of maps (one per load of a `solve --contact-out` sweep): one
     // result per map, a JSON array for a stack.

@@ -11,7 +11,7 @@ use wearcoef::io::read_measured;
 use wearcoef::psd::{fit_self_affine, log_edges, radial_psd, PsdBin};
 use wearcoef::topography::{Form, Topography};
 
-use super::{check_outputs, write_atomically, InputError};
+use super::{check_output_named, write_atomically, InputError};
 
 /// A length unit of a measured map.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -58,10 +58,10 @@ pub enum FillArg {
 /// Reading and preparing a measured map (shared by `topography` and `wear`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct PrepareArgs {
-    /// The map: .x3p (ISO 25178-72, metres), .nc (NetCDF 3 as SurfaceTopography writes it,
-    /// its unit and lengths read), a 2-D .npy (float32 or float64, any shape) or a text
-    /// matrix (.txt, .csv, .asc, .dat: one row per line); NaN or an invalid flag marks a
-    /// missing point.
+    /// The map: .x3p (ISO 25178-72), .sdf (ISO 25178-71, text or binary), .gsf (Gwyddion),
+    /// .nc (NetCDF 3 as SurfaceTopography writes it), which state their units; a 2-D .npy
+    /// (float32 or float64, any shape, rows along y) or a text matrix (.txt, .csv, .asc,
+    /// .dat: one row per line). NaN or the format's invalid flag marks a missing point.
     #[arg(long)]
     pub input: PathBuf,
     /// The unit of the heights: required when the file states none (.npy, text); given
@@ -259,25 +259,24 @@ pub fn psd_frame(psd: &[PsdBin]) -> anyhow::Result<polars::prelude::DataFrame> {
 }
 
 pub fn topography(args: TopographyArgs) -> anyhow::Result<ExitCode> {
+    let input = [("--input", args.prepare.input.as_path())];
     if let Some(out) = &args.output {
-        if out.extension().is_none_or(|e| e != "npy") {
-            return Err(InputError(format!(
-                "--output {}: the prepared map is a .npy file; name it FILE.npy",
-                out.display()
-            ))
-            .into());
-        }
-        check_outputs(&[("--output", out)], &[("--input", &args.prepare.input)])?;
+        check_output_named(
+            "--output",
+            out,
+            "npy",
+            "the prepared map is a .npy file",
+            &input,
+        )?;
     }
     if let Some(out) = &args.psd {
-        if out.extension().is_none_or(|e| e != "parquet") {
-            return Err(InputError(format!(
-                "--psd {}: the PSD is a Parquet table; name it FILE.parquet",
-                out.display()
-            ))
-            .into());
-        }
-        check_outputs(&[("--psd", out)], &[("--input", &args.prepare.input)])?;
+        check_output_named(
+            "--psd",
+            out,
+            "parquet",
+            "the PSD is a Parquet table",
+            &input,
+        )?;
     }
     let Prepared { map, report, psd } = prepare(&args.prepare)?;
     if let Some(out) = &args.psd {
