@@ -322,6 +322,14 @@ const LOAD_COLUMNS: [&str; 20] = [
     "solver_error",
 ];
 
+/// Writes `df` as Parquet (a file of [`write_all_atomically`]).
+fn parquet<'a>(mut df: DataFrame) -> FileWriter<'a> {
+    Box::new(move |tmp: &Path| {
+        ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
+        Ok(())
+    })
+}
+
 /// The loads table's integer columns (counts).
 const COUNT_COLUMNS: [&str; 4] = [
     "n_clusters",
@@ -335,7 +343,7 @@ fn write_outputs(
     t: Tables,
     report: &serde_json::Value,
     maps: Option<([usize; 3], Vec<f64>)>,
-    mut psd: DataFrame,
+    psd: DataFrame,
     staging: &Path,
     pixel_m2: f64,
 ) -> anyhow::Result<()> {
@@ -376,51 +384,25 @@ fn write_outputs(
         csv_text.write_record(std::iter::once(i.to_string()).chain(cells))?;
     }
     let csv_bytes = csv_text.into_inner()?;
-    let mut parquet_loads = loads;
-    let mut parquet_clusters = clusters;
     let pressure_path = out.join("pressure.npy");
     let psd_path = out.join("psd.parquet");
     let page: Vec<(PathBuf, PathBuf)> = ["wear.png", "wear.svg", "index.html"]
         .iter()
         .map(|name| (out.join(name), staging.join(name)))
         .collect();
-    let mut files: Vec<(&Path, FileWriter)> = vec![
-        (
-            &lp,
-            Box::new(move |tmp: &Path| {
-                ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut parquet_loads)?;
-                Ok(())
-            }),
-        ),
-        (
-            &lc,
-            Box::new(move |tmp: &Path| {
-                std::fs::write(tmp, csv_bytes)?;
-                Ok(())
-            }),
-        ),
-        (
-            &cp,
-            Box::new(move |tmp: &Path| {
-                ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut parquet_clusters)?;
-                Ok(())
-            }),
-        ),
-        (
-            &pj,
-            Box::new(move |tmp: &Path| {
-                std::fs::write(tmp, text)?;
-                Ok(())
-            }),
-        ),
-    ];
-    files.push((
-        &psd_path,
+    let bytes = |b: Vec<u8>| -> FileWriter {
         Box::new(move |tmp: &Path| {
-            ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut psd)?;
+            std::fs::write(tmp, b)?;
             Ok(())
-        }),
-    ));
+        })
+    };
+    let mut files: Vec<(&Path, FileWriter)> = vec![
+        (&lp, parquet(loads)),
+        (&lc, bytes(csv_bytes)),
+        (&cp, parquet(clusters)),
+        (&pj, bytes(text.into_bytes())),
+        (&psd_path, parquet(psd)),
+    ];
     for (to, from) in &page {
         files.push((
             to,
