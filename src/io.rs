@@ -7,6 +7,7 @@ pub mod atomic;
 mod gsf;
 pub mod measured;
 mod netcdf;
+pub mod prepare;
 mod sdf;
 mod x3p;
 

@@ -190,7 +190,7 @@ fn check_wear_memory(map: &wearcoef::topography::Topography) -> Result<(), Input
 }
 
 pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
-    if args.prepare.fill == FillArg::Keep {
+    if args.prepare.preparation.fill == FillArg::Keep {
         return Err(InputError(
             "--fill keep: contact needs every height; choose --fill harmonic or none".into(),
         )
@@ -284,7 +284,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         report: &report,
     };
     let drawn = super::wear_page::write(&page, &staging);
-    let psd = super::topography::psd_frame(&psd)?;
+    let psd = wearcoef::stages::surface::psd_table(&psd)?;
     let written = drawn
         .and_then(|_| write_outputs(&args.out, tables, &report, maps, psd, &staging, pixel_m2));
     let _ = std::fs::remove_dir_all(&staging);

@@ -16,6 +16,7 @@ use crate::surface::{Method, SurfaceParams};
 mod cluster;
 mod figures;
 mod limits;
+mod measured;
 mod sizes;
 pub use cluster::ClusterConfig;
 pub use figures::{FigureDecl, FigureKind};
@@ -89,18 +90,27 @@ pub struct Solver {
 pub struct Study {
     #[serde(default)]
     pub description: String,
-    /// Hurst exponent H ∈ (0, 1).
-    pub hurst: f64,
-    /// Spectrum bandwidth λ_l/λ_s.
-    pub lambda_l_over_lambda_s: f64,
+    /// A measured study: topography files as its realizations, instead of a generated
+    /// spectrum (then `hurst`, `lambda_l_over_lambda_s`, `seed`, `rolloff_over_lambda_l`
+    /// and `method` are not given, nor the profiles' sizes).
+    #[serde(default)]
+    pub measured: Option<MeasuredStudy>,
+    /// Hurst exponent H ∈ (0, 1) (a generated study).
+    #[serde(default)]
+    pub hurst: Option<f64>,
+    /// Spectrum bandwidth λ_l/λ_s (a generated study).
+    #[serde(default)]
+    pub lambda_l_over_lambda_s: Option<f64>,
     /// Optional roll-off plateau: λ_r/λ_l > 1 (flat PSD between q_r and q_l).
     #[serde(default)]
     pub rolloff_over_lambda_l: Option<f64>,
     /// Surface generator: `filter` (default) or `random-phase`.
     #[serde(default = "default_method")]
     pub method: String,
-    /// Study seed; realization i uses `surface::realization_seed(seed, i)`.
-    pub seed: u64,
+    /// Study seed; realization i uses `surface::realization_seed(seed, i)` (a generated
+    /// study).
+    #[serde(default)]
+    pub seed: Option<u64>,
     /// Loads W/W0 of the study's own, shared by all profiles unless a profile overrides
     /// them. A sweep (`min/max/count`) gives the figures that draw the study their nearest
     /// loads; listed values are joined by the loads the study's figures ask for. Without
@@ -121,16 +131,41 @@ fn default_method() -> String {
     "filter".to_string()
 }
 
+/// The files of a measured study and how they are prepared.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasuredStudy {
+    /// Topography files, one realization each, relative to the pipeline file's directory;
+    /// all of one shape and pixel size. Keyed by content: moving a file keeps its results.
+    pub files: Vec<String>,
+    /// The unit of cluster areas λ_s, in pixels of the files (areas are also given per
+    /// λ_s², and the thresholds A*/λ_s² are in it): `wearcoef topography FILE --json`
+    /// reports the fitted one.
+    pub lambda_s_over_dl: f64,
+    /// Units where the files state none, form removed, missing points (defaults: the
+    /// files' units, `form: plane`, `fill: none`).
+    #[serde(default = "default_preparation")]
+    pub preparation: crate::io::prepare::Preparation,
+}
+
+fn default_preparation() -> crate::io::prepare::Preparation {
+    serde_json::from_value(serde_json::json!({})).expect("every preparation field has a default")
+}
+
 /// Per-profile sizes of a study.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StudyProfile {
-    /// Box size over largest wavelength, L/λ_l.
-    pub l_over_lambda_l: f64,
-    /// Resolution of the smallest wavelength, λ_s/Δl (≥ 2).
-    pub lambda_s_over_dl: f64,
-    /// Number of independent surface realizations (≥ 1).
-    pub realizations: u32,
+    /// Box size over largest wavelength, L/λ_l (a generated study).
+    #[serde(default)]
+    pub l_over_lambda_l: Option<f64>,
+    /// Resolution of the smallest wavelength, λ_s/Δl ≥ 2 (a generated study).
+    #[serde(default)]
+    pub lambda_s_over_dl: Option<f64>,
+    /// Number of independent surface realizations ≥ 1 (a generated study; a measured one
+    /// has one per file).
+    #[serde(default)]
+    pub realizations: Option<u32>,
     /// Loads for this profile, replacing the study's.
     #[serde(default)]
     pub loads: Option<Loads>,
@@ -179,6 +214,19 @@ pub struct StudyPlan {
     pub max_iterations: u32,
     /// The hardness (units of W/W0), if the contact is perfectly plastic.
     pub hardness: Option<f64>,
+    /// A measured study's files and preparation (then `surface` holds only
+    /// `lambda_s_px`, and `n` is 0).
+    pub measured: Option<MeasuredPlan>,
+}
+
+/// A measured study resolved: its files (relative to the working directory) and their
+/// preparation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasuredPlan {
+    pub files: Vec<std::path::PathBuf>,
+    /// The fields of pipeline.yaml that name the files, in order (for messages).
+    pub fields: Vec<String>,
+    pub preparation: crate::io::prepare::Preparation,
 }
 
 impl StudyPlan {
@@ -337,6 +385,7 @@ impl Pipeline {
             fig.validate(name, origin, &self.studies, &self.profiles)?;
         }
         figures::check_file_names(&self.figures, origin)?;
+        self.check_measured_figures(origin)?;
         for (name, study) in &self.studies {
             for profile in study.profiles.keys() {
                 self.resolve_study(name, profile, origin)?;
@@ -376,47 +425,32 @@ impl Pipeline {
         let sp = &study.profiles[profile];
         let base = format!("studies.{name}");
         let pbase = format!("{base}.profiles.{profile}");
-        let ratio = sizes::checked_spectrum(study, &base, origin)?;
+        if let Some(m) = &study.measured {
+            return self.resolve_measured(name, profile, m, origin);
+        }
+        let (hurst, ratio) = sizes::checked_spectrum(study, &base, origin)?;
+        let seed = sizes::required(study.seed, format!("{base}.seed"), origin)?;
         let method = Method::parse(&study.method).ok_or_else(|| ConfigError::Invalid {
             path: origin.to_string(),
             field: format!("{base}.method"),
             value: study.method.clone(),
             allowed: "must be `filter` or `random-phase`".into(),
         })?;
-        let n = sizes::checked_grid_side(study, sp, ratio, &base, &pbase, origin)?;
-        let res = sp.lambda_s_over_dl;
+        let (n, res, realizations) =
+            sizes::checked_grid_side(study, sp, ratio, &base, &pbase, origin)?;
         let (loads, sweep, keep_pressure) = self.resolve_study_loads(name, profile, origin)?;
-        if let Some(h) = study.hardness {
-            let invalid = |value: String, allowed: String| ConfigError::Invalid {
-                path: origin.to_string(),
-                field: format!("{base}.hardness"),
-                value,
-                allowed,
-            };
-            if !(h.is_finite() && h > 0.0) {
-                return Err(invalid(
-                    h.to_string(),
-                    "must be finite and > 0 (in units of E*·rms slope, as W/W0), or left out for elastic contact".into(),
-                ));
-            }
-            if let Some(w) = loads.iter().find(|&&w| w > h) {
-                return Err(invalid(
-                    h.to_string(),
-                    format!("is below the load W/W0 = {w} of profile {profile}: a pressure capped at the hardness cannot carry a mean above it; raise the hardness or lower the loads")
-                ));
-            }
-        }
-        limits::check_realizations(&pbase, sp.realizations, loads.len(), profile, origin)?;
+        self.check_hardness(name, profile, &loads, origin)?;
+        limits::check_realizations(&pbase, realizations, loads.len(), profile, origin)?;
         let lambda_s_px = res;
         let lambda_l_px = res * ratio;
         let surface = SurfaceParams {
             n,
-            hurst: study.hurst,
+            hurst,
             lambda_l_px,
             lambda_s_px,
             rolloff_lambda_px: study.rolloff_over_lambda_l.map(|r| r * lambda_l_px),
             method,
-            seed: study.seed,
+            seed,
         };
         surface.validate().map_err(|e| ConfigError::Invalid {
             path: origin.to_string(),
@@ -427,8 +461,8 @@ impl Pipeline {
         Ok(StudyPlan {
             name: name.to_string(),
             profile: profile.to_string(),
-            realizations: sp.realizations,
-            seed: study.seed,
+            realizations,
+            seed,
             surface,
             loads,
             keep_pressure,
@@ -437,6 +471,7 @@ impl Pipeline {
             tolerance: sp.tolerance.unwrap_or(self.solver.tolerance),
             max_iterations: self.solver.max_iterations,
             hardness: study.hardness,
+            measured: None,
         })
     }
 }

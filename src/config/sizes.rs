@@ -3,26 +3,46 @@
 
 use super::{ConfigError, Study, StudyProfile, MAX_N};
 
-/// A study's spectrum checked: 0 < H < 1 and λ_l/λ_s > 1; returns λ_l/λ_s.
+/// A field a generated study must give.
+pub(super) fn required<T: Copy>(
+    value: Option<T>,
+    field: String,
+    origin: &str,
+) -> Result<T, ConfigError> {
+    value.ok_or_else(|| ConfigError::Invalid {
+        path: origin.to_string(),
+        field,
+        value: "(missing)".into(),
+        allowed: "a generated study gives it (or the study is `measured`, from topography files)"
+            .into(),
+    })
+}
+
+/// A study's spectrum checked: 0 < H < 1 and λ_l/λ_s > 1; returns (H, λ_l/λ_s).
 pub(super) fn checked_spectrum(
     study: &Study,
     base: &str,
     origin: &str,
-) -> Result<f64, ConfigError> {
+) -> Result<(f64, f64), ConfigError> {
     let invalid = |field: String, value: f64, allowed: String| ConfigError::Invalid {
         path: origin.to_string(),
         field,
         value: value.to_string(),
         allowed,
     };
-    if !(study.hurst.is_finite() && study.hurst > 0.0 && study.hurst < 1.0) {
+    let hurst = required(study.hurst, format!("{base}.hurst"), origin)?;
+    if !(hurst.is_finite() && hurst > 0.0 && hurst < 1.0) {
         return Err(invalid(
             format!("{base}.hurst"),
-            study.hurst,
+            hurst,
             "the Hurst exponent must lie in the open interval (0, 1)".into(),
         ));
     }
-    let ratio = study.lambda_l_over_lambda_s;
+    let ratio = required(
+        study.lambda_l_over_lambda_s,
+        format!("{base}.lambda_l_over_lambda_s"),
+        origin,
+    )?;
     if !(ratio.is_finite() && ratio > 1.0) {
         return Err(invalid(
             format!("{base}.lambda_l_over_lambda_s"),
@@ -30,11 +50,12 @@ pub(super) fn checked_spectrum(
             "λ_l/λ_s must be finite and > 1 (λ_l > λ_s)".into(),
         ));
     }
-    Ok(ratio)
+    Ok((hurst, ratio))
 }
 
 /// A study's sizes in one profile checked (roll-off, tolerance, λ_s/Δl, L/λ_l, realizations)
-/// and its grid side n = (L/λ_l)·(λ_l/λ_s)·(λ_s/Δl), an even integer in [4, MAX_N].
+/// and its grid side n = (L/λ_l)·(λ_l/λ_s)·(λ_s/Δl), an even integer in [4, MAX_N]; returns
+/// (n, λ_s/Δl, realizations).
 pub(super) fn checked_grid_side(
     study: &Study,
     sp: &StudyProfile,
@@ -42,19 +63,30 @@ pub(super) fn checked_grid_side(
     base: &str,
     pbase: &str,
     origin: &str,
-) -> Result<usize, ConfigError> {
+) -> Result<(usize, f64, u32), ConfigError> {
     let invalid = |field: String, value: f64, allowed: String| ConfigError::Invalid {
         path: origin.to_string(),
         field,
         value: value.to_string(),
         allowed,
     };
+    let box_ratio = required(
+        sp.l_over_lambda_l,
+        format!("{pbase}.l_over_lambda_l"),
+        origin,
+    )?;
+    let res = required(
+        sp.lambda_s_over_dl,
+        format!("{pbase}.lambda_s_over_dl"),
+        origin,
+    )?;
+    let realizations = required(sp.realizations, format!("{pbase}.realizations"), origin)?;
     if let Some(r) = study.rolloff_over_lambda_l {
-        if !(r.is_finite() && r > 1.0 && r <= sp.l_over_lambda_l) {
+        if !(r.is_finite() && r > 1.0 && r <= box_ratio) {
             return Err(invalid(
                 format!("{base}.rolloff_over_lambda_l"),
                 r,
-                format!("λ_r/λ_l must lie in (1, L/λ_l = {}]", sp.l_over_lambda_l),
+                format!("λ_r/λ_l must lie in (1, L/λ_l = {box_ratio}]"),
             ));
         }
     }
@@ -67,7 +99,6 @@ pub(super) fn checked_grid_side(
             ));
         }
     }
-    let res = sp.lambda_s_over_dl;
     if !(res.is_finite() && res >= 2.0) {
         return Err(invalid(
             format!("{pbase}.lambda_s_over_dl"),
@@ -75,7 +106,6 @@ pub(super) fn checked_grid_side(
             "λ_s/Δl must be ≥ 2: the smallest wavelength needs at least two grid spacings (Nyquist)".into(),
         ));
     }
-    let box_ratio = sp.l_over_lambda_l;
     if !(box_ratio.is_finite() && box_ratio >= 1.0) {
         return Err(invalid(
             format!("{pbase}.l_over_lambda_l"),
@@ -83,7 +113,7 @@ pub(super) fn checked_grid_side(
             "L/λ_l must be ≥ 1: the largest wavelength cannot exceed the box".into(),
         ));
     }
-    if sp.realizations == 0 {
+    if realizations == 0 {
         return Err(invalid(
             format!("{pbase}.realizations"),
             0.0,
@@ -109,5 +139,5 @@ pub(super) fn checked_grid_side(
             format!("the grid L/Δl = {n} must be an even integer in [4, {MAX_N}]"),
         ));
     }
-    Ok(n)
+    Ok((n, res, realizations))
 }

@@ -123,8 +123,8 @@ fn per_threshold(
 /// pooled over realizations) and from the fitted plateau + power-law model (dashed).
 ///
 /// Input 0: the study's statistics; input 1: its fitted model (analytic).
-pub fn fig45(inputs: &Inputs, lambda_l_over_lambda_s: f64) -> anyhow::Result<Vec<(String, Drawn)>> {
-    let spectrum = format!("λ_l/λ_s = {}", super::plot::number(lambda_l_over_lambda_s));
+/// `spectrum` names the surfaces in the titles (`λ_l/λ_s = 128`, or a measured study).
+pub fn fig45(inputs: &Inputs, spectrum: &str) -> anyhow::Result<Vec<(String, Drawn)>> {
     let wear = &inputs.table(0, "statistics", "wear.parquet")?;
     let model = &inputs.table(1, "analytic", "model.parquet")?;
     let mut k = per_threshold(wear, "k_archard_pooled", "K", false)?;
@@ -182,7 +182,7 @@ pub fn fig45(inputs: &Inputs, lambda_l_over_lambda_s: f64) -> anyhow::Result<Vec
         ),
         (
             "fig45_dn_dac".into(),
-            Drawn::Line(regime(inputs, &spectrum)?),
+            Drawn::Line(regime(inputs, spectrum)?),
         ),
     ])
 }

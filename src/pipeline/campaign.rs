@@ -324,6 +324,7 @@ mod tests {
                 seconds,
                 peak_bytes: peak,
             },
+            source: None,
         }
     }
 

@@ -154,7 +154,9 @@ impl Catalog {
             let spectra: Vec<[(&str, Value); 4]> = inst
                 .studies
                 .iter()
-                .filter_map(|s| by_name.get(s.as_str()).map(|p| ratios(p)))
+                .filter_map(|s| by_name.get(s.as_str()))
+                .filter(|p| p.measured.is_none())
+                .map(|p| ratios(p))
                 .collect();
             let numerical = !matches!(inst.stage.as_str(), "figures" | "audits");
             if numerical && !spectra.is_empty() && spectra.iter().all(|s| s == &spectra[0]) {

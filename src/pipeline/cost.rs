@@ -303,14 +303,16 @@ impl CostModel {
         let p = params;
         match stage {
             "surface" => {
-                let n = num(p, "n").unwrap_or(0.0);
+                let n = num(p, "n").unwrap_or_else(|| measured_side(p).sqrt());
                 Estimate {
                     seconds: self.surface_per_n2logn * n2logn(n),
                     peak_bytes: doubles(6.0, n),
                 }
             }
             "contact" => {
-                let n = surface.and_then(|s| num(s, "n")).unwrap_or(0.0);
+                // A measured map is solved on the zero-padded square of twice its longer
+                // side (contact::window).
+                let n = surface.map_or(0.0, |s| num(s, "n").unwrap_or_else(|| padded_side(s)));
                 let iterations = self.sweep_iterations(p, surface, n);
                 Estimate {
                     seconds: self.contact_per_iteration_n2logn * iterations * n2logn(n),
@@ -318,7 +320,10 @@ impl CostModel {
                 }
             }
             "clusters" => {
-                let n = num(p, "n").unwrap_or(0.0);
+                let n = match p.get("window").and_then(|w| w.as_array()) {
+                    Some(w) => w.iter().filter_map(Value::as_f64).product::<f64>().sqrt(),
+                    None => num(p, "n").unwrap_or(0.0),
+                };
                 Estimate {
                     seconds: self.clusters_per_load_n2 * loads_of(p) * n * n,
                     peak_bytes: (17.0 * n * n) as u64,
@@ -330,6 +335,19 @@ impl CostModel {
             },
         }
     }
+}
+
+/// `rows·cols` of a measured surface job (0 for any other).
+fn measured_side(p: &Value) -> f64 {
+    num(p, "rows").unwrap_or(0.0) * num(p, "cols").unwrap_or(0.0)
+}
+
+/// The FFT side of a measured surface's padded solve: twice its longer side, made even.
+fn padded_side(p: &Value) -> f64 {
+    let longer = num(p, "rows")
+        .unwrap_or(0.0)
+        .max(num(p, "cols").unwrap_or(0.0));
+    2.0 * (longer / 2.0).ceil() * 2.0
 }
 
 pub use crate::machine::memory_bytes as machine_memory_bytes;

@@ -181,6 +181,7 @@ mod tests {
             name: name.map(str::to_string),
             cached: false,
             estimate: Default::default(),
+            source: None,
         }
     }
 

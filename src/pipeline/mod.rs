@@ -14,6 +14,7 @@ pub mod registry;
 pub mod report;
 pub mod runner;
 pub mod slurm;
+pub mod sources;
 pub mod status;
 
 /// A usage error (an unknown target, a plan that cannot run here): the command exits with

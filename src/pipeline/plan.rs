@@ -12,6 +12,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::cost::Estimate;
+use super::sources::measured_surfaces;
+pub use super::sources::SourceFile;
 use crate::config::{FigureDecl, FigureKind, Pipeline, StudyPlan};
 use crate::stages::analytic::{Analytic, AnalyticJob};
 use crate::stages::audits::{AuditJob, Audits, Setting};
@@ -20,7 +22,7 @@ use crate::stages::contact::{Contact, ContactJob};
 use crate::stages::figures::StudyRef;
 use crate::stages::figures::{FigureJob, Figures};
 use crate::stages::statistics::{Statistics, StatisticsJob, A_STAR_OVER_LS2};
-use crate::stages::surface::Surface;
+use crate::stages::surface::{Surface, SurfaceJob};
 use crate::stages::{keyed, InputRef, Stage};
 use crate::store::Store;
 
@@ -47,6 +49,10 @@ pub struct Instance {
     pub cached: bool,
     #[serde(default)]
     pub estimate: Estimate,
+    /// A file the runner copies into the entry before computing it (a measured study's
+    /// topography); its content, not its place, is in the key.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<SourceFile>,
 }
 
 impl Instance {
@@ -126,6 +132,7 @@ impl Builder {
                 name: name.map(str::to_string),
                 cached: false,
                 estimate: Estimate::default(),
+                source: None,
             });
         }
         InputRef {
@@ -190,7 +197,7 @@ impl Plan {
         let mut b = Builder::default();
         let mut keys: Vec<StudyKeys> = Vec::new();
         for plan in &plans {
-            keys.push(study_instances(&mut b, plan));
+            keys.push(study_instances(&mut b, plan)?);
         }
         for (name, decl) in &figures {
             figure_instances(&mut b, name, decl, profile, &keys)?;
@@ -272,11 +279,41 @@ fn select(all: Vec<Instance>, targets: &[String]) -> Vec<Instance> {
         .collect()
 }
 
-fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> StudyKeys<'a> {
+/// A study's surface instances: generated from its seed, or its measured files read (each
+/// hashed, and its shape taken, here) and attached as the instances' sources.
+fn surface_instances(b: &mut Builder, plan: &StudyPlan) -> anyhow::Result<Vec<InputRef>> {
     let studies = std::slice::from_ref(&plan.name);
-    let (mut surfaces, mut contacts, mut clusters) = (Vec::new(), Vec::new(), Vec::new());
-    for r in 0..plan.realizations {
-        let surface = b.add::<Surface>(&plan.surface_for(r), vec![], studies, Some(r), None);
+    let Some(m) = &plan.measured else {
+        return Ok((0..plan.realizations)
+            .map(|r| {
+                let job = SurfaceJob::Generated(plan.surface_for(r));
+                b.add::<Surface>(&job, vec![], studies, Some(r), None)
+            })
+            .collect());
+    };
+    let mut out = Vec::new();
+    for (r, (job, source)) in measured_surfaces(m)?.into_iter().enumerate() {
+        let surface = b.add::<Surface>(&job, vec![], studies, Some(r as u32), None);
+        b.out[b.index[&surface.key]].source = Some(source);
+        out.push(surface);
+    }
+    Ok(out)
+}
+
+fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> anyhow::Result<StudyKeys<'a>> {
+    let studies = std::slice::from_ref(&plan.name);
+    let surfaces = surface_instances(b, plan)?;
+    let window = match (&plan.measured, surfaces.first()) {
+        (Some(_), Some(first)) => {
+            let job = &b.out[b.index[&first.key]].params;
+            let dim = |k: &str| job[k].as_u64().unwrap_or(0) as usize;
+            Some([dim("rows"), dim("cols")])
+        }
+        _ => None,
+    };
+    let (mut contacts, mut clusters) = (Vec::new(), Vec::new());
+    for (r, surface) in surfaces.iter().enumerate() {
+        let r = r as u32;
         let job = ContactJob {
             loads: plan.loads.clone(),
             keep_pressure: plan.keep_pressure.clone(),
@@ -293,31 +330,32 @@ fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> StudyKeys<'a> {
             realization: r,
             connectivity: Default::default(),
             saturated: plan.hardness.is_some(),
+            window,
         };
         clusters.push(b.add::<Clusters>(&job, vec![contact.clone()], studies, Some(r), None));
-        surfaces.push(surface);
         contacts.push(contact);
     }
-    let job = StatisticsJob::standard(
+    let mut job = StatisticsJob::standard(
         plan.loads.clone(),
         plan.surface.n,
         plan.surface.lambda_s_px,
         plan.seed,
     );
+    job.map_pixels = window.map(|[rows, cols]| (rows * cols) as u64);
     let statistics = b.add::<Statistics>(&job, clusters.clone(), studies, None, None);
     let job = AnalyticJob::Fitted {
         lambda_s_px: plan.surface.lambda_s_px,
         a_star_over_ls2: A_STAR_OVER_LS2.to_vec(),
     };
     let analytic = b.add::<Analytic>(&job, vec![statistics.clone()], studies, None, None);
-    StudyKeys {
+    Ok(StudyKeys {
         plan,
         surfaces,
         contacts,
         clusters,
         statistics,
         analytic,
-    }
+    })
 }
 
 /// A study's reference in a figure: legend text `name = value`.
@@ -472,8 +510,20 @@ fn fig45_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
     let k = c.find(decl.study.as_deref().unwrap_or_default())?;
     let inputs = vec![k.statistics.clone(), k.analytic.clone()];
     let studies = std::slice::from_ref(&k.plan.name);
-    let job = FigureJob::Fig45 {
-        lambda_l_over_lambda_s: k.plan.surface.lambda_l_px / k.plan.surface.lambda_s_px,
+    let job = match &k.plan.measured {
+        Some(m) => FigureJob::Fig45 {
+            lambda_l_over_lambda_s: 0.0,
+            measured: Some(format!(
+                "measured ({} file{}, λ_s = {} px)",
+                m.files.len(),
+                if m.files.len() == 1 { "" } else { "s" },
+                k.plan.surface.lambda_s_px
+            )),
+        },
+        None => FigureJob::Fig45 {
+            lambda_l_over_lambda_s: k.plan.surface.lambda_l_px / k.plan.surface.lambda_s_px,
+            measured: None,
+        },
     };
     b.add::<Figures>(&job, inputs, studies, None, fig);
     Ok(())

@@ -549,6 +549,16 @@ fn build(
             .to_string(),
     );
     let plain = |e: &dyn std::fmt::Display| format!("{e:#}").replace(&temporary, &place);
+    if let Some(src) = &inst.source {
+        // A measured file: copied in, so the entry holds what it was computed from (the
+        // stage checks its hash against the key's).
+        std::fs::copy(&src.path, entry.path().join(&src.file)).map_err(|e| {
+            crate::pipeline::UsageError(format!(
+                "{}: cannot be read ({e}); a measured study's files must stay where the plan found them",
+                src.path.display()
+            ))
+        })?;
+    }
     let measured = alone && crate::machine::reset_peak_rss();
     let results = match stage.compute(&inst.params, &inputs, entry.path()) {
         Ok(results) => results,

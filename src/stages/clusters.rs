@@ -10,7 +10,7 @@ use serde_json::{json, Value};
 
 use super::contact::{contact_file, saturated_file};
 use super::{Inputs, Stage};
-use crate::clusters::{self, Connectivity};
+use crate::clusters::{self, Boundary, Connectivity};
 use crate::store::table::{col, load_columns, write};
 
 pub struct Clusters;
@@ -35,6 +35,21 @@ pub struct ClustersJob {
     /// elastic.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub saturated: bool,
+    /// A measured map: its `[rows, cols]`, labelled without wrap-around (`n` is 0), with a
+    /// `touches_edge` column for the clusters its border cuts. Absent (and not in the key)
+    /// for the periodic `n × n` grid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<[usize; 2]>,
+}
+
+impl ClustersJob {
+    /// Rows, columns and boundary of the maps.
+    fn shape(&self) -> (usize, usize, Boundary) {
+        match self.window {
+            Some([rows, cols]) => (rows, cols, Boundary::Open),
+            None => (self.n, self.n, Boundary::Periodic),
+        }
+    }
 }
 
 impl Stage for Clusters {
@@ -75,7 +90,9 @@ fn label_maps(
     per_load: bool,
 ) -> anyhow::Result<Value> {
     let ls2 = job.lambda_s_px * job.lambda_s_px;
-    let pixels = (job.n * job.n) as f64;
+    let (want_rows, want_cols, boundary) = job.shape();
+    let pixels = (want_rows * want_cols) as f64;
+    let mut touches_edge = Vec::new();
     // Per cluster.
     let (mut load_index, mut w, mut id) = (Vec::new(), Vec::new(), Vec::new());
     let (mut area, mut area_ls2, mut perimeter) = (Vec::new(), Vec::new(), Vec::new());
@@ -86,14 +103,16 @@ fn label_maps(
     for (i, &load) in job.loads.iter().enumerate() {
         let path = inputs.file(0, "contact", &file(i))?;
         let (rows, cols, map, _) = crate::io::read_contact_map(&path)?;
-        if (rows, cols) != (job.n, job.n) {
+        if (rows, cols) != (want_rows, want_cols) {
             anyhow::bail!(
-                "{}: contact map is {rows} × {cols}, the study's grid is {n} × {n}",
+                "{}: contact map is {rows} × {cols}, the study's grid is {want_rows} × {want_cols}",
                 path.display(),
-                n = job.n
             );
         }
-        let l = clusters::label(&map, rows, cols, job.connectivity)?;
+        let l = clusters::label_with(&map, rows, cols, job.connectivity, boundary)?;
+        if job.window.is_some() {
+            touches_edge.extend(l.touching_border());
+        }
         let mut in_contact = 0u64;
         let mut max_area = 0u64;
         for (k, c) in l.clusters.iter().enumerate() {
@@ -132,7 +151,10 @@ fn label_maps(
                 col("extent_x_px", extent_x),
                 col("extent_y_px", extent_y),
                 col("percolating", percolating),
-            ],
+            ]
+            .into_iter()
+            .chain(job.window.map(|_| col("touches_edge", touches_edge)))
+            .collect(),
         )?,
     )?;
     let loads = job.loads.len();

@@ -11,8 +11,10 @@ use super::{Inputs, Stage};
 use crate::contact::elastic::ElasticOperator;
 use crate::contact::solver::SolverConfig;
 use crate::contact::sweep::{pack_contact, sweep_heights_with_hardness, LoadResult};
+use crate::contact::window::sweep_window;
 use crate::grid::Grid;
 use crate::store::table::{col, load_columns, write};
+use crate::topography::Topography;
 
 pub struct Contact;
 
@@ -62,6 +64,10 @@ impl Stage for Contact {
     type Job = ContactJob;
 
     fn compute(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+        let surface = inputs.of(0, "surface")?;
+        if surface.results["periodic"] == Value::Bool(false) {
+            return compute_window(job, inputs, dir);
+        }
         let path = inputs.file(0, "surface", "heights.npy")?;
         let (n, heights) = crate::io::read_square_f64(&path)?;
         let cfg = SolverConfig {
@@ -119,6 +125,86 @@ impl Stage for Contact {
             "solve_seconds": results.iter().map(|r| r.seconds).collect::<Vec<_>>(),
         }))
     }
+}
+
+/// The sweep of a measured map (not periodic, rows × cols, heights in metres): the free
+/// boundary half-space of [`sweep_window`]. Contact maps are written unpacked (`u8` 0/1,
+/// rows × cols), saturated maps likewise; no plastic displacement field is written.
+fn compute_window(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
+    let results = &inputs.of(0, "surface")?.results;
+    let pixel = |k: &str| {
+        results[k]
+            .as_f64()
+            .ok_or_else(|| anyhow::anyhow!("the measured surface records no {k}"))
+    };
+    let path = inputs.file(0, "surface", "heights.npy")?;
+    let read = crate::io::read_measured(&path)?;
+    let map = Topography::new(
+        read.rows,
+        read.cols,
+        pixel("pixel_size_x_m")?,
+        pixel("pixel_size_y_m")?,
+        read.heights,
+    )?;
+    let cfg = SolverConfig {
+        tolerance: job.tolerance,
+        max_iterations: job.max_iterations as usize,
+        ..SolverConfig::default()
+    };
+    let (rows, cols) = (map.rows, map.cols);
+    let ceiling = job.hardness.map(|h| h * job.e_star * map.rms_slope());
+    let bits = |on: &dyn Fn(f64) -> bool, p: &[f64]| -> Vec<u8> {
+        p.iter().map(|&v| u8::from(on(v))).collect()
+    };
+    let (layout, loads) = sweep_window(
+        &map,
+        job.e_star,
+        &job.loads,
+        &cfg,
+        job.hardness,
+        |index, pressure, _| {
+            let write = |name: String, values: Vec<u8>| {
+                crate::io::write_u8(&dir.join(name), &[rows, cols], values)
+                    .map_err(|e| e.to_string())
+            };
+            write(contact_file(index), bits(&|p| p > 0.0, pressure))?;
+            if let Some(c) = ceiling {
+                write(saturated_file(index), bits(&|p| p >= c, pressure))?;
+            }
+            if job.keep_pressure.contains(&index) {
+                crate::io::write_f64(
+                    &dir.join(pressure_file(index)),
+                    &[rows, cols],
+                    pressure.to_vec(),
+                )
+                .map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        },
+    )?;
+    let results: Vec<LoadResult> = loads
+        .into_iter()
+        .map(|l| LoadResult {
+            w_over_w0: l.w_over_w0,
+            mean_pressure: l.mean_pressure,
+            area_fraction: l.area_fraction,
+            n_contact_px: l.n_contact_px,
+            n_saturated_px: l.n_saturated_px,
+            ceiling,
+            report: l.report,
+            seconds: l.seconds,
+        })
+        .collect();
+    write(dir, "loads.parquet", loads_table(&results)?)?;
+    Ok(json!({
+        "rows": rows,
+        "cols": cols,
+        "rms_slope": layout.rms_slope,
+        "half_space": "free boundary (zero-padded), the map's outside never in contact",
+        "layout": layout,
+        "total_iterations": results.iter().map(|r| r.report.iterations).sum::<usize>(),
+        "solve_seconds": results.iter().map(|r| r.seconds).collect::<Vec<_>>(),
+    }))
 }
 
 /// The plastic displacement of a solved field under the ceiling `ceiling` (docs/CONVENTIONS.md):

@@ -63,9 +63,13 @@ pub enum FigureJob {
         loads: Vec<f64>,
         inset_load: f64,
     },
-    /// Figs. 4b, 5a, 5b of a study of spectrum `lambda_l_over_lambda_s`. Inputs: the
-    /// statistics, the fitted model.
-    Fig45 { lambda_l_over_lambda_s: f64 },
+    /// Figs. 4b, 5a, 5b of a study of spectrum `lambda_l_over_lambda_s` (0 for a measured
+    /// study, which `measured` then names). Inputs: the statistics, the fitted model.
+    Fig45 {
+        lambda_l_over_lambda_s: f64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        measured: Option<String>,
+    },
     /// Fig. B.1 (`b1`) or B.2 and the convergence chart. Inputs: each setting's statistics,
     /// then the settings audit.
     Appendix {
@@ -114,7 +118,17 @@ impl Stage for Figures {
             } => draw::fig3_4a::fig34a(inputs, ratios, hurst, loads, *inset_load)?,
             FigureJob::Fig45 {
                 lambda_l_over_lambda_s,
-            } => draw::fig45::fig45(inputs, *lambda_l_over_lambda_s)?,
+                measured,
+            } => {
+                let surface = match measured {
+                    Some(name) => name.clone(),
+                    None => format!(
+                        "λ_l/λ_s = {}",
+                        crate::figures::plot::number(*lambda_l_over_lambda_s)
+                    ),
+                };
+                draw::fig45::fig45(inputs, &surface)?
+            }
             FigureJob::Appendix {
                 figure,
                 quantity,

@@ -49,6 +49,10 @@ pub struct StatisticsJob {
     pub min_tail: usize,
     /// Wear-volume factor ω of the wear rate (volume = ω A^(3/2)).
     pub omega: f64,
+    /// A measured study's maps: rows × cols pixels each (`n` is 0). Absent (and not in the
+    /// key) for the `n × n` grid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map_pixels: Option<u64>,
 }
 
 impl StatisticsJob {
@@ -64,6 +68,7 @@ impl StatisticsJob {
             bootstrap_resamples: BOOTSTRAP_RESAMPLES,
             min_tail: powerlaw::MIN_TAIL,
             omega: stats::OMEGA,
+            map_pixels: None,
         }
     }
 }
@@ -157,7 +162,7 @@ fn compute_statistics(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyho
         s,
         pooled,
         ls2: job.lambda_s_px * job.lambda_s_px,
-        pixels: (job.n * job.n) as f64,
+        pixels: job.map_pixels.unwrap_or((job.n * job.n) as u64) as f64,
         loads,
         realizations: inputs.len(),
     };

@@ -8,6 +8,7 @@ mod config;
 mod contact;
 mod galleries;
 mod layout;
+mod measured_study;
 mod plan;
 mod plastic;
 mod powerlaw;

@@ -447,8 +447,8 @@ fn catalog_reads_back_with_typed_columns() {
 /// is bumped on purpose: this pins the key of one surface instance.
 #[test]
 fn cache_key_is_stable() {
-    use wearcoef::stages::{keyed, surface::Surface};
-    let (_, key) = keyed::<Surface>(&key_fixture(), &[]);
+    use wearcoef::stages::{keyed, surface::Surface, surface::SurfaceJob};
+    let (_, key) = keyed::<Surface>(&SurfaceJob::Generated(key_fixture()), &[]);
     assert_eq!(
         key, PINNED_SURFACE_KEY,
         "surface keys changed: bump SURFACE_VERSION or the salt deliberately"
@@ -473,10 +473,10 @@ const PINNED_SURFACE_KEY: &str = "8aa76b2801a9988576896a292e010b73809f1fcc17df84
 /// Every parameter the surface stage reads changes its key.
 #[test]
 fn every_surface_parameter_changes_the_key() {
-    use wearcoef::stages::{keyed, surface::Surface};
+    use wearcoef::stages::{keyed, surface::Surface, surface::SurfaceJob};
     use wearcoef::surface::{Method, SurfaceParams};
     let base = key_fixture();
-    let key = |p: &SurfaceParams| keyed::<Surface>(p, &[]).1;
+    let key = |p: &SurfaceParams| keyed::<Surface>(&SurfaceJob::Generated(p.clone()), &[]).1;
     let variants = [
         SurfaceParams {
             n: 128,

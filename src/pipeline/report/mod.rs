@@ -33,6 +33,8 @@ pub struct Sizes {
     pub tolerance: f64,
     /// Loads whose pressure field is kept (the maps of Fig. 2b–d), as W/W₀.
     pub kept_loads: Vec<f64>,
+    /// A measured study (no spectrum, box or grid side: its files set them).
+    pub measured: bool,
 }
 
 impl Sizes {
@@ -48,6 +50,7 @@ impl Sizes {
             loads: p.loads.clone(),
             tolerance: p.tolerance,
             kept_loads: p.keep_pressure.iter().map(|&i| p.loads[i]).collect(),
+            measured: p.measured.is_some(),
         }
     }
 
@@ -277,6 +280,14 @@ fn parameter_table(context: &Context, studies: &[String]) -> String {
             continue;
         };
         let paper = context.paper.get(study);
+        // A measured study's files set these: the cell says so.
+        let generated = |text: String| {
+            if s.measured {
+                "measured".to_string()
+            } else {
+                text
+            }
+        };
         let cell = |ours: String, theirs: Option<String>| match theirs {
             Some(t) if t != ours => format!("<b>{ours}</b> (paper {t})"),
             Some(_) => ours,
@@ -287,17 +298,17 @@ fn parameter_table(context: &Context, studies: &[String]) -> String {
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
              <td>{}</td><td>{}</td></tr>",
             escape(study),
-            number(s.hurst),
-            number(s.lambda_l_over_lambda_s),
-            cell(
+            generated(number(s.hurst)),
+            generated(number(s.lambda_l_over_lambda_s)),
+            generated(cell(
                 number(s.l_over_lambda_l),
                 paper.map(|p| number(p.l_over_lambda_l))
-            ),
+            )),
             cell(
                 number(s.lambda_s_over_dl),
                 paper.map(|p| number(p.lambda_s_over_dl))
             ),
-            cell(s.n.to_string(), paper.map(|p| p.n.to_string())),
+            generated(cell(s.n.to_string(), paper.map(|p| p.n.to_string()))),
             cell(
                 s.realizations.to_string(),
                 paper.map(|p| p.realizations.to_string())

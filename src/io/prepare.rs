@@ -1,0 +1,265 @@
+//! A measured map prepared for contact: read, its units stated, its form removed and its
+//! missing points counted or filled, with the record of what was done. Shared by `wearcoef
+//! topography`, `wearcoef wear` and the surface stage of a `measured` study, which spell
+//! the same settings as options (`--height-unit`) and as `pipeline.yaml` fields
+//! (`height_unit`).
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use super::measured::READ_EXTENSIONS;
+use super::{read_measured, IoError};
+use crate::psd::{fit_self_affine, log_edges, radial_psd, PsdBin};
+use crate::topography::{Form, Topography};
+
+/// A length unit of a measured map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Unit {
+    M,
+    Mm,
+    Um,
+    Nm,
+}
+
+impl Unit {
+    pub fn metres(self) -> f64 {
+        match self {
+            Unit::M => 1.0,
+            Unit::Mm => 1e-3,
+            Unit::Um => 1e-6,
+            Unit::Nm => 1e-9,
+        }
+    }
+}
+
+/// The form removed by least squares over the present points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FormArg {
+    /// Nothing removed (the heights as read, scaled to metres).
+    None,
+    Mean,
+    Plane,
+    Curvature,
+}
+
+/// What is done with missing points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FillArg {
+    /// Refuse a map with missing points, naming how many and the first.
+    None,
+    /// Harmonic (Laplace) interpolation from the present points, after the form removal.
+    Harmonic,
+    /// Keep them missing (NaN) in the prepared map: `topography` only, for inspection;
+    /// contact needs every height.
+    Keep,
+}
+
+/// How a measured map is prepared: its units where the file states none (or overriding
+/// the file's), the form removed and the rule for missing points.
+#[derive(clap::Args, Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Preparation {
+    /// The unit of the heights: required when the file states none (.npy, text); given
+    /// for a file that states one, it overrides the file.
+    #[arg(long, value_enum)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_unit: Option<Unit>,
+    /// The pixel size along x (columns), in --pixel-unit: required when the file states
+    /// none; overrides the file's.
+    #[arg(long)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixel_size: Option<f64>,
+    /// The pixel size along y (rows), if not that of x.
+    #[arg(long)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixel_size_y: Option<f64>,
+    /// The unit of the pixel sizes (default: that of the heights).
+    #[arg(long, value_enum)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixel_unit: Option<Unit>,
+    /// The form removed by least squares (over the present points) before contact.
+    #[arg(long, value_enum, default_value = "plane")]
+    #[serde(default = "plane")]
+    pub form: FormArg,
+    /// What to do with missing points.
+    #[arg(long, value_enum, default_value = "none")]
+    #[serde(default = "no_fill")]
+    pub fill: FillArg,
+}
+
+fn plane() -> FormArg {
+    FormArg::Plane
+}
+
+fn no_fill() -> FillArg {
+    FillArg::None
+}
+
+/// A prepared map and the record of its preparation (JSON, stored with every output).
+pub struct Prepared {
+    pub map: Topography,
+    pub report: serde_json::Value,
+    /// The radially averaged PSD (none when missing points were kept).
+    pub psd: Vec<PsdBin>,
+}
+
+/// The smallest λ_s/Δl at which the project's own discretisation study finds the contact
+/// area unbiased (docs/SIZES.md); below it a warning is given and recorded.
+const MIN_LAMBDA_S_PX: f64 = 8.0;
+
+/// The PSD of a complete map, its self-affine fit and the warnings it calls for.
+fn spectrum(map: &Topography) -> (Vec<PsdBin>, serde_json::Value, Vec<String>) {
+    let psd = radial_psd(map, &log_edges(map, 10));
+    let fit = fit_self_affine(&psd);
+    let mut warnings = Vec::new();
+    match fit {
+        Some(f) if f.lambda_s_m / map.dx.max(map.dy) < MIN_LAMBDA_S_PX => warnings.push(format!(
+            "the fitted λ_s = {:.3e} m is {:.1} pixels: below {MIN_LAMBDA_S_PX} the discretised contact area is biased (docs/SIZES.md); measure at a finer pixel",
+            f.lambda_s_m,
+            f.lambda_s_m / map.dx.max(map.dy)
+        )),
+        None => warnings.push(
+            "the PSD has no self-affine range of 5 bins (within a factor 2 of a power law): H, λ_l and λ_s are not fitted".into(),
+        ),
+        _ => {}
+    }
+    let fit = fit.map_or(serde_json::Value::Null, |f| {
+        json!({"hurst": f.hurst, "lambda_l_m": f.lambda_l_m, "lambda_s_m": f.lambda_s_m,
+               "lambda_s_px": f.lambda_s_m / map.dx.max(map.dy),
+               "max_log10_residual": f.max_log10_residual, "bins": f.bins})
+    });
+    (psd, fit, warnings)
+}
+
+/// The heights' scale to metres and where the unit came from.
+fn height_scale(
+    p: &Preparation,
+    file: Option<f64>,
+    bad: &dyn Fn(String) -> IoError,
+) -> Result<(f64, &'static str), IoError> {
+    match (p.height_unit, file) {
+        (Some(u), Some(file)) => Ok((u.metres() / file, "height_unit (overriding the file)")),
+        (Some(u), None) => Ok((u.metres(), "height_unit")),
+        (None, Some(_)) => Ok((1.0, "the file")),
+        (None, None) => Err(bad(format!(
+            "the file states no height unit; give one (--height-unit, or height_unit in pipeline.yaml: m, mm, um, nm). Files that state theirs: {READ_EXTENSIONS}"
+        ))),
+    }
+}
+
+/// The pixel size `(Δx, Δy)` in metres and where it came from.
+fn pixel_size(
+    p: &Preparation,
+    file: Option<(f64, f64)>,
+    bad: &dyn Fn(String) -> IoError,
+) -> Result<((f64, f64), &'static str), IoError> {
+    let unit = p.pixel_unit.or(p.height_unit).map(Unit::metres);
+    match (p.pixel_size, file) {
+        (Some(px), file) => {
+            let Some(u) = unit else {
+                return Err(bad(
+                    "a pixel size needs its unit: give pixel_unit (or height_unit)".into(),
+                ));
+            };
+            let py = p.pixel_size_y.unwrap_or(px);
+            if !(px.is_finite() && px > 0.0 && py.is_finite() && py > 0.0) {
+                return Err(bad(format!(
+                    "pixel size {px} × {py}: must be finite and > 0"
+                )));
+            }
+            let from = if file.is_some() {
+                "pixel_size (overriding the file)"
+            } else {
+                "pixel_size"
+            };
+            Ok(((px * u, py * u), from))
+        }
+        (None, Some(d)) => Ok((d, "the file")),
+        (None, None) => Err(bad(
+            "the file states no pixel size; give one (--pixel-size and --pixel-unit, or pixel_size and pixel_unit in pipeline.yaml)".into(),
+        )),
+    }
+}
+
+/// Read `input`, scale it to metres, remove the form and fill (or refuse) missing points.
+pub fn prepare(input: &Path, p: &Preparation) -> anyhow::Result<Prepared> {
+    prepare_as(input, &input.display().to_string(), p)
+}
+
+/// [`prepare`], naming the map `name` in its warnings and record (a copy read from a
+/// temporary place is named by what it is).
+pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<Prepared> {
+    let bad = |why: String| IoError::File {
+        path: input.display().to_string(),
+        message: why,
+    };
+    let read = read_measured(input)?;
+    let (scale, height_unit_from) = height_scale(p, read.height_unit_m, &bad)?;
+    let ((dx, dy), pixel_from) = pixel_size(p, read.pixel_m, &bad)?;
+    let (rows, cols) = (read.rows, read.cols);
+    let heights = read.heights.into_iter().map(|h| h * scale).collect();
+    let mut map = Topography::new(rows, cols, dx, dy, heights).map_err(|e| bad(e.to_string()))?;
+    let missing = map.missing();
+    if p.fill == FillArg::None {
+        map.refuse_missing().map_err(|e| {
+            bad(format!(
+                "{e} (--fill harmonic, or fill: harmonic in pipeline.yaml)"
+            ))
+        })?;
+    }
+    let form = match p.form {
+        FormArg::None => None,
+        FormArg::Mean => Some(Form::Mean),
+        FormArg::Plane => Some(Form::Plane),
+        FormArg::Curvature => Some(Form::Curvature),
+    };
+    let coefficients = match form {
+        Some(form) => map.remove_form(form).map_err(|e| bad(e.to_string()))?,
+        None => Vec::new(),
+    };
+    let filled = match p.fill {
+        FillArg::Keep => 0,
+        _ => map.fill_harmonic().map_err(|e| bad(e.to_string()))?,
+    };
+    let present: Vec<f64> = map
+        .heights
+        .iter()
+        .copied()
+        .filter(|h| !h.is_nan())
+        .collect();
+    let mean = present.iter().sum::<f64>() / present.len().max(1) as f64;
+    let rms_height = (present.iter().map(|h| (h - mean) * (h - mean)).sum::<f64>()
+        / present.len().max(1) as f64)
+        .sqrt();
+    let rms_slope = map.rms_slope();
+    let (psd, fit, warnings) = if p.fill == FillArg::Keep && missing > 0 {
+        (Vec::new(), serde_json::Value::Null, Vec::new())
+    } else {
+        spectrum(&map)
+    };
+    for w in &warnings {
+        crate::note!("warning: {name}: {w}");
+    }
+    let report = json!({
+        "input": name, "format": read.source,
+        "rows": rows, "cols": cols,
+        "pixel_size_x_m": dx, "pixel_size_y_m": dy, "pixel_size_from": pixel_from,
+        "height_unit_from": height_unit_from,
+        "missing_points": missing, "filled_points": filled,
+        "fill": match (p.fill, filled) {
+            (FillArg::Keep, _) => "keep",
+            (_, 0) => "none",
+            _ => "harmonic",
+        },
+        "form_removed": form.map_or("none".to_string(), |f| format!("{f:?}").to_lowercase()),
+        "form_coefficients_m": coefficients,
+        "rms_height_m": rms_height, "rms_slope": rms_slope,
+        "psd_fit": fit, "warnings": warnings,
+    });
+    Ok(Prepared { map, report, psd })
+}

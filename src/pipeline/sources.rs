@@ -1,0 +1,58 @@
+//! The files a plan reads from outside the store: a measured study's topography files,
+//! hashed and measured when the plan is made, and copied into their entries when run.
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::MeasuredPlan;
+use crate::stages::surface::{measured_file_name, MeasuredJob, SurfaceJob};
+
+/// A file outside the store that an instance reads: where it lies (absolute, so that a
+/// saved plan runs from any directory), and the name the stage reads it under in its entry.
+/// Not part of the key.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SourceFile {
+    pub path: std::path::PathBuf,
+    pub file: String,
+}
+
+/// The surface job of each file of a measured study, keyed by the file's SHA-256, with its
+/// source. The files must all be of one shape; an unreadable one is an error naming its
+/// field of pipeline.yaml.
+pub fn measured_surfaces(m: &MeasuredPlan) -> anyhow::Result<Vec<(SurfaceJob, SourceFile)>> {
+    let mut shape = None;
+    let mut out = Vec::new();
+    for (path, field) in m.files.iter().zip(&m.fields) {
+        let bad = |why: String| {
+            crate::pipeline::UsageError(format!("{field} = {}: {why}", path.display()))
+        };
+        let (sha256, _) = crate::store::hash::sha256_file(path).map_err(|e| {
+            bad(format!(
+                "cannot be read ({e}); paths are relative to the pipeline file"
+            ))
+        })?;
+        let read = crate::io::read_measured(path).map_err(|e| bad(e.to_string()))?;
+        let this = (read.rows, read.cols);
+        let first = *shape.get_or_insert(this);
+        if first != this {
+            return Err(bad(format!(
+                "is {} × {}, the study's first file {} × {}: the files of a study share one shape",
+                this.0, this.1, first.0, first.1
+            ))
+            .into());
+        }
+        let file = measured_file_name(path);
+        let job = SurfaceJob::Measured(MeasuredJob {
+            file: file.clone(),
+            sha256,
+            rows: read.rows,
+            cols: read.cols,
+            preparation: m.preparation.clone(),
+        });
+        let source = SourceFile {
+            path: std::path::absolute(path)?,
+            file,
+        };
+        out.push((job, source));
+    }
+    Ok(out)
+}
