@@ -10,6 +10,7 @@ mod netcdf;
 pub mod prepare;
 mod sdf;
 mod x3p;
+mod xyz;
 
 use ndarray::{Array2, Array3, Axis};
 use ndarray_npy::{read_npy, write_npy};
@@ -435,6 +436,7 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         heights,
         height_unit_m: None,
         pixel_m: None,
+        pixel_file_units: None,
         source,
     };
     match ext.as_str() {
@@ -448,6 +450,7 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         "nc" => netcdf::read(path).map_err(err),
         "gsf" => gsf::read(path).map_err(err),
         "sdf" => sdf::read(path).map_err(err),
+        "xyz" => xyz::read(path).map_err(err),
         other => Err(err(format!(
             "a .{other} file is not read; the formats read are {}",
             measured::READ_EXTENSIONS

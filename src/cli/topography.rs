@@ -14,8 +14,9 @@ use super::{check_output_named, write_atomically};
 pub struct PrepareArgs {
     /// The map: .x3p (ISO 25178-72), .sdf (ISO 25178-71, text or binary), .gsf (Gwyddion),
     /// .nc (NetCDF 3 as SurfaceTopography writes it), which state their units; a 2-D .npy
-    /// (float32 or float64, any shape, rows along y) or a text matrix (.txt, .csv, .asc,
-    /// .dat: one row per line). NaN or the format's invalid flag marks a missing point.
+    /// (float32 or float64, any shape, rows along y), a text matrix (.txt, .csv, .asc,
+    /// .dat: one row per line) or an x-y-z list (.xyz: one point per line on a regular
+    /// grid). NaN or the format's invalid flag marks a missing point.
     #[arg(long)]
     pub input: PathBuf,
     #[command(flatten)]

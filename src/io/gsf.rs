@@ -79,6 +79,7 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
         heights,
         height_unit_m: z_unit,
         pixel_m: pixel,
+        pixel_file_units: None,
         source: Source::Gsf,
     })
 }

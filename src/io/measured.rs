@@ -14,6 +14,7 @@ pub enum Source {
     NetCdf,
     Gsf,
     Sdf,
+    Xyz,
 }
 
 /// A map as read from its file.
@@ -28,6 +29,9 @@ pub struct MeasuredMap {
     pub height_unit_m: Option<f64>,
     /// The pixel size `(Δx, Δy)` in metres, when the file states it.
     pub pixel_m: Option<(f64, f64)>,
+    /// The pixel size in the file's own length unit, when the file gives positions but no
+    /// unit (an x-y-z list): the heights' unit, once the user states it.
+    pub pixel_file_units: Option<(f64, f64)>,
     pub source: Source,
 }
 
@@ -39,8 +43,7 @@ impl MeasuredMap {
 }
 
 /// The file extensions read, for error messages and `--help`.
-pub const READ_EXTENSIONS: &str =
-    ".x3p (ISO 25178-72), .nc (NetCDF 3), .npy, text matrix (.txt, .csv, .asc, .dat)";
+pub const READ_EXTENSIONS: &str = ".x3p (ISO 25178-72), .sdf (ISO 25178-71), .gsf (Gwyddion), .nc (NetCDF 3), .npy, text matrix (.txt, .csv, .asc, .dat), x-y-z list (.xyz)";
 
 /// Metres per unit for a length unit as files spell it (`m`, `mm`, `um`/`µm`/`μm`,
 /// `nm`, `pm`, `A`/`Å`); None if unknown.

@@ -97,6 +97,7 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
         },
         height_unit_m: heights_unit,
         pixel_m: pixel,
+        pixel_file_units: None,
         source: Source::NetCdf,
     })
 }

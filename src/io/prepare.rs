@@ -155,10 +155,20 @@ fn height_scale(
 /// The pixel size `(Δx, Δy)` in metres and where it came from.
 fn pixel_size(
     p: &Preparation,
-    file: Option<(f64, f64)>,
+    read: &super::measured::MeasuredMap,
     bad: &dyn Fn(String) -> IoError,
 ) -> Result<((f64, f64), &'static str), IoError> {
     let unit = p.pixel_unit.or(p.height_unit).map(Unit::metres);
+    if let (None, None, Some((dx, dy))) = (p.pixel_size, read.pixel_m, read.pixel_file_units) {
+        // Positions without a unit share the heights' (an x-y-z list).
+        return match unit {
+            Some(u) => Ok(((dx * u, dy * u), "the file's positions, in height_unit")),
+            None => Err(bad(
+                "the file states no unit; give one (--height-unit, or height_unit in pipeline.yaml: m, mm, um, nm), which its positions share".into(),
+            )),
+        };
+    }
+    let file = read.pixel_m;
     match (p.pixel_size, file) {
         (Some(px), file) => {
             let Some(u) = unit else {
@@ -200,7 +210,7 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
     };
     let read = read_measured(input)?;
     let (scale, height_unit_from) = height_scale(p, read.height_unit_m, &bad)?;
-    let ((dx, dy), pixel_from) = pixel_size(p, read.pixel_m, &bad)?;
+    let ((dx, dy), pixel_from) = pixel_size(p, &read, &bad)?;
     let (rows, cols) = (read.rows, read.cols);
     let heights = read.heights.into_iter().map(|h| h * scale).collect();
     let mut map = Topography::new(rows, cols, dx, dy, heights).map_err(|e| bad(e.to_string()))?;

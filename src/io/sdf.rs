@@ -89,6 +89,7 @@ impl Header {
                 .collect(),
             height_unit_m: Some(1.0),
             pixel_m: Some((self.x_scale, self.y_scale)),
+            pixel_file_units: None,
             source: Source::Sdf,
         }
     }

@@ -111,6 +111,7 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
         heights,
         height_unit_m: Some(1.0),
         pixel_m: Some((dx, dy)),
+        pixel_file_units: None,
         source: Source::X3p,
     })
 }

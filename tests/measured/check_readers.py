@@ -85,6 +85,21 @@ def main():
     compare(path, "--height-unit", "um", "--pixel-size", str(DX), "--pixel-size-y", str(DY),
             rows_first=True, physical_sizes=(NY * DY, NX * DX), unit="µm")
 
+    # x-y-z lists, written by numpy: in Gwyddion's layout (units in a comment header), the
+    # points shuffled; and bare, the unit given.
+    h = np.ma.filled(holed.heights(), np.nan)
+    x, y = np.meshgrid(np.arange(NX) * DX, np.arange(NY) * DY, indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel(), h.ravel()])
+    np.random.default_rng(3).shuffle(points)
+    path = os.path.join(WORK, "map.xyz")
+    with open(path, "w") as f:
+        f.write("# Channel: Height\n# Lateral units: µm\n# Value units: µm\n")
+        np.savetxt(f, points)
+    compare(path)
+    path = os.path.join(WORK, "bare.xyz")
+    np.savetxt(path, points)
+    compare(path, "--height-unit", "um", unit="um")
+
     # The rms slope after the plane is removed, against SurfaceTopography's (upwind
     # differences on the (nx − 1) × (ny − 1) pairs where ours averages every pair: they
     # differ by O(1/n), 1 % here).
