@@ -7,18 +7,19 @@ use super::{ConfigError, FigureKind, MeasuredPlan, MeasuredStudy, Pipeline, Stud
 use crate::surface::{Method, SurfaceParams};
 
 impl Pipeline {
-    /// A measured study is drawn by `fig45` only: the other figures compare generated
-    /// spectra (λ_l/λ_s, H, L/λ_l, λ_s/Δl) or draw periodic maps.
+    /// A measured study is drawn by `fig2` and `fig45` only: the other figures compare
+    /// generated spectra (λ_l/λ_s, H, L/λ_l, λ_s/Δl) or hardnesses.
     pub(super) fn check_measured_figures(&self, origin: &str) -> Result<(), ConfigError> {
         for (fname, fig) in &self.figures {
             for (sname, study) in &self.studies {
                 let drawn = fig.profiles.iter().any(|p| fig.uses(sname, p));
-                if study.measured.is_some() && drawn && fig.kind != FigureKind::Fig45 {
+                let allowed = matches!(fig.kind, FigureKind::Fig2 | FigureKind::Fig45);
+                if study.measured.is_some() && drawn && !allowed {
                     return Err(ConfigError::Invalid {
                         path: origin.to_string(),
                         field: format!("figures.{fname}"),
                         value: sname.clone(),
-                        allowed: format!("draws the measured study '{sname}', which only a `fig45` figure draws (K, 𝒦 and the wear rate against load)"),
+                        allowed: format!("draws the measured study '{sname}', which only `fig2` and `fig45` figures draw (the maps, A_c, N and dN/dA_c; K, 𝒦 and the wear rate against load)"),
                     });
                 }
             }

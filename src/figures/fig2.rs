@@ -5,7 +5,7 @@ use super::plot::{
     viridis, ColorBar, Dash, Layout, LinePlot, Marker, Panels, RasterPlot, Series, YAxis,
 };
 use super::{tolerance_line, Drawn, NpyData};
-use crate::clusters::{label, Connectivity};
+use crate::clusters::{label_with, Boundary, Connectivity};
 use crate::stages::analytic::AreaLoadSlopeRecord;
 use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
 use crate::stages::contact::contact_file;
@@ -120,14 +120,31 @@ const SMALL_CLUSTER: (u8, u8, u8) = (255, 215, 0);
 const LARGE_CLUSTER: (u8, u8, u8) = (220, 30, 30);
 /// Fig. 2a (the surface of realization 0) and 2b–d (its contact maps at the kept loads,
 /// clusters with `A ≤ A*` yellow and `A > A*` red on black).
-/// Inputs: the surface and the contact sweep of realization 0.
+/// Inputs: the surface and the contact sweep of realization 0. A `measured` map is drawn
+/// in its own rows × cols, heights in metres, its clusters not joined across the border.
 pub fn fig2_maps(
     inputs: &Inputs,
     maps: &[(usize, f64)],
     lambda_s_px: f64,
     a_star_over_ls2: f64,
+    measured: bool,
 ) -> anyhow::Result<Vec<(String, Drawn)>> {
-    let (n, heights) = crate::io::read_square_f64(&inputs.file(0, "surface", "heights.npy")?)?;
+    let heights_file = inputs.file(0, "surface", "heights.npy")?;
+    let (rows_h, cols_h, heights) = if measured {
+        crate::io::read_map_npy(&heights_file)?
+    } else {
+        let (n, heights) = crate::io::read_square_f64(&heights_file)?;
+        (n, n, heights)
+    };
+    let (boundary, axis, height_label) = if measured {
+        (Boundary::Open, ("x/L_x", "y/L_y"), "height (m)")
+    } else {
+        (
+            Boundary::Periodic,
+            ("x/L", "y/L"),
+            "height h/L (rms slope 1)",
+        )
+    };
     let (lo, hi) = heights
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
@@ -146,26 +163,26 @@ pub fn fig2_maps(
         Drawn::Raster(
             RasterPlot {
                 title: "Fig. 2a: rough surface (realization 0)".into(),
-                x_label: "x/L".into(),
-                y_label: "y/L".into(),
-                rows: n,
-                cols: n,
+                x_label: axis.0.into(),
+                y_label: axis.1.into(),
+                rows: rows_h,
+                cols: cols_h,
                 rgb,
                 colorbar: Some(ColorBar {
                     lo,
                     hi,
-                    label: "height h/L (rms slope 1)".into(),
+                    label: height_label.into(),
                 }),
                 legend: Vec::new(),
             },
-            NpyData::F64(vec![n, n], heights),
+            NpyData::F64(vec![rows_h, cols_h], heights),
         ),
     )];
     let a_star_px = a_star_over_ls2 * lambda_s_px * lambda_s_px;
     for (panel, &(index, w)) in ["b", "c", "d"].iter().zip(maps) {
         let path = inputs.file(1, "contact", &contact_file(index))?;
         let (rows, cols, map, _) = crate::io::read_contact_map(&path)?;
-        let lab = label(&map, rows, cols, Connectivity::Eight)?;
+        let lab = label_with(&map, rows, cols, Connectivity::Eight, boundary)?;
         // 0: out of contact, 1: A ≤ A*, 2: A > A*.
         let class: Vec<u8> = lab
             .labels
@@ -188,8 +205,8 @@ pub fn fig2_maps(
             Drawn::Raster(
                 RasterPlot {
                     title: format!("Fig. 2{panel}: contact clusters at W/W_0 = {w:.3}"),
-                    x_label: "x/L".into(),
-                    y_label: "y/L".into(),
+                    x_label: axis.0.into(),
+                    y_label: axis.1.into(),
                     rows,
                     cols,
                     rgb,

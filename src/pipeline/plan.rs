@@ -450,6 +450,7 @@ fn fig2_instances(b: &mut Builder, c: &FigureContext) -> anyhow::Result<()> {
         maps: maps.clone(),
         lambda_s_px: k.plan.surface.lambda_s_px,
         a_star_over_ls2: crate::stages::figures::FIG2_A_STAR_OVER_LS2,
+        measured: k.plan.measured.is_some(),
     };
     let inputs = vec![k.surfaces[0].clone(), k.contacts[0].clone()];
     b.add::<Figures>(&job, inputs, &studies, None, fig);

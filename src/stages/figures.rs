@@ -52,6 +52,10 @@ pub enum FigureJob {
         maps: Vec<(usize, f64)>,
         lambda_s_px: f64,
         a_star_over_ls2: f64,
+        /// A measured study's map: rows × cols in metres, clusters not wrapped. Absent
+        /// (and not in the key) for a generated surface.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        measured: bool,
     },
     /// Figs. 2e–f with the loads of 2b–d marked, and the realization audit's chart. Inputs:
     /// the statistics, the audit, the analytic fit.
@@ -108,7 +112,8 @@ impl Stage for Figures {
                 maps,
                 lambda_s_px,
                 a_star_over_ls2,
-            } => draw::fig2::fig2_maps(inputs, maps, *lambda_s_px, *a_star_over_ls2)?,
+                measured,
+            } => draw::fig2::fig2_maps(inputs, maps, *lambda_s_px, *a_star_over_ls2, *measured)?,
             FigureJob::Fig2ef { marked_loads } => draw::fig2::fig2ef(inputs, marked_loads)?,
             FigureJob::Fig3Fig4a {
                 ratios,

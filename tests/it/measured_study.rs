@@ -55,7 +55,6 @@ studies:
 figures:
   k:
     kind: {figure_kind}
-    study: rough
     profiles: [m]
 "#
     )
@@ -125,7 +124,7 @@ fn measured_study_agrees_with_wear_on_the_same_file() {
     write_map(d, "maps/one.npy", 3);
     std::fs::write(
         d.join("pipeline.yaml"),
-        pipeline("maps/one.npy", "", "fig45"),
+        pipeline("maps/one.npy", "", "fig45\n    study: rough"),
     )
     .unwrap();
     let out = run_m(d);
@@ -204,14 +203,14 @@ fn measured_files_are_keyed_by_content() {
     write_map(d, "b.npy", 2);
     std::fs::write(
         d.join("pipeline.yaml"),
-        pipeline("a.npy, b.npy", "", "fig45"),
+        pipeline("a.npy, b.npy", "", "fig45\n    study: rough"),
     )
     .unwrap();
     let before = surface_keys(d);
     assert_eq!(before.len(), 2);
     std::fs::create_dir(d.join("moved")).unwrap();
     std::fs::rename(d.join("a.npy"), d.join("moved/a2.npy")).unwrap();
-    let text = pipeline("moved/a2.npy, b.npy", "", "fig45");
+    let text = pipeline("moved/a2.npy, b.npy", "", "fig45\n    study: rough");
     std::fs::write(d.join("pipeline.yaml"), &text).unwrap();
     assert_eq!(surface_keys(d), before, "moving a file keeps its key");
 
@@ -245,16 +244,23 @@ fn measured_study_errors_name_the_field() {
     write_map(d, "a.npy", 1);
     for (text, says) in [
         (
-            pipeline("a.npy", "    hurst: 0.8\n", "fig45"),
+            pipeline("a.npy", "    hurst: 0.8\n", "fig45\n    study: rough"),
             "studies.rough.hurst",
         ),
         (
-            pipeline("a.npy", "", "fig2\n    loads: [0.03]"),
-            "only a `fig45` figure draws",
+            pipeline(
+                "a.npy",
+                "",
+                "appendix_b1\n    studies: [rough]\n    loads: [0.03]",
+            ),
+            "only `fig2` and `fig45` figures draw",
         ),
-        (pipeline("", "", "fig45"), "studies.rough.measured.files"),
         (
-            pipeline("gone.npy", "", "fig45"),
+            pipeline("", "", "fig45\n    study: rough"),
+            "studies.rough.measured.files",
+        ),
+        (
+            pipeline("gone.npy", "", "fig45\n    study: rough"),
             "studies.rough.measured.files[0]",
         ),
     ] {
@@ -304,5 +310,7 @@ fn the_repositorys_measured_example_runs() {
         assert_eq!(r["form_removed"], "plane");
         assert!(s.join("topography.x3p").is_file());
     }
-    assert!(dir.path().join("figs/measured/fig4b.png").is_file());
+    for f in ["fig2a.png", "fig2d.png", "fig2e.png", "fig4b.png"] {
+        assert!(dir.path().join("figs/measured").join(f).is_file(), "{f}");
+    }
 }

@@ -84,12 +84,18 @@ impl RasterPlot {
             TextLook::new(TITLE_PX),
         )?;
         let (_, main) = main.split_vertically(44);
-        // Margins chosen so that the image area is square (pixels of the map are square).
+        // Margins chosen so that the image area has the map's aspect, cols : rows (pixels
+        // of the map are square).
         let (margin, x_area, y_area, top) = (18u32, 60u32, 80u32, 10u32);
         let (mw, mh) = main.dim_in_pixel();
         let pw = mw.saturating_sub(2 * margin + y_area);
         let ph = mh.saturating_sub(top + margin + x_area);
-        let (extra_right, extra_bottom) = if pw > ph { (pw - ph, 0) } else { (0, ph - pw) };
+        let aspect = self.cols as f64 / self.rows as f64;
+        let (extra_right, extra_bottom) = if pw as f64 > ph as f64 * aspect {
+            (pw - (ph as f64 * aspect) as u32, 0)
+        } else {
+            (0, ph - (pw as f64 / aspect) as u32)
+        };
         let mut builder = ChartBuilder::on(&main);
         builder
             .margin_left(margin)
