@@ -17,6 +17,9 @@
 //!   (`a`, `b` fitted in log-log to all stored sweeps' iterations per load). To calibrate a
 //!   big campaign, run its studies first at small box sizes (profile `paper_size_calibration`
 //!   does this for `paper_size`; docs/CLUSTER.md).
+//! - a measured map of `rows × cols`: its surface as `n² = rows·cols`; its sweep on the
+//!   zero-padded square, `n = 2·max(rows, cols)` (the cost BENCHMARKS measures for it); its
+//!   clusters as `n² = rows·cols`.
 //! - clusters: `c · L · n²` seconds; `4 n²` u32 words per map being labelled and the map.
 //! - statistics, analytic, audits, figures: the mean seconds of the stored instances of the
 //!   stage; memory bounded by 1 GiB (the whole default run peaks below that).
