@@ -102,7 +102,7 @@ pub enum FigureJob {
 
 impl Stage for Figures {
     const NAME: &'static str = "figures";
-    const VERSION: u32 = 10;
+    const VERSION: u32 = 11;
     type Job = FigureJob;
 
     fn compute(job: &FigureJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

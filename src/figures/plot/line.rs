@@ -11,7 +11,7 @@ use plotters::prelude::*;
 use super::legend::{covered_pixels, free_spot, Fractions, LegendBox, Rect};
 use super::style::{draw_marker, draw_path, Dash, BAND_OPACITY};
 use super::text::{self, Align, TextLook};
-use super::ticks::{log_key_points, padded, snap_zero, LinLogCoord, Ticks};
+use super::ticks::{log_key_points, padded, snap_zero_on, LinLogCoord, Ticks};
 use super::{
     finite_on, plot_err, write_scene, DrawResult, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX,
     DATA_COLUMNS, LEGEND_PX, SIZE_PX, TICK_PX, TITLE_PX,
@@ -221,10 +221,10 @@ impl LinePlot {
         // Logarithmic axes bring their own ticks (log_key_points); linear ones about 7.
         let hint = 7;
         let (xs, ys) = (x().range(), y_span);
-        let x_label = |v: &f64| xt.label(snap_zero(*v, xs.end - xs.start));
+        let x_label = |v: &f64| xt.label(snap_zero_on(*v, xs.start, xs.end));
         let y_label = |v: &f64| match self.y_floor {
             Some(f) if (v / f - 1.0).abs() < 1e-9 => "exact".to_string(),
-            _ => yt.label(snap_zero(*v, ys.1 - ys.0)),
+            _ => yt.label(snap_zero_on(*v, ys.0, ys.1)),
         };
         chart
             .configure_mesh()

@@ -1,7 +1,7 @@
 use plotters::coord::ranged1d::Ranged;
 
 use super::legend::{covered_pixels, free_spot};
-use super::ticks::{log_key_points, padded, LinLogCoord, Ticks};
+use super::ticks::{log_key_points, padded, snap_zero_on, LinLogCoord, Ticks};
 use super::*;
 
 #[test]
@@ -61,6 +61,11 @@ fn tick_labels_are_numbers_and_powers_of_ten_without_e_notation() {
     assert_eq!(log_key_points(0.5, 20.0).len(), 5 + 9 + 2);
     assert_eq!(number(snap_zero(-1.39e-17, 0.2)), "0");
     assert_eq!(number(snap_zero(1e-6, 1e-5)), "10⁻⁶");
+    // Only an axis that holds 0 snaps to it: on 0.5 … 10¹² (Fig. 6) the tick 1 is 10⁰.
+    assert_eq!(snap_zero_on(-1.39e-17, 0.0, 0.2), 0.0);
+    let decades = Ticks::log(0.5, 1e12);
+    assert_eq!(decades.label(snap_zero_on(1.0, 0.5, 1e12)), "10⁰");
+    assert_eq!(decades.label(snap_zero_on(1000.0, 0.5, 1e12)), "10³");
     // Rounding that carries the mantissa to 10 moves the exponent.
     assert_eq!(number(9.9999e-6), "10⁻⁵");
 }

@@ -17,6 +17,17 @@ pub fn snap_zero(v: f64, span: f64) -> f64 {
     }
 }
 
+/// [`snap_zero`] on an axis from `lo` to `hi`, which snaps only where the axis holds 0: a
+/// logarithmic axis spanning many decades has ticks far below 1e-9 of its span (1 on an
+/// axis to 10¹²), and they are not zero.
+pub fn snap_zero_on(v: f64, lo: f64, hi: f64) -> f64 {
+    if lo <= 0.0 && hi >= 0.0 {
+        snap_zero(v, hi - lo)
+    } else {
+        v
+    }
+}
+
 /// Whether `v` is a power of ten (to rounding).
 fn is_power_of_ten(v: f64) -> bool {
     v > 0.0 && (v.log10() - v.log10().round()).abs() < 1e-9
