@@ -152,7 +152,9 @@ fn compute_window(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Resu
         ..SolverConfig::default()
     };
     let (rows, cols) = (map.rows, map.cols);
-    let ceiling = job.hardness.map(|h| h * job.e_star * map.rms_slope());
+    // As the window computes it, (𝓗·h'_rms)·E*, so that a saturated node's pressure equals
+    // it to the bit.
+    let ceiling = job.hardness.map(|h| (h * map.rms_slope()) * job.e_star);
     let bits = |on: &dyn Fn(f64) -> bool, p: &[f64]| -> Vec<u8> {
         p.iter().map(|&v| u8::from(on(v))).collect()
     };

@@ -314,3 +314,31 @@ fn the_repositorys_measured_example_runs() {
         assert!(dir.path().join("figs/measured").join(f).is_file(), "{f}");
     }
 }
+
+/// Under a hardness, a measured map's saturated maps mark exactly the nodes the solver
+/// counts at the ceiling, for moduli E* at which (𝓗·E*)·h'_rms exceeds (𝓗·h'_rms)·E* by
+/// rounding on this map (h'_rms = 0.00774): the stage's ceiling is the window's to the bit.
+#[test]
+fn measured_saturated_maps_match_the_solvers_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_map(d, "a.npy", 1);
+    for e_star in ["1.2", "2.8", "4.1"] {
+        let text = pipeline("a.npy", "    hardness: 0.45\n", "fig45\n    study: rough")
+            .replace("e_star: 1.0", &format!("e_star: {e_star}"))
+            .replace("values: [0.01, 0.03, 0.1]", "values: [0.05, 0.2]");
+        std::fs::write(d.join("pipeline.yaml"), text).unwrap();
+        let _ = std::fs::remove_dir_all(d.join("data"));
+        let out = run_m(d);
+        assert!(out.status.success(), "{out:?}");
+        let contact = &entries(&d.join("data"), "contact")[0];
+        let counted = f64s(&table(&contact.join("loads.parquet")), "n_saturated_px");
+        for (i, &n) in counted.iter().enumerate() {
+            let path = contact.join(format!("saturated_{i:03}.npy"));
+            let (_, _, map, _) = wearcoef::io::read_contact_map(&path).unwrap();
+            let marked = map.iter().filter(|&&b| b).count() as f64;
+            assert!(n > 0.0, "E* = {e_star}, load {i}: nothing saturated");
+            assert_eq!(marked, n, "E* = {e_star}, load {i}");
+        }
+    }
+}
