@@ -31,6 +31,7 @@ pub fn measured_surfaces(m: &MeasuredPlan) -> anyhow::Result<Vec<(SurfaceJob, So
             ))
         })?;
         let read = crate::io::read_measured(path).map_err(|e| bad(e.to_string()))?;
+        check_preparation(&read, &m.preparation, field).map_err(bad)?;
         let this = (read.rows, read.cols);
         let first = *shape.get_or_insert(this);
         if first != this {
@@ -55,4 +56,36 @@ pub fn measured_surfaces(m: &MeasuredPlan) -> anyhow::Result<Vec<(SurfaceJob, So
         out.push((job, source));
     }
     Ok(out)
+}
+
+/// What a file needs from its study's `preparation` that it does not state, refused when the
+/// plan is made (naming the field to set) rather than when its surface is computed.
+fn check_preparation(
+    read: &crate::io::measured::MeasuredMap,
+    p: &crate::io::prepare::Preparation,
+    field: &str,
+) -> Result<(), String> {
+    // `studies.<name>.measured.files[i]` → `studies.<name>.measured.preparation`.
+    let prep = match field.rfind(".files[") {
+        Some(i) => format!("{}.preparation", &field[..i]),
+        None => "preparation".to_string(),
+    };
+    let missing = read.missing();
+    if missing > 0 && p.fill == crate::io::prepare::FillArg::None {
+        return Err(format!(
+            "{missing} of {} points are missing: set {prep}.fill: harmonic to fill them",
+            read.rows * read.cols
+        ));
+    }
+    if read.height_unit_m.is_none() && p.height_unit.is_none() {
+        return Err(format!(
+            "the file states no height unit: set {prep}.height_unit (m, mm, um, nm)"
+        ));
+    }
+    if read.pixel_m.is_none() && read.pixel_file_units.is_none() && p.pixel_size.is_none() {
+        return Err(format!(
+            "the file states no pixel size: set {prep}.pixel_size (in {prep}.pixel_unit, default the height unit)"
+        ));
+    }
+    Ok(())
 }

@@ -235,13 +235,20 @@ fn measured_files_are_keyed_by_content() {
     );
 }
 
-/// A measured study refuses a generated study's fields, a figure other than fig45, an empty
-/// list and a missing file, each naming its field; nothing is written.
+/// A measured study refuses a generated study's fields, a figure other than fig2 or fig45,
+/// an empty list, a missing file, and a file that needs a unit, a pixel size or a fill rule
+/// its preparation does not give, each naming the field to set, before any work; nothing
+/// is written.
 #[test]
 fn measured_study_errors_name_the_field() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write_map(d, "a.npy", 1);
+    let mut holes: Array2<f64> = ndarray_npy::read_npy(d.join("a.npy")).unwrap();
+    for (r, c) in [(3, 4), (50, 60), (99, 119)] {
+        holes[[r, c]] = f64::NAN;
+    }
+    ndarray_npy::write_npy(d.join("holes.npy"), &holes).unwrap();
     for (text, says) in [
         (
             pipeline("a.npy", "    hurst: 0.8\n", "fig45\n    study: rough"),
@@ -262,6 +269,22 @@ fn measured_study_errors_name_the_field() {
         (
             pipeline("gone.npy", "", "fig45\n    study: rough"),
             "studies.rough.measured.files[0]",
+        ),
+        (
+            pipeline("a.npy", "", "fig45\n    study: rough").replace(
+                "{height_unit: um, pixel_size: 0.5}",
+                "{pixel_size: 0.5, pixel_unit: um}",
+            ),
+            "set studies.rough.measured.preparation.height_unit",
+        ),
+        (
+            pipeline("a.npy", "", "fig45\n    study: rough")
+                .replace("{height_unit: um, pixel_size: 0.5}", "{height_unit: um}"),
+            "set studies.rough.measured.preparation.pixel_size",
+        ),
+        (
+            pipeline("holes.npy", "", "fig45\n    study: rough"),
+            "3 of 12000 points are missing: set studies.rough.measured.preparation.fill",
         ),
     ] {
         std::fs::write(d.join("pipeline.yaml"), &text).unwrap();
