@@ -336,6 +336,10 @@ fn the_repositorys_measured_example_runs() {
     for f in ["fig2a.png", "fig2d.png", "fig2e.png", "fig4b.png"] {
         assert!(dir.path().join("figs/measured").join(f).is_file(), "{f}");
     }
+    // The report describes the measured map, not the generated Fig. 2 surface.
+    let report = std::fs::read_to_string(dir.path().join("figs/measured/index.html")).unwrap();
+    assert!(report.contains("The measured study's first file as prepared for contact"));
+    assert!(!report.contains("One realization of the Fig. 2 surface"));
 }
 
 /// Under a hardness, a measured map's saturated maps mark exactly the nodes the solver

@@ -119,6 +119,17 @@ pub fn escape(s: &str) -> String {
 
 /// What a figure (by file stem) shows and where it departs from the paper: trusted HTML
 /// (subscripts as `<sub>`), written into the page as it is.
+/// The captions that differ for a measured study's maps (no spectrum, not periodic, no
+/// claim about where its cluster count peaks).
+fn measured_caption(stem: &str) -> Option<&'static str> {
+    Some(match stem {
+        "fig2a" => "The measured study's first file as prepared for contact (form removed, missing points filled as its preparation says), heights in metres, axes in units of the map's sides.",
+        "fig2b" => "Contact clusters of that map at the lowest of the three marked loads (dashed line b in Fig. 2e), labelled without wrap-around: yellow A ≤ A*, red A > A*, black out of contact (A* = 2 λ<sub>s</sub>², λ<sub>s</sub> as the study states it).",
+        "fig2d" => "The same map at the highest marked load (line d in Fig. 2e).",
+        _ => return None,
+    })
+}
+
 pub fn caption(stem: &str) -> &'static str {
     match stem {
         "fig2a" => "One realization of the Fig. 2 surface (H = 0.8, λ<sub>l</sub>/λ<sub>s</sub> = 8), heights in units of L scaled to unit rms slope. As in the paper.",
@@ -440,6 +451,9 @@ fn images(
         .filter_map(|s| context.sizes.get(s))
         .flat_map(|s| s.kept_loads.clone())
         .collect();
+    let measured = studies
+        .iter()
+        .any(|s| context.sizes.get(s).is_some_and(|z| z.measured));
     for fig in records {
         for file in fig.files.iter().filter(|f| f.ends_with(".png")) {
             let stem = file.trim_end_matches(".png");
@@ -462,7 +476,10 @@ fn images(
                  </figcaption>\n</figure>",
                 escape(file),
                 escape(stem),
-                caption(stem),
+                measured
+                    .then(|| measured_caption(stem))
+                    .flatten()
+                    .unwrap_or_else(|| caption(stem)),
                 links.join("; ")
             )?;
         }
