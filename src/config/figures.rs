@@ -40,6 +40,11 @@ pub enum FigureKind {
     /// one among them or not): α̂ against 1/𝓗 at `loads`, and K, 𝒦 and the saturated
     /// fraction over the sweep for each 𝓗.
     Plastic,
+    /// Not in the paper: the same statistics for spectra of several widths λ_l/λ_s
+    /// (`studies`): α̂ at `loads`, K and 𝒦 at the end of the mild-wear range with the fitted
+    /// model, the power-law interval's upper end, the end of the nucleation regime, and K at
+    /// fixed A*/λ_l².
+    Spectrum,
 }
 
 impl FigureKind {
@@ -56,6 +61,7 @@ impl FigureKind {
             Convergence => "convergence",
             LoadResolution => "load_resolution",
             Plastic => "plastic",
+            Spectrum => "spectrum",
         }
     }
 }
@@ -180,7 +186,9 @@ impl FigureDecl {
         let (study, list, fig3, pair) = match self.kind {
             Fig6 => (false, false, false, false),
             Fig2 | Fig45 => (true, false, false, false),
-            AppendixB1 | AppendixB2 | Convergence | Plastic => (false, true, false, false),
+            AppendixB1 | AppendixB2 | Convergence | Plastic | Spectrum => {
+                (false, true, false, false)
+            }
             Fig3Fig4a => (false, false, true, false),
             LoadResolution => (false, false, false, true),
         };
@@ -229,7 +237,7 @@ impl FigureDecl {
         };
         let wants_loads = matches!(
             self.kind,
-            Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2 | Plastic
+            Fig2 | Fig3Fig4a | AppendixB1 | AppendixB2 | Plastic | Spectrum
         );
         if wants_loads && self.loads.is_empty() {
             return Err(invalid(
@@ -362,7 +370,7 @@ impl FigureDecl {
             }
         }
         let min_used = match self.kind {
-            Convergence | LoadResolution => 2,
+            Convergence | LoadResolution | Spectrum => 2,
             Fig6 => 0,
             _ => 1,
         };
@@ -423,6 +431,14 @@ pub fn file_stems(name: &str, kind: FigureKind) -> Vec<String> {
             "plastic_k_upscaled",
             "plastic_saturated",
         ],
+        Spectrum => &[
+            "spectrum_alpha",
+            "spectrum_k",
+            "spectrum_k_upscaled",
+            "spectrum_interval",
+            "spectrum_transition",
+            "spectrum_k_physical",
+        ],
         AppendixB1 | AppendixB2 | Convergence | LoadResolution => {
             return vec![name.to_string(), format!("{name}_convergence")]
         }
@@ -446,7 +462,7 @@ pub(super) fn check_file_names(
                         field: format!("figures.{name}"),
                         value: fig.kind.name().to_string(),
                         allowed: format!(
-                            "figure '{other}' of profile '{p}' also writes {stem}.*: the same files; a profile holds one figure of each of the kinds fig2, fig3_fig4a, fig45, fig6, plastic, and other figures are named so that their files differ"
+                            "figure '{other}' of profile '{p}' also writes {stem}.*: the same files; a profile holds one figure of each of the kinds fig2, fig3_fig4a, fig45, fig6, plastic, spectrum, and other figures are named so that their files differ"
                         ),
                     });
                 }
@@ -472,6 +488,7 @@ mod tests {
             Convergence,
             LoadResolution,
             Plastic,
+            Spectrum,
         ] {
             let parsed: FigureKind = serde_saphyr::from_str(kind.name()).unwrap();
             assert_eq!(parsed, kind);

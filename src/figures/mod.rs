@@ -18,6 +18,7 @@ pub mod fig3_4a;
 pub mod fig45;
 pub mod plastic;
 pub mod plot;
+pub mod spectrum;
 
 use plot::{LinePlot, Panels, RasterPlot, Series};
 

@@ -40,7 +40,13 @@ pub fn plastic(
     realizations: &[usize],
     loads: &[f64],
 ) -> anyhow::Result<Vec<(String, Drawn)>> {
-    let (alpha_plot, table) = alpha(inputs, settings, loads)?;
+    let axis = AlphaAxis {
+        title: "Cluster-area exponent under a hardness 𝓗 (0: elastic)",
+        x_label: "E^* h'_{rms}/𝓗",
+        x_log: false,
+        x_column: "inverse_hardness",
+    };
+    let (alpha_plot, table) = alpha_against(inputs, settings, loads, &axis)?;
     let mut out = vec![
         ("plastic_alpha".to_string(), Drawn::Table(table)),
         ("plastic_alpha".to_string(), Drawn::Line(alpha_plot)),
@@ -122,10 +128,19 @@ pub fn plastic(
     Ok(out)
 }
 
-/// One fit of `alpha.parquet` drawn by [`alpha`]: a setting's estimator at one load.
+/// The abscissa of [`alpha_against`]: the settings' `value` (1/𝓗, λ_l/λ_s, …).
+pub struct AlphaAxis {
+    pub title: &'static str,
+    pub x_label: &'static str,
+    pub x_log: bool,
+    /// The name of the setting's value in the table of fits.
+    pub x_column: &'static str,
+}
+
+/// One fit of `alpha.parquet` drawn by [`alpha_against`]: a setting's estimator at one load.
 struct AlphaFit {
     study: String,
-    inverse_hardness: f64,
+    setting: f64,
     /// The load asked (`loads`) and the sweep's nearest one, solved.
     w_over_w0: f64,
     w_over_w0_solved: f64,
@@ -170,7 +185,7 @@ fn alpha_fits(
                 if let Some(i) = (0..w.len()).find(|&i| w[i] == sweep[j] && estimator[i] == name) {
                     fits.push(AlphaFit {
                         study: setting.study.clone(),
-                        inverse_hardness: setting.value,
+                        setting: setting.value,
                         w_over_w0: target,
                         w_over_w0_solved: w[i],
                         estimator: name.to_string(),
@@ -187,19 +202,21 @@ fn alpha_fits(
     Ok(fits)
 }
 
-/// α̂ against 1/𝓗 at each of `loads` (the nearest load of each sweep) by both estimators,
-/// with their 95 % intervals, and the table of those fits.
-fn alpha(
+/// α̂ against the settings' value (1/𝓗, λ_l/λ_s) at each of `loads` (the nearest load of
+/// each sweep) by both estimators, with their 95 % intervals, and the table of those fits.
+/// Inputs: each setting's statistics, first.
+pub fn alpha_against(
     inputs: &Inputs,
     settings: &[StudyRef],
     loads: &[f64],
+    axis: &AlphaAxis,
 ) -> anyhow::Result<(LinePlot, DataFrame)> {
     let fits = alpha_fits(inputs, settings, loads)?;
     let mut plot = LinePlot::new(
-        "Cluster-area exponent under a hardness 𝓗 (0: elastic)",
-        "E^* h'_{rms}/𝓗",
+        axis.title,
+        axis.x_label,
         "α̂ (shaded: 95 % interval)",
-        false,
+        axis.x_log,
         YAxis::Linear,
     );
     for (c, &target) in loads.iter().enumerate() {
@@ -215,19 +232,24 @@ fn alpha(
                 band: picked
                     .iter()
                     .filter(|f| f.low.is_finite() && f.high.is_finite())
-                    .map(|f| (f.inverse_hardness, f.low, f.high))
+                    .map(|f| (f.setting, f.low, f.high))
                     .collect(),
                 ..Series::line(
                     format!("W/W_0 = {}, {legend}", super::plot::number(target)),
-                    picked
-                        .iter()
-                        .map(|f| (f.inverse_hardness, f.alpha))
-                        .collect(),
+                    picked.iter().map(|f| (f.setting, f.alpha)).collect(),
                     c,
                 )
             });
         }
     }
+    // A linear axis runs from 0 (plastic: the elastic end), a logarithmic one from the first.
+    let x_min = match axis.x_log {
+        true => settings
+            .iter()
+            .map(|s| s.value)
+            .fold(f64::INFINITY, f64::min),
+        false => 0.0,
+    };
     let x_max = settings.iter().map(|s| s.value).fold(0.0f64, f64::max);
     plot.series.push(Series {
         rgb: Some((0, 0, 0)),
@@ -235,7 +257,7 @@ fn alpha(
         width: 1,
         ..Series::line(
             "α = 2: above it 𝒦's limit falls below 1",
-            vec![(0.0, 2.0), (x_max, 2.0)],
+            vec![(x_min, 2.0), (x_max, 2.0)],
             0,
         )
     });
@@ -249,7 +271,7 @@ fn alpha(
         fits.len(),
         vec![
             strings("study", &|f| f.study.clone()),
-            f64s("inverse_hardness", &|f| f.inverse_hardness),
+            f64s(axis.x_column, &|f| f.setting),
             f64s("w_over_w0", &|f| f.w_over_w0),
             f64s("w_over_w0_solved", &|f| f.w_over_w0_solved),
             strings("estimator", &|f| f.estimator.clone()),

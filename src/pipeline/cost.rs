@@ -4,7 +4,8 @@
 //! measured on the 2-core development machine when the store holds no instance of a stage).
 //!
 //! The model (n: grid side, L: loads of a sweep):
-//! - surface: `c · n² log₂ n` seconds; `6 n²` doubles of memory (heights, spectrum, FFT rows).
+//! - surface: `c · n² log₂ n` seconds; `4 n²` doubles of memory (heights and the complex
+//!   spectrum) and the process's own [`PROCESS_BYTES`] (measured 4.01 n² doubles at 16384²).
 //! - contact: `c · I · n² log₂ n` seconds, with `I` the iterations of the sweep; `7.5 n²`
 //!   doubles of memory (the solver measures at most 7.1 n² doubles in `make bench-peers`,
 //!   plus the heights read from file). The iterations depend on the spectrum and on the loads
@@ -119,6 +120,9 @@ fn line(points: &[(f64, f64)]) -> (f64, Option<f64>) {
 
 /// Bytes of analysis stages (statistics, analytic, audits, figures).
 const ANALYSIS_BYTES: u64 = 1 << 30;
+/// Resident bytes of the process before any array (binary, libraries, thread pools): 24 MiB
+/// measured for a 128² surface.
+pub const PROCESS_BYTES: u64 = 24 << 20;
 
 impl Default for CostModel {
     /// Coefficients measured on the development machine (2 cores, AVX2) on 2026-11-25: the
@@ -309,7 +313,7 @@ impl CostModel {
                 let n = num(p, "n").unwrap_or_else(|| measured_side(p).sqrt());
                 Estimate {
                     seconds: self.surface_per_n2logn * n2logn(n),
-                    peak_bytes: doubles(6.0, n),
+                    peak_bytes: doubles(4.0, n) + PROCESS_BYTES,
                 }
             }
             "contact" => {

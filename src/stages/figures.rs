@@ -40,6 +40,10 @@ pub struct Figures;
 /// The threshold of Fig. 2: `A* = 2 λ_s²`.
 pub const FIG2_A_STAR_OVER_LS2: f64 = 2.0;
 
+/// Thresholds `A*/λ_l²` of the spectrum family's physical K panel: a fixed area on the scale
+/// of the largest wavelength, which a wider spectrum holds fixed while λ_s shrinks.
+pub const SPECTRUM_A_STAR_OVER_LL2: [f64; 3] = [1.0 / 512.0, 1.0 / 128.0, 1.0 / 32.0];
+
 /// What a figures instance draws; the inputs each variant reads are listed with it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "draw", rename_all = "snake_case", deny_unknown_fields)]
@@ -98,6 +102,17 @@ pub enum FigureJob {
         realizations: Vec<usize>,
         loads: Vec<f64>,
     },
+    /// Spectra of several widths (`settings`' value: λ_l/λ_s, increasing): α̂ and the
+    /// interval's upper end at `loads`, K and 𝒦 at `plateau_w_over_w0` at the thresholds
+    /// `a_star_over_ls2` and (K) `a_star_over_ll2`. Inputs: each setting's statistics, then
+    /// each setting's fitted model.
+    Spectrum {
+        settings: Vec<StudyRef>,
+        loads: Vec<f64>,
+        plateau_w_over_w0: f64,
+        a_star_over_ls2: Vec<f64>,
+        a_star_over_ll2: Vec<f64>,
+    },
 }
 
 impl Stage for Figures {
@@ -151,6 +166,22 @@ impl Stage for Figures {
                 realizations,
                 loads,
             } => draw::plastic::plastic(inputs, settings, realizations, loads)?,
+            FigureJob::Spectrum {
+                settings,
+                loads,
+                plateau_w_over_w0,
+                a_star_over_ls2,
+                a_star_over_ll2,
+            } => draw::spectrum::spectrum(
+                inputs,
+                &draw::spectrum::SpectrumScene {
+                    settings,
+                    loads,
+                    plateau_w_over_w0: *plateau_w_over_w0,
+                    a_star_over_ls2,
+                    a_star_over_ll2,
+                },
+            )?,
         };
         draw::write(drawn, dir)
     }

@@ -12,6 +12,7 @@ mod measured_study;
 mod plan;
 mod plastic;
 mod powerlaw;
+mod spectrum;
 mod stability;
 mod stages;
 mod store;
