@@ -21,7 +21,9 @@
 //! - a measured map of `rows × cols`: its surface as `n² = rows·cols`; its sweep on the
 //!   zero-padded square, `n = 2·max(rows, cols)` (the cost BENCHMARKS measures for it); its
 //!   clusters as `n² = rows·cols`.
-//! - clusters: `c · L · n²` seconds; `4 n²` u32 words per map being labelled and the map.
+//! - clusters: `c · L · n²` seconds; one u32 label per node and the packed map (4.125 n²
+//!   bytes) and the stage's own [`CLUSTERS_BASE_BYTES`] (measured 1.04–1.11 GiB at 16384²,
+//!   0.46 at 8192², 0.21 from 128² to 2048²).
 //! - statistics, analytic, audits, figures: the mean seconds of the stored instances of the
 //!   stage; memory bounded by 1 GiB (the whole default run peaks below that).
 
@@ -123,6 +125,9 @@ const ANALYSIS_BYTES: u64 = 1 << 30;
 /// Resident bytes of the process before any array (binary, libraries, thread pools): 24 MiB
 /// measured for a 128² surface.
 pub const PROCESS_BYTES: u64 = 24 << 20;
+/// Resident bytes of a clusters instance before its maps (Parquet writer, thread pools): 215
+/// MiB measured from 128² to 2048².
+pub const CLUSTERS_BASE_BYTES: u64 = 215 << 20;
 
 impl Default for CostModel {
     /// Coefficients measured on the development machine (2 cores, AVX2) on 2026-11-25: the
@@ -333,7 +338,7 @@ impl CostModel {
                 };
                 Estimate {
                     seconds: self.clusters_per_load_n2 * loads_of(p) * n * n,
-                    peak_bytes: (17.0 * n * n) as u64,
+                    peak_bytes: (4.125 * n * n) as u64 + CLUSTERS_BASE_BYTES,
                 }
             }
             other => Estimate {
