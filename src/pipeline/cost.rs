@@ -14,7 +14,9 @@
 //!   generator, roll-off), loads and tolerance, on any box size and seed. Within a family,
 //!   `ln I = ln A + b ln n` is fitted to the sweeps of its two largest grid sizes (the
 //!   iterations grow faster with n on bigger grids; b is the global one when the family has
-//!   one size). Without a stored family: `L · a · (n/1024)^b` iterations
+//!   one size). Without it, a *scaled family* (the spectrum widened with n: the same λ_s,
+//!   L/λ_l, loads and tolerance) of two sizes or more extrapolates its two largest. Else:
+//!   `L · a · (n/1024)^b` iterations
 //!   (`a`, `b` fitted in log-log to all stored sweeps' iterations per load). To calibrate a
 //!   big campaign, run its studies first at small box sizes (profile `paper_size_calibration`
 //!   does this for `paper_size`; docs/CLUSTER.md).
@@ -102,6 +104,27 @@ pub fn sweep_family(contact: &Value, surface: Option<&Value>) -> Option<String> 
         pick(contact, &["loads_w_over_w0", "tolerance"]),
     ]);
     Some(family.to_string())
+}
+
+/// The scaled family of a sweep: its surface's shape relative to the grid (H, λ_s in grid
+/// spacings, L/λ_l, generator, roll-off relative to λ_l) and its loads and tolerance, the
+/// spectrum's width λ_l/λ_s growing with n: a series like profile `spectrum`, whose narrower
+/// members calibrate the wider one (prefixed `scaled:` among the families). `None` when the
+/// surface's parameters are unknown.
+pub fn scaled_family(contact: &Value, surface: Option<&Value>) -> Option<String> {
+    let s = surface?;
+    let (n, lambda_l) = (num(s, "n")?, num(s, "lambda_l_px")?);
+    let rolloff = num(s, "rolloff_lambda_px").map(|r| r / lambda_l);
+    let family = serde_json::json!([
+        s.get("hurst"),
+        s.get("lambda_s_px"),
+        s.get("method"),
+        n / lambda_l,
+        rolloff,
+        contact.get("loads_w_over_w0"),
+        contact.get("tolerance"),
+    ]);
+    Some(format!("scaled:{family}"))
 }
 
 /// Least-squares line through `(x, y)`: `(intercept, slope)`, slope `None` when the x do not
@@ -204,8 +227,13 @@ impl CostModel {
                     (Some(n), Some(it)) if it > 0.0 => {
                         iterations.push((n, it / loads_of(&m.params)));
                         let surface = m.inputs.first().and_then(|k| store.manifest("surface", k));
-                        if let Some(f) =
-                            sweep_family(&m.params, surface.as_ref().map(|s| &s.params))
+                        let surface = surface.as_ref().map(|s| &s.params);
+                        for f in [
+                            sweep_family(&m.params, surface),
+                            scaled_family(&m.params, surface),
+                        ]
+                        .into_iter()
+                        .flatten()
                         {
                             by_family.entry(f).or_default().push((n.ln(), it.ln()));
                         }
@@ -293,14 +321,20 @@ impl CostModel {
 
     /// Iterations of a sweep of `n × n` whose job is `params` on a surface with parameters
     /// `surface`: from its family's fit when the store holds that family, else from the
-    /// global iterations per load.
+    /// global iterations per load. Without its own family, a scaled family of two sizes or
+    /// more extrapolates its two largest (iterations grow faster with λ_l/λ_s than with n
+    /// alone: 13.3, 14.8, 20.8, 31.7 per load at λ_l/λ_s = 128 … 1024, profile `spectrum`).
     pub fn sweep_iterations(&self, params: &Value, surface: Option<&Value>, n: f64) -> f64 {
-        sweep_family(params, surface)
-            .and_then(|f| self.families.get(&f))
-            .map_or_else(
-                || loads_of(params) * self.iterations_per_load(n),
-                |fit| (fit.ln_a + fit.exponent * n.ln()).exp(),
-            )
+        let own = sweep_family(params, surface).and_then(|f| self.families.get(&f));
+        let scaled = || {
+            scaled_family(params, surface)
+                .and_then(|f| self.families.get(&f))
+                .filter(|fit| fit.own_exponent)
+        };
+        own.or_else(scaled).map_or_else(
+            || loads_of(params) * self.iterations_per_load(n),
+            |fit| (fit.ln_a + fit.exponent * n.ln()).exp(),
+        )
     }
 
     /// Iterations per load of a sweep on an `n × n` grid.
@@ -455,5 +489,69 @@ mod tests {
         assert_eq!(fit.exponent, model.iterations_exponent);
         let at_512 = (fit.ln_a + fit.exponent * 512f64.ln()).exp();
         assert!((at_512 - 640.0).abs() < 1e-9 * 640.0);
+    }
+
+    /// A spectrum widened with the grid (λ_l ∝ n, the same λ_s, L/λ_l, loads, tolerance) is
+    /// predicted from its narrower members' two largest sizes when the store lacks its own
+    /// family; its own family, once stored, takes over.
+    #[test]
+    fn a_widening_spectrum_follows_its_scaled_family() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::new(dir.path());
+        let three = [0.005, 0.02, 0.06];
+        let widened = |n: u32| {
+            let mut s = surface(n, 8.0);
+            s["lambda_l_px"] = json!(f64::from(n) / 2.0);
+            s
+        };
+        for (k, (n, it)) in [(512u32, 30.0), (1024, 40.0), (2048, 56.0)]
+            .into_iter()
+            .enumerate()
+        {
+            put(
+                &store,
+                "surface",
+                &format!("s{k}"),
+                widened(n),
+                &[],
+                json!({}),
+            );
+            put(
+                &store,
+                "contact",
+                &format!("c{k}"),
+                sweep(&three),
+                &[&format!("s{k}")],
+                json!({"n": n, "total_iterations": it}),
+            );
+        }
+        let model = CostModel::fit(&store).unwrap();
+        let predicted = model.sweep_iterations(&sweep(&three), Some(&widened(4096)), 4096.0);
+        let expected = 56.0 * 56.0 / 40.0;
+        assert!(
+            (predicted - expected).abs() < 1e-6 * expected,
+            "{predicted}"
+        );
+        // Another box (L/λ_l ≈ 5.9) is another scaled family: the global law.
+        let mut boxed = widened(4096);
+        boxed["lambda_l_px"] = json!(700.0);
+        let global = 3.0 * model.iterations_per_load(4096.0);
+        assert_eq!(
+            model.sweep_iterations(&sweep(&three), Some(&boxed), 4096.0),
+            global
+        );
+        // Its own family stored at one size: that sweep's iterations, not the extrapolation.
+        put(&store, "surface", "s9", widened(4096), &[], json!({}));
+        put(
+            &store,
+            "contact",
+            "c9",
+            sweep(&three),
+            &["s9"],
+            json!({"n": 4096, "total_iterations": 100.0}),
+        );
+        let model = CostModel::fit(&store).unwrap();
+        let own = model.sweep_iterations(&sweep(&three), Some(&widened(4096)), 4096.0);
+        assert!((own - 100.0).abs() < 1e-9 * 100.0, "{own}");
     }
 }
