@@ -117,3 +117,25 @@ pub fn files_under(dir: &Path, tops: &[&str]) -> std::collections::BTreeMap<Stri
     }
     out
 }
+
+/// A Parquet file as a data frame.
+pub fn table(path: &Path) -> polars::prelude::DataFrame {
+    use polars::prelude::SerReader;
+    polars::prelude::ParquetReader::new(std::fs::File::open(path).unwrap())
+        .finish()
+        .unwrap()
+}
+
+/// A numeric column as f64, nulls as NaN.
+pub fn f64s(df: &polars::prelude::DataFrame, name: &str) -> Vec<f64> {
+    let c = df
+        .column(name)
+        .unwrap()
+        .cast(&polars::prelude::DataType::Float64)
+        .unwrap();
+    c.f64()
+        .unwrap()
+        .iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect()
+}

@@ -7,7 +7,7 @@ use std::path::Path;
 use ndarray::{s, Array2};
 use polars::prelude::*;
 
-use super::{run_in, stdout_json};
+use super::{f64s, run_in, stdout_json, table};
 
 const LOADS: [f64; 3] = [0.01, 0.03, 0.1];
 
@@ -74,17 +74,6 @@ fn run_m(d: &Path) -> std::process::Output {
             "figs",
         ],
     )
-}
-
-fn table(path: &Path) -> DataFrame {
-    ParquetReader::new(std::fs::File::open(path).unwrap())
-        .finish()
-        .unwrap()
-}
-
-fn f64s(df: &DataFrame, name: &str) -> Vec<f64> {
-    let c = df.column(name).unwrap().cast(&DataType::Float64).unwrap();
-    c.f64().unwrap().into_no_null_iter().collect()
 }
 
 /// The single entry of `stage` in the store (the study has one of each but surfaces and

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use polars::prelude::*;
 
-use super::{run_in, stdout_json, workdir};
+use super::{f64s, run_in, stdout_json, table, workdir};
 
 /// λ_l/λ_s of the three studies, at L/λ_l = 2 and λ_s = 4 px (n = 32, 64, 128).
 const RATIOS: [u32; 3] = [4, 8, 16];
@@ -29,21 +29,6 @@ fn pipeline() -> String {
     }
     text + "figures:\n  spectrum:\n    kind: spectrum\n    studies: [s16, s4, s8]\n    \
             loads: [0.02, 0.06]\n    profiles: [t]\n"
-}
-
-fn table(path: &Path) -> DataFrame {
-    ParquetReader::new(std::fs::File::open(path).unwrap())
-        .finish()
-        .unwrap()
-}
-
-fn f64s(df: &DataFrame, name: &str) -> Vec<f64> {
-    let c = df.column(name).unwrap().cast(&DataType::Float64).unwrap();
-    c.f64()
-        .unwrap()
-        .iter()
-        .map(|v| v.unwrap_or(f64::NAN))
-        .collect()
 }
 
 fn strings(df: &DataFrame, name: &str) -> Vec<String> {
