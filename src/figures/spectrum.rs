@@ -259,15 +259,27 @@ pub enum SignChange {
     BelowLowest,
     /// Positive at every load.
     AboveHighest,
+    /// dN/dA_c defined at no load.
+    Undefined,
 }
 
-/// The sign change of `dn_dac` over the increasing loads `w`.
+/// The sign change of `dn_dac` over the increasing loads `w`, at the loads where it is
+/// defined (finite: NaN where the contact area does not change between neighbours).
 pub fn sign_change(w: &[f64], dn_dac: &[f64]) -> SignChange {
-    match dn_dac.iter().position(|&d| d <= 0.0) {
+    let (w, d): (Vec<f64>, Vec<f64>) = w
+        .iter()
+        .zip(dn_dac)
+        .filter(|p| p.1.is_finite())
+        .map(|(&w, &d)| (w, d))
+        .unzip();
+    if d.is_empty() {
+        return SignChange::Undefined;
+    }
+    match d.iter().position(|&v| v <= 0.0) {
         None => SignChange::AboveHighest,
         Some(0) => SignChange::BelowLowest,
         Some(i) => {
-            let (d0, d1) = (dn_dac[i - 1], dn_dac[i]);
+            let (d0, d1) = (d[i - 1], d[i]);
             let t = d0 / (d0 - d1);
             SignChange::At((w[i - 1].ln() + t * (w[i].ln() - w[i - 1].ln())).exp())
         }
@@ -314,6 +326,7 @@ fn transition(inputs: &Inputs, settings: &[StudyRef]) -> anyhow::Result<(LinePlo
                 earlier.push((setting.value, lowest));
                 0.0
             }
+            SignChange::Undefined => f64::NAN,
         };
         studies.push(setting.study.clone());
         for (column, v) in rows.iter_mut().zip([setting.value, value, lowest, highest]) {
@@ -455,6 +468,12 @@ mod tests {
             panic!("no sign change found");
         };
         assert!((v - 0.02).abs() < 1e-15);
+        // Undefined loads are skipped; none defined, no answer.
+        let SignChange::At(v) = sign_change(&w, &[1.0, f64::NAN, -1.0]) else {
+            panic!("no sign change found");
+        };
+        assert!((v - (0.01f64 * 0.04).sqrt()).abs() < 1e-15);
+        assert_eq!(sign_change(&w, &[f64::NAN; 3]), SignChange::Undefined);
     }
 
     #[test]

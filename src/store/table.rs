@@ -115,7 +115,11 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
         // The hardness 𝓗 of a study, in the units of W/W0 (p̄/𝓗 = (W/W0)/hardness).
         "hardness" => "E*·h′rms",
         "inverse_hardness" => "1 (E*·h′rms/𝓗; 0: elastic)",
-        "w_over_w0_solved" => "W₀ = E*·h′rms·L²",
+        "w_over_w0_solved" | "w_over_w0_lowest" | "w_over_w0_highest" => "W₀ = E*·h′rms·L²",
+        // The load where dN/dA_c changes sign: 0 below the sweep, inf above it.
+        "w_over_w0_sign_change" => {
+            "W₀ = E*·h′rms·L² (0: before the lowest load, inf: after the highest, NaN: undefined)"
+        }
         // Areas, lengths and counts on the grid.
         "area_px" | "width_px" | "k_min_px" | "k_max_px" | "k_s_px" | "n_contact_px" => {
             "Δl² (grid cells)"

@@ -73,6 +73,12 @@ PLASTIC_ALPHA = [
     ("study", STR), ("inverse_hardness", F64), ("w_over_w0", F64), ("w_over_w0_solved", F64),
     ("estimator", STR), ("alpha", F64), ("ci95_low", F64), ("ci95_high", F64),
     ("k_max_over_ls2", F64), ("n_fitted", U64)]
+# The spectrum family's fits (the same, against λ_l/λ_s) and its sign changes of dN/dA_c.
+SPECTRUM_ALPHA = [(("lambda_l_over_lambda_s" if c == "inverse_hardness" else c), t)
+                  for c, t in PLASTIC_ALPHA]
+SPECTRUM_TRANSITION = [
+    ("study", STR), ("lambda_l_over_lambda_s", F64), ("w_over_w0_sign_change", F64),
+    ("w_over_w0_lowest", F64), ("w_over_w0_highest", F64)]
 FIG2_CONVERGENCE = [("realizations", U32)] + [
     (f"{q}_{m}", F64) for m in ["max_rel_deviation", "max_rel_ci95"]
     for q in ["area", "count", "largest"]] + [
@@ -529,13 +535,27 @@ def main(data_dir, profile):
                 return pd.read_parquet(path) if os.path.exists(path) else None
 
             check_load_resolution(r.path, wear_of)
-        elif r.file == "plastic_alpha.parquet":
-            # The plastic family's fits: each the statistics stage's own at the solved load.
-            check_schema(r.path, PLASTIC_ALPHA)
+        elif r.file == "spectrum_transition.parquet":
+            # 0: negative from the lowest load; inf: positive at every load; NaN: dN/dA_c
+            # undefined at every load (a toy grid); else inside the sweep.
+            check_schema(r.path, SPECTRUM_TRANSITION)
             parquet_files += 1
             df = pd.read_parquet(r.path)
-            check(len(df) > 0 and (df["inverse_hardness"] >= 0).all(),
-                  f"{r.path}: no rows, or a negative 1/hardness")
+            w = df["w_over_w0_sign_change"]
+            inside = (w > df["w_over_w0_lowest"]) & (w <= df["w_over_w0_highest"])
+            check(len(df) > 0 and (inside | (w == 0) | (w == float("inf")) | w.isna()).all()
+                  and df["lambda_l_over_lambda_s"].is_monotonic_increasing,
+                  f"{r.path}: a sign change outside its sweep, or widths out of order")
+        elif r.file in ("plastic_alpha.parquet", "spectrum_alpha.parquet"):
+            # The plastic and spectrum families' fits: each the statistics stage's own at the
+            # solved load.
+            plastic = r.file == "plastic_alpha.parquet"
+            check_schema(r.path, PLASTIC_ALPHA if plastic else SPECTRUM_ALPHA)
+            parquet_files += 1
+            df = pd.read_parquet(r.path)
+            x = df["inverse_hardness" if plastic else "lambda_l_over_lambda_s"]
+            check(len(df) > 0 and (x >= 0).all(),
+                  f"{r.path}: no rows, or a negative setting")
             for study, group in df.groupby("study"):
                 src = rows("statistics", "alpha.parquet", study=study)
                 if not check(len(src) == 1, f"{r.path}: {study} has {len(src)} alpha tables"):
