@@ -131,25 +131,24 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
             f64_column(&model, model_column)?,
         );
         let x = setting.value;
+        // The rows at the plateau load, found once for every threshold.
+        let rows = rows_near(&w, w_plateau).map_or_else(Vec::new, |r| r.0);
+        let model_rows = rows_near(&mw, w_plateau).map_or_else(Vec::new, |r| r.0);
         for (t, &a_star) in scene.a_star_over_ls2.iter().enumerate() {
             // A log axis cannot draw K = 0 (no cluster above A*); the CSV of fig45 has it.
             let drawable = |v: f64| v.is_finite() && (y_axis != YAxis::Log || v > 0.0);
-            if let Some((rows, _)) = rows_near(&w, w_plateau) {
-                for i in rows.into_iter().filter(|&i| a[i] == a_star) {
-                    if drawable(pooled[i]) {
-                        measured[t].push((x, pooled[i]));
-                    }
-                    if half[i].is_finite() && (y_axis != YAxis::Log || mean[i] - half[i] > 0.0) {
-                        // K and 𝒦 are fractions: the band of their mean stops at 1.
-                        bands[t].push((x, mean[i] - half[i], (mean[i] + half[i]).min(1.0)));
-                    }
+            for i in rows.iter().copied().filter(|&i| a[i] == a_star) {
+                if drawable(pooled[i]) {
+                    measured[t].push((x, pooled[i]));
+                }
+                if half[i].is_finite() && (y_axis != YAxis::Log || mean[i] - half[i] > 0.0) {
+                    // K and 𝒦 are fractions: the band of their mean stops at 1.
+                    bands[t].push((x, mean[i] - half[i], (mean[i] + half[i]).min(1.0)));
                 }
             }
-            if let Some((rows, _)) = rows_near(&mw, w_plateau) {
-                for i in rows.into_iter().filter(|&i| ma[i] == a_star) {
-                    if drawable(mv[i]) {
-                        fitted[t].push((x, mv[i]));
-                    }
+            for i in model_rows.iter().copied().filter(|&i| ma[i] == a_star) {
+                if drawable(mv[i]) {
+                    fitted[t].push((x, mv[i]));
                 }
             }
         }
@@ -204,13 +203,21 @@ fn interval(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
         YAxis::Log,
     );
     let n = scene.settings.len();
-    for (c, &target) in scene.loads.iter().enumerate() {
-        let (mut largest, mut band, mut cut_off) = (Vec::new(), Vec::new(), Vec::new());
-        for (s, setting) in scene.settings.iter().enumerate() {
-            let loads = inputs.table(s, "statistics", "loads.parquet")?;
-            let w = f64_column(&loads, "w_over_w0")?;
-            let mean = f64_column(&loads, "largest_area_over_ls2_mean")?;
-            let half = f64_column(&loads, "largest_area_over_ls2_ci95")?;
+    // Per drawn load: the largest cluster, its band and the fitted cut-off of each setting.
+    type Curves = (Vec<(f64, f64)>, Vec<(f64, f64, f64)>, Vec<(f64, f64)>);
+    let mut curves: Vec<Curves> = vec![Default::default(); scene.loads.len()];
+    for (s, setting) in scene.settings.iter().enumerate() {
+        // Each table read once per setting, whatever the number of loads drawn.
+        let loads = inputs.table(s, "statistics", "loads.parquet")?;
+        let w = f64_column(&loads, "w_over_w0")?;
+        let mean = f64_column(&loads, "largest_area_over_ls2_mean")?;
+        let half = f64_column(&loads, "largest_area_over_ls2_ci95")?;
+        let model = inputs.table(n + s, "analytic", "model.parquet")?;
+        let (mw, a_m) = (
+            f64_column(&model, "w_over_w0")?,
+            f64_column(&model, "a_m_over_ls2")?,
+        );
+        for (&target, (largest, band, cut_off)) in scene.loads.iter().zip(curves.iter_mut()) {
             if let Some((rows, _)) = rows_near(&w, target) {
                 for i in rows.into_iter().filter(|&i| mean[i] > 0.0) {
                     largest.push((setting.value, mean[i]));
@@ -219,17 +226,14 @@ fn interval(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
                     }
                 }
             }
-            let model = inputs.table(n + s, "analytic", "model.parquet")?;
-            let (mw, a_m) = (
-                f64_column(&model, "w_over_w0")?,
-                f64_column(&model, "a_m_over_ls2")?,
-            );
             if let Some((rows, _)) = rows_near(&mw, target) {
                 if let Some(&i) = rows.iter().find(|&&i| a_m[i].is_finite() && a_m[i] > 0.0) {
                     cut_off.push((setting.value, a_m[i]));
                 }
             }
         }
+    }
+    for (c, (&target, (largest, band, cut_off))) in scene.loads.iter().zip(curves).enumerate() {
         let load = super::plot::number(target);
         plot.series.push(Series {
             marker: Some(Marker::ALL[c % Marker::ALL.len()]),
