@@ -5,10 +5,13 @@ use std::path::Path;
 
 pub mod atomic;
 mod gsf;
+pub mod guard;
 pub mod measured;
 mod netcdf;
 pub mod prepare;
 mod sdf;
+pub mod sniff;
+pub mod text;
 mod x3p;
 mod xyz;
 
@@ -189,54 +192,32 @@ pub fn read_map_npy(path: &Path) -> Result<(usize, usize, Vec<f64>), IoError> {
 }
 
 /// Read a plain-text matrix of heights: one row of the map per line, values separated by
-/// spaces, tabs, commas or semicolons; blank lines and lines starting with `#` or `%` are
-/// skipped; `nan` (any case) is a missing point. Every row must have the same length.
+/// spaces, tabs, commas or semicolons (a decimal comma where fields are separated by tabs,
+/// spaces or semicolons); header lines before the numbers and lines starting with `#` or
+/// `%` are skipped; `nan` (any case) is a missing point. Every row must have the same
+/// length. A table that is an x-y-z list or a line scan is refused, saying so.
 pub fn read_map_text(path: &Path) -> Result<(usize, usize, Vec<f64>), IoError> {
     let err = |message: String| IoError::File {
         path: path.display().to_string(),
         message,
     };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| err(format!("cannot be read as text ({e})")))?;
-    let (mut values, mut cols, mut rows) = (Vec::new(), None, 0usize);
-    for (line_no, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || line.starts_with('%') {
-            continue;
-        }
-        let before = values.len();
-        for token in line
-            .split(|c: char| c.is_whitespace() || c == ',' || c == ';')
-            .filter(|t| !t.is_empty())
-        {
-            let v: f64 = token
-                .parse()
-                .map_err(|_| err(format!("line {}: '{token}' is not a number", line_no + 1)))?;
-            if v.is_infinite() {
-                return Err(err(format!(
-                    "line {}: '{token}' is not a height",
-                    line_no + 1
-                )));
-            }
-            values.push(v);
-        }
-        let n = values.len() - before;
-        match cols {
-            None => cols = Some(n),
-            Some(c) if c != n => {
-                return Err(err(format!(
-                    "line {} has {n} values where the rows before have {c}: not a matrix",
-                    line_no + 1
-                )))
-            }
-            _ => {}
-        }
-        rows += 1;
+    let table = read_table(path).map_err(err)?;
+    match text::classify(&table) {
+        text::Shape::Matrix => Ok((table.rows, table.cols, table.values)),
+        text::Shape::Xyz => Err(err(
+            "is an x-y-z list (three columns on a regular grid), not a matrix".into(),
+        )),
+        text::Shape::LineScan => Err(err(format!(
+            "is {}; a contact needs a 2-D map",
+            text::describe_line_scan(&table)
+        ))),
     }
-    match cols {
-        Some(c) if c > 0 => Ok((rows, c, values)),
-        _ => Err(err("holds no heights".into())),
-    }
+}
+
+/// The table of numbers of a text file (a regular file, within the memory budget).
+fn read_table(path: &Path) -> Result<text::Table, String> {
+    let bytes = guard::read_bounded(path)?;
+    text::table(&text::decode(&bytes)?)
 }
 
 /// Write any float64 array of the given shape (C order) as `.npy`.
@@ -419,17 +400,55 @@ pub fn cannot_write(path: &Path, cause: &str) -> String {
     format!("cannot write {}: {cause}{}", path.display(), disk_note(dir))
 }
 
-/// Read a measured map by its extension; every failure names the file and what is wrong.
+/// Read a measured map by its content: its first bytes say what it is (the suffix must
+/// agree); every failure names the file and what is wrong. Devices, pipes and directories
+/// are refused before anything is read.
 pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
+    use sniff::Content;
     let err = |message: String| IoError::File {
         path: path.display().to_string(),
         message,
     };
+    let len = guard::regular_file(path).map_err(err)?;
+    let mut head = Vec::with_capacity(len.min(1 << 16) as usize);
+    {
+        use std::io::Read;
+        std::fs::File::open(path)
+            .and_then(|f| f.take(1 << 16).read_to_end(&mut head))
+            .map_err(|e| err(format!("cannot be read ({e})")))?;
+    }
+    let content = sniff::sniff(&head);
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
+    let known = |e: &str| {
+        [
+            "npy", "x3p", "nc", "gsf", "sdf", "txt", "csv", "asc", "dat", "xyz", "tsv",
+        ]
+        .contains(&e)
+    };
+    match content {
+        Content::Foreign(what) => return Err(err(format!("is {what}"))),
+        Content::Binary => {
+            return Err(err(if sniff::suffixes(Content::Text).contains(&ext.as_str()) {
+                format!("is a binary file, not text (a matrix or an x-y-z list); the formats read are {}", measured::READ_EXTENSIONS)
+            } else {
+                format!(
+                    "is a binary file of no format read here; the formats read are {}",
+                    measured::READ_EXTENSIONS
+                )
+            }))
+        }
+        c if known(&ext) && !sniff::suffixes(c).contains(&ext.as_str()) => {
+            return Err(err(format!(
+                "is named .{ext} but holds {}: rename it to what it holds, or check that it is the file meant",
+                sniff::name(c)
+            )))
+        }
+        _ => {}
+    }
     let plain = |(rows, cols, heights): (usize, usize, Vec<f64>), source| measured::MeasuredMap {
         rows,
         cols,
@@ -439,21 +458,41 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         pixel_file_units: None,
         source,
     };
-    match ext.as_str() {
-        "npy" => Ok(plain(read_map_npy(path)?, measured::Source::Npy)),
-        "txt" | "csv" | "asc" | "dat" => {
-            let mut map = plain(read_map_text(path)?, measured::Source::Text);
-            measured::text_header(path, &mut map).map_err(err)?;
-            Ok(map)
+    match content {
+        Content::Npy => Ok(plain(read_map_npy(path)?, measured::Source::Npy)),
+        Content::Zip => x3p::read(path).map_err(err),
+        Content::NetCdf3 => netcdf::read(path).map_err(err),
+        Content::Gsf => gsf::read(path).map_err(err),
+        Content::SdfText | Content::SdfBinary => sdf::read(path).map_err(err),
+        _ => {
+            let table = read_table(path).map_err(err)?;
+            match text::classify(&table) {
+                text::Shape::Xyz => xyz::from_table(&table).map_err(err),
+                text::Shape::LineScan => Err(err(format!(
+                    "is {}; a contact needs a 2-D map (a matrix, or an x-y-z list on a grid)",
+                    text::describe_line_scan(&table)
+                ))),
+                text::Shape::Matrix if ext == "xyz" && table.cols == 3 => {
+                    xyz::from_table(&table).map_err(err)
+                }
+                text::Shape::Matrix if ext == "xyz" => Err(err(format!(
+                    "is named .xyz but holds a table of {} columns, not three (x y z)",
+                    table.cols
+                ))),
+                text::Shape::Matrix => {
+                    let mut map = measured::MeasuredMap {
+                        rows: table.rows,
+                        cols: table.cols,
+                        heights: table.values,
+                        height_unit_m: None,
+                        pixel_m: None,
+                        pixel_file_units: None,
+                        source: measured::Source::Text,
+                    };
+                    measured::text_header(&table.header, &mut map).map_err(err)?;
+                    Ok(map)
+                }
+            }
         }
-        "x3p" => x3p::read(path).map_err(err),
-        "nc" => netcdf::read(path).map_err(err),
-        "gsf" => gsf::read(path).map_err(err),
-        "sdf" => sdf::read(path).map_err(err),
-        "xyz" => xyz::read(path).map_err(err),
-        other => Err(err(format!(
-            "a .{other} file is not read; the formats read are {}",
-            measured::READ_EXTENSIONS
-        ))),
     }
 }

@@ -36,5 +36,6 @@ pub mod format;
 pub mod io;
 pub mod machine;
 pub mod pipeline;
+pub mod ranges;
 pub mod stages;
 pub mod store;

@@ -230,12 +230,9 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    if resamples < 10 {
-        return Err(InputError(format!(
-            "--resamples {resamples}: at least 10 are needed for a 95 % interval"
-        ))
-        .into());
-    }
+    wearcoef::ranges::RESAMPLES
+        .check_count("--resamples", resamples as u64)
+        .map_err(InputError)?;
     let is_parquet = areas.extension().is_some_and(|e| e == "parquet");
     if !is_parquet {
         return Err(InputError(format!(

@@ -143,6 +143,19 @@ pub fn check_outputs(
     Ok(())
 }
 
+/// Check a command's output files against every file its pipeline reads: the pipeline file
+/// (`--config`) and each measured study's topography files, before anything is written.
+pub fn check_outputs_of_pipeline(
+    outputs: &[(&str, &Path)],
+    config: &Path,
+    pipeline: &Pipeline,
+) -> Result<(), InputError> {
+    let files = pipeline.read_files(&config.display().to_string());
+    let mut inputs: Vec<(&str, &Path)> = vec![("--config", config)];
+    inputs.extend(files.iter().map(|(f, p)| (f.as_str(), p.as_path())));
+    check_outputs(outputs, &inputs)
+}
+
 /// Whether two directory options name one directory (both existing, or the same path).
 pub fn same_dir(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {

@@ -340,7 +340,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     }
     let pipeline = load(&store.config)?;
     if let Some(path) = &out {
-        super::check_outputs(&[("--out", path)], &[("--config", &store.config)])?;
+        super::check_outputs_of_pipeline(&[("--out", path)], &store.config, &pipeline)?;
     }
     let origin = store.config.display().to_string();
     let (plan, model) = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;

@@ -441,11 +441,11 @@ pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
         )
         .into());
     }
+    let pipeline = load(&store.config)?;
     if let Some(path) = &output {
-        super::check_outputs(&[("--output", path)], &[("--config", &store.config)])?;
+        super::check_outputs_of_pipeline(&[("--output", path)], &store.config, &pipeline)?;
     }
     let data = require_store(&store.data)?;
-    let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
     let plan = Plan::build(&pipeline, &origin, &profile, &[])?;
     let studies = pipeline.plan(&profile, &origin)?;

@@ -169,7 +169,22 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
     let pipeline = load(&args.store.config)?;
     let origin = args.store.config.display().to_string();
     let cluster = cluster_config(&pipeline.cluster, &args);
-    cluster.validate("command line")?;
+    // The file's block was checked when it was loaded: what fails here came from an option.
+    cluster.validate(&origin).map_err(|e| match e {
+        wearcoef::config::ConfigError::Invalid {
+            field,
+            value,
+            allowed,
+            ..
+        } => {
+            let name = field.trim_start_matches("cluster.");
+            anyhow::Error::from(super::InputError(format!(
+                "--{} {value}: {allowed}",
+                name.replace('_', "-")
+            )))
+        }
+        other => other.into(),
+    })?;
     std::fs::create_dir_all(&args.store.data)
         .with_context(|| format!("cannot create {}", args.store.data.display()))?;
     let data = args.store.data.canonicalize()?;

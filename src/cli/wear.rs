@@ -12,7 +12,6 @@ use serde_json::json;
 use wearcoef::clusters::{self, Boundary, Connectivity};
 use wearcoef::contact::solver::SolverConfig;
 use wearcoef::contact::window::sweep_window;
-use wearcoef::io::atomic::{write_all_atomically, FileWriter};
 use wearcoef::statistics::{wear_at, OMEGA};
 use wearcoef::store::table::col;
 
@@ -70,9 +69,11 @@ fn quantity(
         .unwrap_or(t.len());
     let (number, unit) = (t[..split].trim(), t[split..].trim());
     let names: Vec<&str> = units.iter().map(|(n, _)| *n).collect();
+    let shown: String = text.chars().take(40).collect();
+    let ellipsis = if text.chars().count() > 40 { "…" } else { "" };
     let bad = || {
         InputError(format!(
-            "{option} {text:?}: {what} with its unit, one of {}",
+            "{option} {shown:?}{ellipsis}: {what} with its unit, one of {}",
             names.join(", ")
         ))
     };
@@ -85,7 +86,7 @@ fn quantity(
     let si = value * factor;
     if !(si.is_finite() && si > 0.0) {
         return Err(InputError(format!(
-            "{option} {text:?}: must be finite and > 0"
+            "{option} {shown:?}{ellipsis}: must be finite and > 0"
         )));
     }
     Ok(si)
@@ -108,8 +109,9 @@ const AREA: &[(&str, f64)] = &[
     ("nm2", 1e-18),
 ];
 
-/// The output directory: created, or an existing empty directory; never anything else.
-fn output_dir(out: &Path) -> Result<(), InputError> {
+/// The output directory, checked before any work: absent (it is created, whole, when the
+/// run ends) or an existing empty directory; never anything else.
+fn check_output_dir(out: &Path) -> Result<(), InputError> {
     match std::fs::read_dir(out) {
         Ok(mut entries) => {
             if entries.next().is_some() {
@@ -120,9 +122,74 @@ fn output_dir(out: &Path) -> Result<(), InputError> {
             }
             Ok(())
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => std::fs::create_dir_all(out)
-            .map_err(|e| InputError(format!("--out {}: cannot be created ({e})", out.display()))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => super::check_dir("--out", out),
+        Err(_) if out.exists() => Err(InputError(format!(
+            "--out {}: exists and is not a directory; name a new directory",
+            out.display()
+        ))),
         Err(e) => Err(InputError(format!("--out {}: {e}", out.display()))),
+    }
+}
+
+/// Refuse, in the user's units, a load whose mean pressure exceeds the hardness.
+fn check_loads_below_hardness(
+    loads: &[f64],
+    hardness_pa: Option<f64>,
+    e_star_pa: f64,
+    slope: f64,
+) -> Result<(), InputError> {
+    let Some(h) = hardness_pa else { return Ok(()) };
+    let show = wearcoef::ranges::show;
+    for &w in loads {
+        let p = w * e_star_pa * slope;
+        if p > h {
+            return Err(InputError(format!(
+                "--loads {}: W/W0 = {} is a mean pressure of {} Pa (W/W0·E*·rms slope, rms slope {}), above --hardness {} Pa: a pressure capped at the hardness cannot carry it; lower the load below W/W0 = {} or raise the hardness",
+                show(w), show(w), show(p), show(slope), show(h), show(h / (e_star_pa * slope))
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A float64 `.npy` of shape `shape` written one block of values at a time, so that the
+/// pressure maps of a sweep are never all in memory.
+struct NpyStream {
+    file: std::io::BufWriter<std::fs::File>,
+}
+
+impl NpyStream {
+    fn create(path: &Path, shape: &[usize]) -> std::io::Result<Self> {
+        use std::io::Write;
+        let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+        let mut dict = format!(
+            "{{'descr': '<f8', 'fortran_order': False, 'shape': ({},), }}",
+            dims.join(", ")
+        );
+        // Magic (6), version (2), length (2), the dict and a newline: a multiple of 64.
+        while (10 + dict.len() + 1) % 64 != 0 {
+            dict.push(' ');
+        }
+        dict.push('\n');
+        let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
+        file.write_all(b"\x93NUMPY\x01\x00")?;
+        file.write_all(&(dict.len() as u16).to_le_bytes())?;
+        file.write_all(dict.as_bytes())?;
+        Ok(NpyStream { file })
+    }
+
+    fn push(&mut self, values: &[f64]) -> std::io::Result<()> {
+        use std::io::Write;
+        for v in values {
+            self.file.write_all(&v.to_le_bytes())?;
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> std::io::Result<()> {
+        use std::io::Write;
+        self.file.flush()?;
+        self.file.get_ref().sync_all()
     }
 }
 
@@ -135,7 +202,10 @@ struct Tables {
 
 /// The physical settings of `wear`, checked: E* (Pa), A* (m²), the hardness (Pa).
 fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>), InputError> {
+    let in_range =
+        |r: &wearcoef::ranges::Range, option: &str, v: f64| r.check(option, v).map_err(InputError);
     let e_star = quantity("--e-star", &args.e_star, PRESSURE, "a modulus")?;
+    in_range(&wearcoef::ranges::E_STAR_PA, "--e-star", e_star)?;
     let a_star_m2 =
         match (&args.a_star, &args.d_star) {
             (Some(a), _) => quantity("--a-star", a, AREA, "an area")?,
@@ -153,22 +223,20 @@ fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>), InputError> {
         .as_deref()
         .map(|h| quantity("--hardness", h, PRESSURE, "a hardness"))
         .transpose()?;
-    if let Some((i, w)) = args
-        .loads
-        .iter()
-        .enumerate()
-        .find(|(_, w)| !(w.is_finite() && **w > 0.0))
-    {
-        return Err(InputError(format!(
-            "--loads: value {i} is {w}; loads W/W0 are finite and > 0"
-        )));
+    if let Some(h) = hardness_pa {
+        in_range(&wearcoef::ranges::HARDNESS_PA, "--hardness", h)?;
     }
-    if !(args.tolerance.is_finite() && args.tolerance > 0.0 && args.tolerance < 1e-2) {
-        return Err(InputError(format!(
-            "--tolerance {}: in (0, 1e-2)",
-            args.tolerance
-        )));
+    for (i, &w) in args.loads.iter().enumerate() {
+        in_range(
+            &wearcoef::ranges::W_OVER_W0,
+            &format!("--loads (value {})", i + 1),
+            w,
+        )?;
     }
+    in_range(&wearcoef::ranges::TOLERANCE, "--tolerance", args.tolerance)?;
+    wearcoef::ranges::RESAMPLES
+        .check_count("--resamples", args.resamples as u64)
+        .map_err(InputError)?;
     Ok((e_star, a_star_m2, hardness_pa))
 }
 
@@ -203,8 +271,12 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         psd,
     } = prepare(&args.prepare)?;
     check_wear_memory(&map)?;
-    output_dir(&args.out)?;
+    check_output_dir(&args.out)?;
     let slope = map.rms_slope();
+    check_loads_below_hardness(&args.loads, hardness_pa, e_star, slope)?;
+    // Everything is written into a staging directory, moved onto --out when complete.
+    let staged = wearcoef::io::atomic::StagedDir::new(&args.out)?;
+    let dir = staged.path().to_path_buf();
     let pixel_m2 = map.dx * map.dy;
     let area_m2 = (map.rows * map.cols) as f64 * pixel_m2;
     let a_star_px = a_star_m2 / pixel_m2;
@@ -218,11 +290,19 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
             .expect("a valid template"),
     );
     let mut tables = Tables::default();
-    let mut pressures: Vec<f64> = Vec::new();
     let (rows, cols) = (map.rows, map.cols);
+    let mut pressures = match args.pressure_maps {
+        true => Some(NpyStream::create(
+            &dir.join("pressure.npy"),
+            &[args.loads.len(), rows, cols],
+        )?),
+        false => None,
+    };
     let (layout, _) = sweep_window(&map, e_star, &args.loads, &cfg, hardness, |i, p, r| {
-        if args.pressure_maps {
-            pressures.extend_from_slice(p);
+        if let Some(stream) = pressures.as_mut() {
+            stream.push(p).map_err(|e| {
+                wearcoef::io::cannot_write(&args.out.join("pressure.npy"), &e.to_string())
+            })?;
         }
         let contact: Vec<bool> = p.iter().map(|&v| v > 0.0).collect();
         let labelling =
@@ -267,28 +347,33 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         "clusters": "8-connected, no wrap-around; touches_edge marks clusters cut by the map's border",
         "program": wearcoef::store::table::program(),
     });
-    let maps = args
-        .pressure_maps
-        .then_some(([args.loads.len(), rows, cols], pressures));
-    // The page is drawn first into a staging directory, then moved in with the tables.
-    let staging = args.out.join(format!(".page.tmp-{}", std::process::id()));
-    std::fs::create_dir_all(&staging)?;
+    if let Some(stream) = pressures {
+        stream.finish()?;
+    }
     let mut areas_um2 = vec![Vec::new(); args.loads.len()];
     for (&i, &a) in tables.clusters.maps().iter().zip(tables.clusters.areas()) {
         areas_um2[i as usize].push(a as f64 * pixel_m2 * 1e12);
     }
+    let rows_of_page = tables.rows.clone();
     let page = super::wear_page::Page {
-        rows: &tables.rows,
+        rows: &rows_of_page,
         areas_um2,
         psd: &psd,
         report: &report,
     };
-    let drawn = super::wear_page::write(&page, &staging);
     let psd = wearcoef::stages::surface::psd_table(&psd)?;
-    let written = drawn
-        .and_then(|_| write_outputs(&args.out, tables, &report, maps, psd, &staging, pixel_m2));
-    let _ = std::fs::remove_dir_all(&staging);
-    written?;
+    write_outputs(&dir, tables, &report, psd, pixel_m2)?;
+    // The tables are kept whatever the page does: a page that cannot be drawn is a warning.
+    let drawn = super::wear_page::write(&page, &dir);
+    if let Err(e) = &drawn {
+        wearcoef::note!(
+            "warning: the page (wear.png, wear.svg, index.html) could not be drawn: {e:#}; the tables are written"
+        );
+    }
+    staged.commit()?;
+    if drawn.is_err() {
+        return Ok(ExitCode::FAILURE);
+    }
     out!(
         "{} loads on a {rows} × {cols} map written to {} (index.html, loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
         args.loads.len(),
@@ -322,14 +407,6 @@ const LOAD_COLUMNS: [&str; 20] = [
     "solver_error",
 ];
 
-/// Writes `df` as Parquet (a file of [`write_all_atomically`]).
-fn parquet<'a>(mut df: DataFrame) -> FileWriter<'a> {
-    Box::new(move |tmp: &Path| {
-        ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
-        Ok(())
-    })
-}
-
 /// The loads table's integer columns (counts).
 const COUNT_COLUMNS: [&str; 4] = [
     "n_clusters",
@@ -339,12 +416,10 @@ const COUNT_COLUMNS: [&str; 4] = [
 ];
 
 fn write_outputs(
-    out: &Path,
+    dir: &Path,
     t: Tables,
     report: &serde_json::Value,
-    maps: Option<([usize; 3], Vec<f64>)>,
-    psd: DataFrame,
-    staging: &Path,
+    mut psd: DataFrame,
     pixel_m2: f64,
 ) -> anyhow::Result<()> {
     let n = t.rows.len();
@@ -358,7 +433,7 @@ fn write_outputs(
             columns.push(col(name, values));
         }
     }
-    let loads = DataFrame::new(n, columns)?;
+    let mut loads = DataFrame::new(n, columns)?;
     let area_um2: Vec<f64> = t
         .clusters
         .areas()
@@ -367,13 +442,6 @@ fn write_outputs(
         .collect();
     let mut clusters = t.clusters.frame(true)?;
     clusters.with_column(col("area_um2", area_um2))?;
-    let text = serde_json::to_string_pretty(report)?;
-    let (lp, lc, cp, pj) = (
-        out.join("loads.parquet"),
-        out.join("loads.csv"),
-        out.join("clusters.parquet"),
-        out.join("preparation.json"),
-    );
     let mut csv_text = csv::Writer::from_writer(Vec::new());
     csv_text.write_record(std::iter::once("load_index").chain(LOAD_COLUMNS))?;
     for (i, r) in t.rows.iter().enumerate() {
@@ -383,43 +451,17 @@ fn write_outputs(
         });
         csv_text.write_record(std::iter::once(i.to_string()).chain(cells))?;
     }
-    let csv_bytes = csv_text.into_inner()?;
-    let pressure_path = out.join("pressure.npy");
-    let psd_path = out.join("psd.parquet");
-    let page: Vec<(PathBuf, PathBuf)> = ["wear.png", "wear.svg", "index.html"]
-        .iter()
-        .map(|name| (out.join(name), staging.join(name)))
-        .collect();
-    let bytes = |b: Vec<u8>| -> FileWriter {
-        Box::new(move |tmp: &Path| {
-            std::fs::write(tmp, b)?;
-            Ok(())
-        })
+    let parquet = |name: &str, df: &mut DataFrame| -> anyhow::Result<()> {
+        ParquetWriter::new(std::fs::File::create(dir.join(name))?).finish(df)?;
+        Ok(())
     };
-    let mut files: Vec<(&Path, FileWriter)> = vec![
-        (&lp, parquet(loads)),
-        (&lc, bytes(csv_bytes)),
-        (&cp, parquet(clusters)),
-        (&pj, bytes(text.into_bytes())),
-        (&psd_path, parquet(psd)),
-    ];
-    for (to, from) in &page {
-        files.push((
-            to,
-            Box::new(move |tmp: &Path| {
-                std::fs::rename(from, tmp)?;
-                Ok(())
-            }),
-        ));
-    }
-    if let Some((shape, values)) = maps {
-        files.push((
-            &pressure_path,
-            Box::new(move |tmp: &Path| {
-                wearcoef::io::write_f64(tmp, &shape, values)?;
-                Ok(())
-            }),
-        ));
-    }
-    write_all_atomically(files)
+    parquet("loads.parquet", &mut loads)?;
+    parquet("clusters.parquet", &mut clusters)?;
+    parquet("psd.parquet", &mut psd)?;
+    std::fs::write(dir.join("loads.csv"), csv_text.into_inner()?)?;
+    std::fs::write(
+        dir.join("preparation.json"),
+        serde_json::to_string_pretty(report)?,
+    )?;
+    Ok(())
 }

@@ -39,6 +39,7 @@ fn coefficients(p: &Page) -> LinePlot {
         ..Series::line("𝒦 (eq. 7)", at("k_upscaled"), 1)
     });
     plot.y_bounds = Some((0.0, 1.0));
+    plot.when_empty = Some("no load has a cluster: K and 𝒦 are undefined".into());
     plot
 }
 
@@ -64,6 +65,7 @@ fn spectrum(p: &Page) -> LinePlot {
         width: 0,
         ..Series::line("measured", points, 0)
     });
+    plot.when_empty = Some("the map is too small for a PSD bin".into());
     let fit = &p.report["psd_fit"];
     if let (Some(h), Some(ll), Some(ls)) = (
         fit["hurst"].as_f64(),
@@ -99,6 +101,10 @@ fn spectrum(p: &Page) -> LinePlot {
 
 fn ccdf(p: &Page) -> LinePlot {
     let mut plot = LinePlot::new("Cluster areas", "A (µm^2)", "P(area > A)", true, YAxis::Log);
+    plot.when_empty = Some(
+        "no load has two clusters or more: no distribution to draw (full contact, one cluster or none)"
+            .into(),
+    );
     for (i, (areas, r)) in p.areas_um2.iter().zip(p.rows).enumerate() {
         let mut a = areas.clone();
         a.sort_by(f64::total_cmp);

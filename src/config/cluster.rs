@@ -80,6 +80,21 @@ impl Default for ClusterConfig {
     }
 }
 
+/// A Slurm partition, account or QOS name: letters, digits, `_`, `-` and `.`, as Slurm
+/// names them (at most 64); anything else (a quote, `$(…)`, a space) would be read by the
+/// batch script's `#SBATCH` line, not passed as a name.
+pub fn check_slurm_name(v: &str) -> Result<(), String> {
+    let ok = !v.is_empty()
+        && v.len() <= 64
+        && v.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    if ok {
+        Ok(())
+    } else {
+        Err("a Slurm name of 1 to 64 letters, digits, '_', '-' or '.' (as `sacctmgr show qos` and `sinfo` list them)".into())
+    }
+}
+
 impl ClusterConfig {
     /// Check every value; `origin` names the file in messages.
     pub fn validate(&self, origin: &str) -> Result<(), ConfigError> {
@@ -92,28 +107,26 @@ impl ClusterConfig {
         if self.solve_cpus == 0 {
             return Err(invalid("solve_cpus", "0".into(), "must be ≥ 1"));
         }
-        for (field, v, lo) in [
-            ("task_minutes", self.task_minutes, 0.0),
-            ("min_minutes", self.min_minutes, 0.0),
+        use crate::ranges::{MEMORY_SAFETY, MINUTES, TIME_SAFETY};
+        for (field, v, range) in [
+            ("task_minutes", self.task_minutes, MINUTES),
+            ("min_minutes", self.min_minutes, MINUTES),
+            ("memory_safety", self.memory_safety, MEMORY_SAFETY),
+            ("time_safety", self.time_safety, TIME_SAFETY),
         ] {
-            if !(v.is_finite() && v > lo) {
-                return Err(invalid(
-                    field,
-                    v.to_string(),
-                    "must be a number of minutes > 0",
-                ));
+            if let Err(why) = range.check(&format!("cluster.{field}"), v) {
+                let allowed = why.split_once(": ").map_or(why.as_str(), |(_, w)| w);
+                return Err(invalid(field, crate::ranges::show(v), allowed));
             }
         }
+        // Names written into #SBATCH lines: a plain word, nothing a shell or Slurm reads.
         for (field, v) in [
-            ("memory_safety", self.memory_safety),
-            ("time_safety", self.time_safety),
+            ("partition", &self.partition),
+            ("account", &self.account),
+            ("qos", &self.qos),
         ] {
-            if !(v.is_finite() && v >= 1.0) {
-                return Err(invalid(
-                    field,
-                    v.to_string(),
-                    "a safety factor must be ≥ 1 (the estimate is not a bound)",
-                ));
+            if let Some(v) = v {
+                check_slurm_name(v).map_err(|why| invalid(field, format!("{v:?}"), &why))?;
             }
         }
         if self.max_array_size < 2 {

@@ -7,6 +7,23 @@ use super::{ConfigError, FigureKind, MeasuredPlan, MeasuredStudy, Pipeline, Stud
 use crate::surface::{Method, SurfaceParams};
 
 impl Pipeline {
+    /// Every file outside the store that this pipeline reads, with its field: the measured
+    /// studies' topography files (paths relative to the pipeline file at `origin`). An
+    /// output of any command must be none of them, nor the pipeline file itself.
+    pub fn read_files(&self, origin: &str) -> Vec<(String, PathBuf)> {
+        let dir = Path::new(origin).parent().unwrap_or(Path::new(""));
+        self.studies
+            .iter()
+            .filter_map(|(name, s)| s.measured.as_ref().map(|m| (name, m)))
+            .flat_map(|(name, m)| {
+                m.files
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, f)| (format!("studies.{name}.measured.files[{i}]"), dir.join(f)))
+            })
+            .collect()
+    }
+
     /// A measured study is drawn by `fig2` and `fig45` only: the other figures compare
     /// generated spectra (λ_l/λ_s, H, L/λ_l, λ_s/Δl) or hardnesses.
     pub(super) fn check_measured_figures(&self, origin: &str) -> Result<(), ConfigError> {
@@ -38,6 +55,10 @@ impl Pipeline {
         let Some(h) = self.studies[name].hardness else {
             return Ok(());
         };
+        if h == f64::INFINITY {
+            // No ceiling: elastic contact, as documented.
+            return Ok(());
+        }
         let invalid = |value: String, allowed: String| ConfigError::Invalid {
             path: origin.to_string(),
             field: format!("studies.{name}.hardness"),
@@ -46,13 +67,13 @@ impl Pipeline {
         };
         if !(h.is_finite() && h > 0.0) {
             return Err(invalid(
-                h.to_string(),
-                "must be finite and > 0 (in units of E*·rms slope, as W/W0), or left out for elastic contact".into(),
+                crate::ranges::show(h),
+                "must be > 0 (in units of E*·rms slope, as W/W0), or .inf or left out for elastic contact".into(),
             ));
         }
         if let Some(w) = loads.iter().find(|&&w| w > h) {
             return Err(invalid(
-                h.to_string(),
+                crate::ranges::show(h),
                 format!("is below the load W/W0 = {w} of profile {profile}: a pressure capped at the hardness cannot carry a mean above it; raise the hardness or lower the loads")
             ));
         }
@@ -159,7 +180,8 @@ impl Pipeline {
             e_star: self.material.e_star,
             tolerance: sp.tolerance.unwrap_or(self.solver.tolerance),
             max_iterations: self.solver.max_iterations,
-            hardness: study.hardness,
+            // `.inf` is elastic contact, as if left out.
+            hardness: study.hardness.filter(|h| *h != f64::INFINITY),
             measured: Some(MeasuredPlan {
                 files,
                 fields: (0..m.files.len())

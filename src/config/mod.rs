@@ -302,11 +302,13 @@ impl Pipeline {
                 "only schema version 1 exists",
             ));
         }
-        if !(self.material.e_star.is_finite() && self.material.e_star > 0.0) {
+        if let Err(why) =
+            crate::ranges::E_STAR_PIPELINE.check("material.e_star", self.material.e_star)
+        {
             return Err(invalid(
                 "material.e_star".into(),
-                self.material.e_star.to_string(),
-                "the effective modulus must be finite and > 0",
+                crate::ranges::show(self.material.e_star),
+                why.split_once(": ").map_or(why.as_str(), |(_, w)| w),
             ));
         }
         let tol = self.solver.tolerance;
@@ -470,7 +472,8 @@ impl Pipeline {
             e_star: self.material.e_star,
             tolerance: sp.tolerance.unwrap_or(self.solver.tolerance),
             max_iterations: self.solver.max_iterations,
-            hardness: study.hardness,
+            // `.inf` is elastic contact, as if left out.
+            hardness: study.hardness.filter(|h| *h != f64::INFINITY),
             measured: None,
         })
     }

@@ -133,6 +133,107 @@ pub fn write_all_atomically(files: Vec<(&Path, FileWriter<'_>)>) -> anyhow::Resu
     Ok(())
 }
 
+/// A directory written whole or not at all: its files go into a staging sibling
+/// `.<name>.tmp-<pid>`, renamed onto the target only when every one is written. The target
+/// must be absent or an empty directory then; if another process filled it meanwhile (two
+/// runs into one directory), the commit fails and nothing of this run lands there. Dropped
+/// without a commit (an error, a refusal), the staging directory and every parent it
+/// created are removed.
+pub struct StagedDir {
+    target: PathBuf,
+    staging: PathBuf,
+    created: Vec<PathBuf>,
+    done: bool,
+}
+
+impl StagedDir {
+    /// Stage `target`: its missing parents are created (and removed again if nothing is
+    /// committed), and stagings of it left by dead processes are removed.
+    pub fn new(target: &Path) -> anyhow::Result<Self> {
+        let name = target
+            .file_name()
+            .ok_or_else(|| anyhow::anyhow!("{}: names no directory", target.display()))?
+            .to_string_lossy()
+            .into_owned();
+        let parent = target
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
+        let mut created = Vec::new();
+        let mut missing = Vec::new();
+        let mut at = parent.as_path();
+        while !at.as_os_str().is_empty() && !at.exists() {
+            missing.push(at.to_path_buf());
+            at = at.parent().unwrap_or(Path::new(""));
+        }
+        for dir in missing.into_iter().rev() {
+            std::fs::create_dir(&dir)
+                .map_err(|e| anyhow::anyhow!(super::cannot_write(&dir, &e.to_string())))?;
+            created.push(dir);
+        }
+        let mut staged = StagedDir {
+            target: target.to_path_buf(),
+            staging: parent.join(format!(".{name}.tmp-{}", std::process::id())),
+            created,
+            done: false,
+        };
+        if let Ok(entries) = std::fs::read_dir(&parent) {
+            for e in entries.flatten() {
+                let other = e.file_name().to_string_lossy().into_owned();
+                let pid = other
+                    .strip_prefix('.')
+                    .and_then(|o| o.strip_prefix(name.as_str()))
+                    .and_then(|o| o.strip_prefix(".tmp-"))
+                    .and_then(|p| p.parse::<u32>().ok());
+                if pid.is_some_and(|p| p != std::process::id() && !alive(p)) {
+                    let _ = std::fs::remove_dir_all(e.path());
+                }
+            }
+        }
+        let _ = std::fs::remove_dir_all(&staged.staging);
+        if let Err(e) = std::fs::create_dir(&staged.staging) {
+            staged.done = false;
+            anyhow::bail!(super::cannot_write(target, &e.to_string()));
+        }
+        Ok(staged)
+    }
+
+    /// Where the files are written until the commit.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Move the staged directory onto the target.
+    pub fn commit(mut self) -> anyhow::Result<()> {
+        match std::fs::rename(&self.staging, &self.target) {
+            Ok(()) => {
+                self.done = true;
+                Ok(())
+            }
+            Err(e) if matches!(e.raw_os_error(), Some(libc::ENOTEMPTY | libc::EEXIST)) => {
+                anyhow::bail!(
+                    "{} was filled by another process while this one ran (two runs into one directory?); nothing of this run was written there: run again into a new directory",
+                    self.target.display()
+                )
+            }
+            Err(e) => anyhow::bail!(super::cannot_write(&self.target, &e.to_string())),
+        }
+    }
+}
+
+impl Drop for StagedDir {
+    fn drop(&mut self) {
+        if self.done {
+            return;
+        }
+        let _ = std::fs::remove_dir_all(&self.staging);
+        for dir in self.created.iter().rev() {
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -175,5 +276,30 @@ mod tests {
         assert!(e.contains("b.npy") && e.contains("disk full"), "{e}");
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert!(left.is_empty(), "{left:?}");
+    }
+
+    /// A staged directory lands whole; a second into the same target fails and leaves the
+    /// first; one dropped uncommitted leaves nothing, not even the parents it made.
+    #[test]
+    fn staged_directories_land_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("new/out");
+        let a = StagedDir::new(&target).unwrap();
+        std::fs::write(a.path().join("x"), b"a").unwrap();
+        let other = dir.path().join("new/.out.tmp-4194399");
+        std::fs::create_dir(&other).unwrap();
+        std::fs::write(other.join("y"), b"b").unwrap();
+        a.commit().unwrap();
+        assert_eq!(std::fs::read(target.join("x")).unwrap(), b"a");
+        let c = StagedDir::new(&target).unwrap();
+        assert!(!other.exists(), "a dead process's staging is removed");
+        std::fs::write(c.path().join("x"), b"c").unwrap();
+        let e = c.commit().unwrap_err().to_string();
+        assert!(e.contains("filled by another process"), "{e}");
+        assert_eq!(std::fs::read(target.join("x")).unwrap(), b"a");
+        let left: Vec<_> = std::fs::read_dir(dir.path().join("new")).unwrap().collect();
+        assert_eq!(left.len(), 1, "{left:?}");
+        drop(StagedDir::new(&dir.path().join("p/q/out")).unwrap());
+        assert!(!dir.path().join("p").exists());
     }
 }

@@ -10,7 +10,7 @@ use super::measured::{length_unit_m, MeasuredMap, Source};
 const MAGIC: &[u8] = b"Gwyddion Simple Field 1.0\n";
 
 pub fn read(path: &Path) -> Result<MeasuredMap, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot be read ({e})"))?;
+    let bytes = super::guard::read_bounded(path)?;
     if !bytes.starts_with(MAGIC) {
         return Err("does not start with 'Gwyddion Simple Field 1.0': not a GSF file".into());
     }
@@ -60,8 +60,14 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
         (Some(sx), Some(sy), Some(u)) => Some((sx * u / cols as f64, sy * u / rows as f64)),
         _ => None,
     };
-    let need = rows * cols * 4;
     let data = bytes.get(data_start..).unwrap_or(&[]);
+    let count = super::guard::check_promised(
+        "XRes × YRes",
+        rows as u128 * cols as u128,
+        4,
+        data.len() as u64,
+    )?;
+    let need = count * 4;
     if data.len() != need {
         return Err(format!(
             "holds {} bytes of data where XRes × YRes = {cols} × {rows} float32 need {need}: truncated or mismatched",

@@ -2,8 +2,6 @@
 //! heights row-major with rows along y (NaN for a missing point), in metres when the file
 //! states a unit, and the pixel size when the file states one.
 
-use std::path::Path;
-
 /// The format a map was read from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -62,13 +60,12 @@ pub fn length_unit_m(unit: &str) -> Option<f64> {
 
 /// The units a text matrix states in its comment header, as SurfaceTopography writes it
 /// (`# Width: 30.0 µm`, `# Height: 18.0 µm`, `# Value units: µm`): applied to `map`.
-pub(super) fn text_header(path: &Path, map: &mut MeasuredMap) -> Result<(), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot be read ({e})"))?;
+pub(super) fn text_header(header: &[String], map: &mut MeasuredMap) -> Result<(), String> {
     let (mut width, mut height, mut unit) = (None, None, None);
-    for line in text
-        .lines()
-        .map(str::trim)
-        .take_while(|l| l.is_empty() || l.starts_with('#'))
+    for line in header
+        .iter()
+        .map(|l| l.trim())
+        .filter(|l| l.starts_with('#'))
     {
         let Some((key, value)) = line.trim_start_matches('#').split_once(':') else {
             continue;

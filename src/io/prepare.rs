@@ -177,10 +177,13 @@ fn pixel_size(
                 ));
             };
             let py = p.pixel_size_y.unwrap_or(px);
-            if !(px.is_finite() && px > 0.0 && py.is_finite() && py > 0.0) {
-                return Err(bad(format!(
-                    "pixel size {px} × {py}: must be finite and > 0"
-                )));
+            for (option, v) in [("pixel_size", px), ("pixel_size_y", py)] {
+                crate::ranges::PIXEL_M
+                    .check(
+                        &format!("--{} ({option} in pipeline.yaml)", option.replace('_', "-")),
+                        v * u,
+                    )
+                    .map_err(bad)?;
             }
             let from = if file.is_some() {
                 "pixel_size (overriding the file)"
@@ -189,11 +192,138 @@ fn pixel_size(
             };
             Ok(((px * u, py * u), from))
         }
-        (None, Some(d)) => Ok((d, "the file")),
+        (None, Some(d)) => {
+            let show = crate::ranges::show;
+            if !(d.0.is_finite() && d.0 > 0.0 && d.1.is_finite() && d.1 > 0.0) {
+                return Err(bad(format!(
+                    "the file states a pixel size of {} × {} m: a pixel size is finite and > 0 (give --pixel-size, or pixel_size in pipeline.yaml)",
+                    show(d.0),
+                    show(d.1)
+                )));
+            }
+            Ok((d, "the file"))
+        }
         (None, None) => Err(bad(
             "the file states no pixel size; give one (--pixel-size and --pixel-unit, or pixel_size and pixel_unit in pipeline.yaml)".into(),
         )),
     }
+}
+
+/// The largest share of a map that a harmonic fill may invent: beyond it the contact would
+/// be that of the interpolation, not of the measurement.
+pub const MAX_FILLED_FRACTION: f64 = 0.5;
+
+/// A share of filled points above which the record and the terminal say so.
+pub const WARN_FILLED_FRACTION: f64 = 0.05;
+
+/// A map whose heights, once the form is removed, vary by less than this fraction of what
+/// they varied before is flat: what is left is the fit's rounding, not roughness.
+pub const FLAT_RESIDUE: f64 = 1e-9;
+
+/// Whether a map of pixels `dx × dy` can be solved: the half-space is solved on square
+/// pixels.
+pub fn check_square_pixels(dx: f64, dy: f64) -> Result<(), String> {
+    if (dx - dy).abs() > crate::contact::window::SQUARE_PIXEL * dx.max(dy) {
+        return Err(format!(
+            "its pixels are {} × {} m, not square: the contact is solved on square pixels; resample the map to square pixels (e.g. with Gwyddion or SurfaceTopography), or state the pixel size if the file's is wrong",
+            crate::ranges::show(dx),
+            crate::ranges::show(dy)
+        ));
+    }
+    Ok(())
+}
+
+/// Refuse a fill that would invent more than [`MAX_FILLED_FRACTION`] of a map; a warning
+/// when it fills more than [`WARN_FILLED_FRACTION`].
+pub fn check_filled_share(missing: usize, total: usize) -> Result<Option<String>, String> {
+    let share = missing as f64 / total.max(1) as f64;
+    if share > MAX_FILLED_FRACTION {
+        return Err(format!(
+            "{missing} of {total} points ({:.1} %) are missing: a harmonic fill would invent more than {:.0} % of the map, and its contact would be that of the interpolation; crop the map to its measured part",
+            100.0 * share,
+            100.0 * MAX_FILLED_FRACTION
+        ));
+    }
+    Ok((share > WARN_FILLED_FRACTION).then(|| {
+        format!(
+            "{missing} of {total} points ({:.1} %) are missing and filled by harmonic interpolation: where they cluster, the contact is that of the interpolation",
+            100.0 * share
+        )
+    }))
+}
+
+/// The range of the present heights (0 when fewer than two).
+fn height_range(heights: &[f64]) -> f64 {
+    let (lo, hi) = heights
+        .iter()
+        .filter(|h| !h.is_nan())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
+            (a.min(h), b.max(h))
+        });
+    if hi > lo {
+        hi - lo
+    } else {
+        0.0
+    }
+}
+
+/// Refuse a map that is flat once its form is removed: its heights vary by no more than
+/// [`FLAT_RESIDUE`] of their range before (the rounding of the fit).
+pub fn check_not_flat(before: &[f64], after: &[f64], form: &str) -> Result<(), String> {
+    let (was, is) = (height_range(before), height_range(after));
+    if is == 0.0 && was == 0.0 {
+        return Err(
+            "the map is flat: every height is the same; there is nothing to press (check the file)"
+                .into(),
+        );
+    }
+    if is <= FLAT_RESIDUE * was || is == 0.0 {
+        return Err(format!(
+            "the map is flat once its {form} is removed (its heights then vary by {} m, {} of the {} m before: the fit's rounding, not roughness); there is nothing to press: check the file, or remove less form (--form none)",
+            crate::ranges::show(is),
+            crate::ranges::show(if was > 0.0 { is / was } else { 0.0 }),
+            crate::ranges::show(was)
+        ));
+    }
+    Ok(())
+}
+
+/// What [`prepare`] would refuse in a map already read, checked without filling it or
+/// computing its spectrum (so that a plan refuses it before any work): the units, a pixel
+/// size in range and square, the share a fill would invent, and a map flat once its form
+/// is removed.
+pub fn check_for_contact(
+    read: &super::measured::MeasuredMap,
+    p: &Preparation,
+) -> Result<(), String> {
+    let bad = |why: String| IoError::File {
+        path: String::new(),
+        message: why,
+    };
+    let plain = |e: IoError| match e {
+        IoError::File { message, .. } => message,
+    };
+    let (scale, _) = height_scale(p, read.height_unit_m, &bad).map_err(plain)?;
+    let ((dx, dy), _) = pixel_size(p, read, &bad).map_err(plain)?;
+    check_square_pixels(dx, dy)?;
+    let missing = read.missing();
+    if p.fill == FillArg::Harmonic {
+        check_filled_share(missing, read.rows * read.cols)?;
+    }
+    let heights: Vec<f64> = read.heights.iter().map(|h| h * scale).collect();
+    let mut map = Topography::new(read.rows, read.cols, dx, dy, heights.clone())
+        .map_err(|e| e.to_string())?;
+    let form = match p.form {
+        FormArg::None => None,
+        FormArg::Mean => Some(Form::Mean),
+        FormArg::Plane => Some(Form::Plane),
+        FormArg::Curvature => Some(Form::Curvature),
+    };
+    if let Some(form) = form {
+        map.remove_form(form).map_err(|e| e.to_string())?;
+    }
+    let form_name = form.map_or("none".to_string(), |f| format!("{f:?}").to_lowercase());
+    check_not_flat(&heights, &map.heights, &form_name)
 }
 
 /// Read `input`, scale it to metres, remove the form and fill (or refuse) missing points.
@@ -228,10 +358,18 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
         FormArg::Plane => Some(Form::Plane),
         FormArg::Curvature => Some(Form::Curvature),
     };
+    let mut fill_warning = None;
+    if p.fill == FillArg::Harmonic {
+        fill_warning = check_filled_share(missing, rows * cols).map_err(bad)?;
+    }
+    let before = map.heights.clone();
     let coefficients = match form {
         Some(form) => map.remove_form(form).map_err(|e| bad(e.to_string()))?,
         None => Vec::new(),
     };
+    let form_name = form.map_or("none".to_string(), |f| format!("{f:?}").to_lowercase());
+    check_not_flat(&before, &map.heights, &form_name).map_err(bad)?;
+    drop(before);
     let filled = match p.fill {
         FillArg::Keep => 0,
         _ => map.fill_harmonic().map_err(|e| bad(e.to_string()))?,
@@ -247,11 +385,12 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
         / present.len().max(1) as f64)
         .sqrt();
     let rms_slope = map.rms_slope();
-    let (psd, fit, warnings) = if p.fill == FillArg::Keep && missing > 0 {
+    let (psd, fit, mut warnings) = if p.fill == FillArg::Keep && missing > 0 {
         (Vec::new(), serde_json::Value::Null, Vec::new())
     } else {
         spectrum(&map)
     };
+    warnings.extend(fill_warning);
     for w in &warnings {
         crate::note!("warning: {name}: {w}");
     }
@@ -266,7 +405,7 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
             (_, 0) => "none",
             _ => "harmonic",
         },
-        "form_removed": form.map_or("none".to_string(), |f| format!("{f:?}").to_lowercase()),
+        "form_removed": form_name,
         "form_coefficients_m": coefficients,
         "rms_height_m": rms_height, "rms_slope": rms_slope,
         "psd_fit": fit, "warnings": warnings,

@@ -11,7 +11,7 @@ use std::path::Path;
 use super::measured::{MeasuredMap, Source};
 
 pub fn read(path: &Path) -> Result<MeasuredMap, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot be read ({e})"))?;
+    let bytes = super::guard::read_bounded(path)?;
     match bytes.get(..8) {
         Some(b"aISO-1.0") => text(&bytes),
         Some(b"bISO-1.0") => binary(&bytes),
@@ -115,9 +115,20 @@ fn text(bytes: &[u8]) -> Result<MeasuredMap, String> {
         v.parse::<f64>()
             .map_err(|_| format!("{k} = {v} is not a number"))
     };
+    let size = |k: &str| -> Result<usize, String> {
+        let v = get(k)?;
+        if !(v.fract() == 0.0 && (1.0..=u32::MAX as f64).contains(&v)) {
+            return Err(format!(
+                "{k} = {}: a count of points from 1 to {}",
+                fields[k],
+                u32::MAX
+            ));
+        }
+        Ok(v as usize)
+    };
     let header = Header {
-        points: get("NumPoints")? as usize,
-        profiles: get("NumProfiles")? as usize,
+        points: size("NumPoints")?,
+        profiles: size("NumProfiles")?,
         x_scale: get("Xscale")?,
         y_scale: get("Yscale")?,
         z_scale: get("Zscale")?,
@@ -127,7 +138,13 @@ fn text(bytes: &[u8]) -> Result<MeasuredMap, String> {
         data_type: get("DataType")? as u8,
     };
     header.check()?;
-    let count = header.points * header.profiles;
+    // Each value takes at least two characters (a digit and a separator).
+    let count = super::guard::check_promised(
+        "NumPoints × NumProfiles",
+        header.points as u128 * header.profiles as u128,
+        2,
+        bytes.len() as u64,
+    )?;
     let mut raw = Vec::with_capacity(count);
     for token in lines
         .take_while(|l| l.trim() != "*")

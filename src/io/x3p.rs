@@ -13,10 +13,12 @@ use super::measured::{MeasuredMap, Source};
 /// Read an X3P file: only areal maps on a regular grid (`FeatureType` SUR, x and y axes
 /// incremental, one layer) are surfaces; anything else is refused with what it holds.
 pub fn read(path: &Path) -> Result<MeasuredMap, String> {
+    super::guard::regular_file(path)?;
     let file = std::fs::File::open(path).map_err(|e| format!("cannot be opened ({e})"))?;
     let mut zip = zip::ZipArchive::new(file)
         .map_err(|e| format!("is not a readable zip archive, so not an X3P file ({e})"))?;
-    let xml = member(&mut zip, "main.xml")?;
+    // main.xml is text of a few KiB; 64 MiB is far beyond any index a writer makes.
+    let xml = member(&mut zip, "main.xml", 64 << 20)?;
     let xml = String::from_utf8(xml).map_err(|_| "main.xml is not UTF-8 text".to_string())?;
     let doc = roxmltree::Document::parse(&xml)
         .map_err(|e| format!("main.xml is not well-formed XML ({e})"))?;
@@ -75,7 +77,22 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
         );
     }
     let link = text(root, &["Record3", "DataLink", "PointDataLink"])?;
-    let data = member(&mut zip, link.trim())?;
+    let width = match cz.data_type.trim() {
+        "I" => 2,
+        "L" | "F" => 4,
+        _ => 8,
+    };
+    // The member is read to at most the size MatrixDimension and DataType promise, checked
+    // against memory first: a member that inflates beyond it (a zip bomb) is refused.
+    super::guard::check_allocation(
+        &format!("{cols} × {rows} points of DataType {}", cz.data_type.trim()),
+        (rows as u128 * cols as u128).saturating_mul(8 + width),
+    )?;
+    let data = member(
+        &mut zip,
+        link.trim(),
+        rows as u64 * cols as u64 * width as u64,
+    )?;
     check_md5(
         &data,
         optional(root, &["Record3", "DataLink", "MD5ChecksumPointData"]),
@@ -86,7 +103,7 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
     let (scale, shift) = (cz.increment.unwrap_or(1.0), cz.offset.unwrap_or(0.0));
     let mut heights: Vec<f64> = raw.into_iter().map(|v| v * scale + shift).collect();
     if let Some(valid_link) = optional(root, &["Record3", "DataLink", "ValidPointsLink"]) {
-        let bits = member(&mut zip, valid_link.trim())?;
+        let bits = member(&mut zip, valid_link.trim(), count.div_ceil(8) as u64 + 64)?;
         check_md5(
             &bits,
             optional(root, &["Record3", "DataLink", "MD5ChecksumValidPoints"]),
@@ -123,14 +140,26 @@ struct Axis {
     offset: Option<f64>,
 }
 
-fn member(zip: &mut zip::ZipArchive<std::fs::File>, name: &str) -> Result<Vec<u8>, String> {
-    let mut entry = zip.by_name(name).map_err(|_| {
+/// The member `name`, read to at most `most` bytes: one that holds (or inflates to) more is
+/// refused before it is read further.
+fn member(
+    zip: &mut zip::ZipArchive<std::fs::File>,
+    name: &str,
+    most: u64,
+) -> Result<Vec<u8>, String> {
+    let entry = zip.by_name(name).map_err(|_| {
         format!("has no member '{name}' (an X3P archive holds main.xml and the data it links)")
     })?;
-    let mut bytes = Vec::with_capacity(entry.size().min(1 << 30) as usize);
-    entry.read_to_end(&mut bytes).map_err(|e| {
+    let mut bytes = Vec::with_capacity(entry.size().min(most) as usize);
+    entry.take(most + 1).read_to_end(&mut bytes).map_err(|e| {
         format!("member '{name}' cannot be read ({e}): the archive is corrupt or truncated")
     })?;
+    if bytes.len() as u64 > most {
+        return Err(format!(
+            "member '{name}' holds more than the {} that main.xml's MatrixDimension and DataType account for: corrupt, or a zip bomb",
+            super::guard::human_bytes(u128::from(most))
+        ));
+    }
     Ok(bytes)
 }
 

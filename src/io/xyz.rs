@@ -7,11 +7,14 @@
 //! point is binned to its nearest grid node, and a grid with a node empty or filled twice
 //! is refused. A height of `nan` is a missing point.
 
+#[cfg(test)]
 use std::path::Path;
 
 use super::measured::{length_unit_m, MeasuredMap, Source};
+use super::text::{Table, GRID_TOLERANCE_PX};
 
-/// One axis of the grid: origin, spacing and the bin of every point.
+/// One axis of the grid: its spacing and the bin of every point. A point farther than
+/// [`GRID_TOLERANCE_PX`] of a pixel from its node is refused, not snapped.
 fn axis(values: &[f64], name: &str) -> Result<(usize, Vec<usize>, f64), String> {
     let mut sorted = values.to_vec();
     sorted.sort_by(f64::total_cmp);
@@ -24,10 +27,19 @@ fn axis(values: &[f64], name: &str) -> Result<(usize, Vec<usize>, f64), String> 
             ))
         }
     };
-    let bins: Vec<usize> = values
-        .iter()
-        .map(|v| ((v - origin) / spacing + 0.5) as usize)
-        .collect();
+    let mut bins = Vec::with_capacity(values.len());
+    for (k, v) in values.iter().enumerate() {
+        let at = (v - origin) / spacing;
+        let node = at.round();
+        if (at - node).abs() > GRID_TOLERANCE_PX {
+            return Err(format!(
+                "point {} has {name} = {v}, {:.3} of a pixel off the grid of spacing {spacing} (from the two smallest {name}); points within {GRID_TOLERANCE_PX} of a pixel of a node are on it: not a regular grid",
+                k + 1,
+                (at - node).abs()
+            ));
+        }
+        bins.push(node as usize);
+    }
     let count = bins.iter().max().map_or(0, |m| m + 1);
     Ok((count, bins, spacing))
 }
@@ -45,44 +57,40 @@ fn header_units(line: &str, lateral: &mut Option<f64>, value: &mut Option<f64>) 
     }
 }
 
+/// Read an x-y-z list from its file (for the tests; the reader sniffs the content first).
+#[cfg(test)]
 pub(super) fn read(path: &Path) -> Result<MeasuredMap, String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("cannot be read as text ({e})"))?;
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let table = super::text::table(&super::text::decode(&bytes)?)?;
+    if table.cols == 2 {
+        return Err("two columns, a line scan; contact needs a map (x y z)".into());
+    }
+    if table.cols != 3 {
+        return Err(format!(
+            "{} columns are not three numbers x y z",
+            table.cols
+        ));
+    }
+    from_table(&table)
+}
+
+/// An x-y-z list from its table of three columns.
+pub(super) fn from_table(table: &Table) -> Result<MeasuredMap, String> {
     let (mut lateral, mut value) = (None, None);
-    let (mut x, mut y, mut z) = (Vec::new(), Vec::new(), Vec::new());
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
+    for line in &table.header {
         if line.starts_with('#') {
             header_units(line, &mut lateral, &mut value);
-            continue;
         }
-        if line.is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line
-            .split(|c: char| c.is_whitespace() || c == ',' || c == ';')
-            .filter(|f| !f.is_empty())
-            .collect();
-        let numbers: Result<Vec<f64>, _> = fields.iter().map(|f| f.parse::<f64>()).collect();
-        match numbers {
-            Ok(v) if v.len() == 3 && v[0].is_finite() && v[1].is_finite() => {
-                x.push(v[0]);
-                y.push(v[1]);
-                z.push(v[2]);
-            }
-            Ok(v) if v.len() == 2 => {
-                return Err(format!(
-                    "line {}: two columns, a line scan; contact needs a map (x y z)",
-                    i + 1
-                ))
-            }
-            _ => {
-                return Err(format!(
-                    "line {}: {line:?} is not three numbers x y z (finite positions)",
-                    i + 1
-                ))
-            }
-        }
+    }
+    let column =
+        |k: usize| -> Vec<f64> { table.values.iter().skip(k).step_by(3).copied().collect() };
+    let (x, y, z) = (column(0), column(1), column(2));
+    if let Some(k) = x
+        .iter()
+        .zip(&y)
+        .position(|(a, b)| !(a.is_finite() && b.is_finite()))
+    {
+        return Err(format!("point {}: its position is not a finite x y", k + 1));
     }
     if z.is_empty() {
         return Err("holds no point (x y z per line)".into());
@@ -178,7 +186,10 @@ mod tests {
                 "not a regular grid",
             ),
             ("0 1\n1 2\n", "line scan"),
-            ("0 0 a\n", "not three numbers"),
+            (
+                "0 0 1\n1 0 1\n0 1 1\n1.45 1 1\n",
+                "0.450 of a pixel off the grid",
+            ),
         ] {
             let (_d, path) = write(text);
             let e = read(&path).unwrap_err();

@@ -21,17 +21,43 @@ pub struct SourceFile {
 pub fn measured_surfaces(m: &MeasuredPlan) -> anyhow::Result<Vec<(SurfaceJob, SourceFile)>> {
     let mut shape = None;
     let mut out = Vec::new();
+    let mut seen: Vec<(String, &str)> = Vec::new();
     for (path, field) in m.files.iter().zip(&m.fields) {
         let bad = |why: String| {
             crate::pipeline::UsageError(format!("{field} = {}: {why}", path.display()))
         };
+        // A device (/dev/zero) or a pipe would be hashed forever: refused by its kind.
+        crate::io::guard::regular_file(path).map_err(|e| {
+            bad(format!(
+                "{e}{}",
+                if e.contains("does not exist") {
+                    "; paths are relative to the pipeline file"
+                } else {
+                    ""
+                }
+            ))
+        })?;
         let (sha256, _) = crate::store::hash::sha256_file(path).map_err(|e| {
             bad(format!(
                 "cannot be read ({e}); paths are relative to the pipeline file"
             ))
         })?;
-        let read = crate::io::read_measured(path).map_err(|e| bad(e.to_string()))?;
+        if let Some((_, other)) = seen.iter().find(|(h, _)| *h == sha256) {
+            return Err(bad(format!(
+                "holds the same bytes as {other} (SHA-256 {}…): one measurement is one realization; list each file once",
+                &sha256[..12]
+            ))
+            .into());
+        }
+        seen.push((sha256.clone(), field.as_str()));
+        let read = crate::io::read_measured(path).map_err(|e| {
+            // The reader names the path; the field names it already.
+            let text = e.to_string();
+            let prefix = format!("{}: ", path.display());
+            bad(text.strip_prefix(&prefix).unwrap_or(&text).to_string())
+        })?;
         check_preparation(&read, &m.preparation, field).map_err(bad)?;
+        crate::io::prepare::check_for_contact(&read, &m.preparation).map_err(bad)?;
         let this = (read.rows, read.cols);
         let first = *shape.get_or_insert(this);
         if first != this {

@@ -85,6 +85,18 @@ impl LinePlot {
         scale: f64,
         avoid: &[Fractions],
     ) -> anyhow::Result<Rect> {
+        if let (Err(_), Some(why)) = (self.extent(|p| p.0), &self.when_empty) {
+            let title_h = self.draw_title(area, scale)?;
+            let (w, h) = area.dim_in_pixel();
+            text::draw(
+                area,
+                why,
+                (w as i32 / 2, (h as i32 + title_h) / 2),
+                Align::Middle,
+                TextLook::new(TITLE_PX * scale * 0.8),
+            )?;
+            return Ok((0, title_h, w as i32, h as i32));
+        }
         let (x0, x1) = self.extent(|p| p.0)?;
         let (x0, x1) = padded(x0, x1, self.x_log);
         let (y0, y1) = self.extent(|p| p.1)?;

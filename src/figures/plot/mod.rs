@@ -194,6 +194,10 @@ pub struct LinePlot {
     pub y_marks: Vec<f64>,
     /// Short texts (label markup) written beside points (x, y), e.g. the setting of a point.
     pub notes: Vec<((f64, f64), String)>,
+    /// Where a plot may have nothing to draw (a measured map in full contact, one cluster):
+    /// why, written in the empty panel instead of failing. None: a plot with no point is an
+    /// error (a figure of the pipeline always has data).
+    pub when_empty: Option<String>,
 }
 
 impl LinePlot {
@@ -220,6 +224,7 @@ impl LinePlot {
             y_floor: None,
             y_marks: Vec::new(),
             notes: Vec::new(),
+            when_empty: None,
         }
     }
 }

@@ -22,7 +22,7 @@ use crate::grid::Grid;
 use crate::topography::Topography;
 
 /// Relative difference of the pixel sides below which pixels are square.
-const SQUARE_PIXEL: f64 = 1e-6;
+pub const SQUARE_PIXEL: f64 = 1e-6;
 
 /// One solved load of a window.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -74,7 +74,19 @@ pub fn sweep_window(
     check_map(map, e_star)?;
     let slope = map.rms_slope();
     check_rms_slope(slope)?;
-    let (side, square, tolerance_scale) = embed(map);
+    let (side, mut square, tolerance_scale) = embed(map);
+    // The contact problem is linear in the heights: solved on heights scaled by an exact
+    // power of two that brings the rms slope near 1 (bit for bit the same contact set,
+    // pressures scaled back exactly), so that heights in any unit from 1e-150 to 1e150
+    // converge alike. Slopes within [2^-20, 2^20] are solved as they are.
+    let exponent = slope.log2().round();
+    let unscale = if exponent.abs() > 20.0 {
+        2f64.powi(exponent as i32)
+    } else {
+        1.0
+    };
+    square.iter_mut().for_each(|h| *h /= unscale);
+    let solve_slope = slope / unscale;
     let mut square_cfg = *cfg;
     square_cfg.tolerance = cfg.tolerance * tolerance_scale;
     let layout = WindowLayout {
@@ -94,7 +106,7 @@ pub fn sweep_window(
         for (k, &v) in p.iter().enumerate() {
             let (row, col) = (k / side, k % side);
             if row < rows && col < cols {
-                window[row * cols + col] = v * e_star;
+                window[row * cols + col] = v * unscale * e_star;
             } else if v > 0.0 {
                 touching += 1;
             }
@@ -133,7 +145,7 @@ pub fn sweep_window(
         run(
             &op,
             &square,
-            slope,
+            solve_slope,
             &square_loads,
             &square_cfg,
             constraint,
@@ -150,7 +162,7 @@ pub fn sweep_window(
                     hardness: h,
                 });
             }
-            solve(Bound::Ceiling(Ceiling::new(h * slope)?), &mut each)?
+            solve(Bound::Ceiling(Ceiling::new(h * solve_slope)?), &mut each)?
         }
     }
     Ok((layout, out))
