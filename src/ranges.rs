@@ -122,11 +122,11 @@ pub const PIXEL_M: Range = Range {
 
 /// Every range, for the table of docs/CONVENTIONS.md.
 pub const ALL: [(&str, Range); 10] = [
-    ("--resamples (fit, wear)", RESAMPLES),
+    ("--resamples (fit and wear)", RESAMPLES),
     ("--e-star (wear)", E_STAR_PA),
     ("--hardness (wear)", HARDNESS_PA),
     ("material.e_star", E_STAR_PIPELINE),
-    ("--tolerance (wear), solver.tolerance", TOLERANCE),
+    ("--tolerance (wear)", TOLERANCE),
     ("--memory-safety, cluster.memory_safety", MEMORY_SAFETY),
     ("--time-safety, cluster.time_safety", TIME_SAFETY),
     (
@@ -158,10 +158,37 @@ pub fn show(v: f64) -> String {
         let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
         trim(&format!("{v:.decimals$}"))
     } else {
+        // The shortest form that reads back as `v` when it is short (1e-320, not the
+        // subnormal's 9.99989e-321), else six significant digits.
+        let shortest = format!("{v:e}");
+        if shortest.split('e').next().is_some_and(|m| m.len() <= 8) {
+            return shortest;
+        }
         let s = format!("{v:.5e}");
         let (m, e) = s.split_once('e').expect("an exponent");
         format!("{}e{e}", trim(m))
     }
+}
+
+/// The rows of docs/CONVENTIONS.md's table of ranges, one per entry of [`ALL`].
+pub fn table_rows() -> Vec<String> {
+    ALL.iter()
+        .map(|(names, r)| {
+            let names: Vec<String> = names.split(", ").map(|n| format!("`{n}`")).collect();
+            let unit = if r.unit.starts_with("the ") {
+                format!(" ({})", r.unit)
+            } else {
+                String::new()
+            };
+            format!(
+                "| {} | {}{unit}{} | {} |",
+                names.join(", "),
+                r.span(),
+                if r.whole { ", whole" } else { "" },
+                r.why
+            )
+        })
+        .collect()
 }
 
 impl Range {
@@ -215,6 +242,20 @@ mod tests {
         assert_eq!(show(1.234_567_89e300), "1.23457e300");
         assert_eq!(show(-2.5e-7), "-2.5e-7");
         assert_eq!(show(0.010_000_000_000_000_002), "0.01");
+    }
+
+    /// docs/CONVENTIONS.md lists every range as this file states it.
+    #[test]
+    fn conventions_list_every_range() {
+        let doc =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/CONVENTIONS.md"))
+                .unwrap();
+        for row in table_rows() {
+            assert!(
+                doc.contains(&row),
+                "docs/CONVENTIONS.md lacks the row\n{row}"
+            );
+        }
     }
 
     #[test]

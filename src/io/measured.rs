@@ -43,6 +43,10 @@ impl MeasuredMap {
 /// The file extensions read, for error messages and `--help`.
 pub const READ_EXTENSIONS: &str = ".x3p (ISO 25178-72), .sdf (ISO 25178-71), .gsf (Gwyddion), .nc (NetCDF 3), .npy, text matrix (.txt, .csv, .asc, .dat), x-y-z list (.xyz)";
 
+/// The formats that state their units (a .npy never does; text and x-y-z lists only with
+/// the header named), for the message that asks for one.
+pub const STATE_UNITS: &str = ".x3p, .sdf, .gsf, .nc with `unit` attributes, a text matrix with SurfaceTopography's `# Value units:` header, an x-y-z list with Gwyddion's `# Lateral units:` and `# Value units:`";
+
 /// Metres per unit for a length unit as files spell it (`m`, `mm`, `um`/`µm`/`μm`,
 /// `nm`, `pm`, `A`/`Å`); None if unknown.
 pub fn length_unit_m(unit: &str) -> Option<f64> {

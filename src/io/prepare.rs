@@ -9,7 +9,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::measured::READ_EXTENSIONS;
+use super::measured::STATE_UNITS;
 use super::{read_measured, IoError};
 use crate::psd::{fit_self_affine, log_edges, radial_psd, PsdBin};
 use crate::topography::{Form, Topography};
@@ -147,7 +147,7 @@ fn height_scale(
         (Some(u), None) => Ok((u.metres(), "height_unit")),
         (None, Some(_)) => Ok((1.0, "the file")),
         (None, None) => Err(bad(format!(
-            "the file states no height unit; give one (--height-unit, or height_unit in pipeline.yaml: m, mm, um, nm). Files that state theirs: {READ_EXTENSIONS}"
+            "the file states no height unit; give one (--height-unit, or height_unit in pipeline.yaml: m, mm, um, nm). Files that state theirs: {STATE_UNITS}"
         ))),
     }
 }
@@ -177,13 +177,28 @@ fn pixel_size(
                 ));
             };
             let py = p.pixel_size_y.unwrap_or(px);
+            let unit_name = p
+                .pixel_unit
+                .or(p.height_unit)
+                .map_or("", |u| match u {
+                    Unit::M => "m",
+                    Unit::Mm => "mm",
+                    Unit::Um => "um",
+                    Unit::Nm => "nm",
+                });
             for (option, v) in [("pixel_size", px), ("pixel_size_y", py)] {
-                crate::ranges::PIXEL_M
-                    .check(
-                        &format!("--{} ({option} in pipeline.yaml)", option.replace('_', "-")),
-                        v * u,
-                    )
-                    .map_err(bad)?;
+                let r = crate::ranges::PIXEL_M;
+                if r.check(option, v * u).is_err() {
+                    return Err(bad(format!(
+                        "--{} {} {unit_name} ({option}: {} in pipeline.yaml): the {} must be in {} ({})",
+                        option.replace('_', "-"),
+                        crate::ranges::show(v),
+                        crate::ranges::show(v),
+                        r.what,
+                        r.span(),
+                        r.why
+                    )));
+                }
             }
             let from = if file.is_some() {
                 "pixel_size (overriding the file)"

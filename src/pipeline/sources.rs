@@ -74,6 +74,7 @@ pub fn measured_surfaces(m: &MeasuredPlan) -> anyhow::Result<Vec<(SurfaceJob, So
             rows: read.rows,
             cols: read.cols,
             preparation: m.preparation.clone(),
+            reader: crate::stages::surface::MEASURED_READER,
         });
         let source = SourceFile {
             path: std::path::absolute(path)?,

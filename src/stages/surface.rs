@@ -40,7 +40,15 @@ pub struct MeasuredJob {
     pub rows: usize,
     pub cols: usize,
     pub preparation: Preparation,
+    /// The revision of the readers and checks that turn the file into heights
+    /// ([`MEASURED_READER`]): part of the key, so that a file read differently is recomputed.
+    #[serde(default)]
+    pub reader: u32,
 }
+
+/// The readers' revision: 2 reads by content (an x-y-z list or decimal commas in a .txt),
+/// refuses maps flat once their form is removed and fills of more than half a map.
+pub const MEASURED_READER: u32 = 2;
 
 /// The name a measured file is copied under: `topography.<ext>` (the readers go by the
 /// extension).
