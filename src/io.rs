@@ -216,6 +216,9 @@ pub fn read_map_text(path: &Path) -> Result<(usize, usize, Vec<f64>), IoError> {
 
 /// The table of numbers of a text file (a regular file, within the memory budget).
 fn read_table(path: &Path) -> Result<text::Table, String> {
+    // Every two bytes of text may be a value of eight: the table is bounded by 4× the file.
+    let len = guard::regular_file(path)?;
+    guard::check_allocation("a table of that much text", u128::from(len) * 5)?;
     let bytes = guard::read_bounded(path)?;
     text::table(&text::decode(&bytes)?)
 }
@@ -459,13 +462,31 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         source,
     };
     match content {
-        Content::Npy => Ok(plain(read_map_npy(path)?, measured::Source::Npy)),
+        Content::Npy => {
+            // A true header of more values than memory allows: refused before reading.
+            let (_, shape) = npy_header(path)?;
+            let values = shape
+                .iter()
+                .fold(1u128, |a, &d| a.saturating_mul(d as u128));
+            guard::check_allocation("the map's heights", values.saturating_mul(16)).map_err(err)?;
+            Ok(plain(read_map_npy(path)?, measured::Source::Npy))
+        }
         Content::Zip => x3p::read(path).map_err(err),
         Content::NetCdf3 => netcdf::read(path).map_err(err),
         Content::Gsf => gsf::read(path).map_err(err),
         Content::SdfText | Content::SdfBinary => sdf::read(path).map_err(err),
         _ => {
-            let table = read_table(path).map_err(err)?;
+            let table = read_table(path).map_err(|e| {
+                if known(&ext) {
+                    err(e)
+                } else {
+                    err(format!(
+                        "a .{ext} file is not read, and as text it {}; the formats read are {}",
+                        e.trim_start_matches("is "),
+                        measured::READ_EXTENSIONS
+                    ))
+                }
+            })?;
             match text::classify(&table) {
                 text::Shape::Xyz => xyz::from_table(&table).map_err(err),
                 text::Shape::LineScan => Err(err(format!(

@@ -7,7 +7,8 @@
 //! The physics and statistics live in the `wearcoef-core` crate (re-exported here under the
 //! same module names); this crate is the application around it:
 //! In layers, each importing only its own and lower ones (checked by `tests/it/layout.rs`):
-//! 1. [`io`] (`.npy` fields, atomic writes), [`machine`], [`format`] (numbers for readers);
+//! 1. [`io`] (`.npy` fields, measured files, atomic writes), [`machine`], [`format`] (numbers
+//!    for readers), [`ranges`] (the accepted range of every number a user types);
 //! 2. [`store`]: content keys, the artifact store, Parquet tables, a stage's inputs;
 //!    [`config`]: `pipeline.yaml` (studies, profiles, figures);
 //! 3. [`stages`]: the stage contract and one module per stage; [`figures`]: drawing the

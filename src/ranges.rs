@@ -33,20 +33,20 @@ pub const RESAMPLES: Range = Range {
 /// The effective modulus of a measured contact, in Pa: from soft gels to diamond.
 pub const E_STAR_PA: Range = Range {
     what: "effective modulus E*",
-    lo: 1e3,
+    lo: 1.0,
     hi: 1e13,
     unit: "Pa",
-    why: "from the softest gels (kPa) to beyond diamond (1.2 TPa)",
+    why: "from 1 Pa (below the softest gels, about 100 Pa; E* = 1 Pa gives forces in units of E*) to beyond diamond (1.2 TPa)",
     whole: false,
 };
 
 /// A hardness of a measured contact, in Pa.
 pub const HARDNESS_PA: Range = Range {
     what: "hardness",
-    lo: 1e3,
+    lo: 1.0,
     hi: 1e13,
     unit: "Pa",
-    why: "the same span as E*, from gels to diamond; leave it out (or .inf in pipeline.yaml) for elastic contact",
+    why: "the same span as E*; leave it out (or .inf in pipeline.yaml) for elastic contact",
     whole: false,
 };
 
@@ -90,13 +90,23 @@ pub const TIME_SAFETY: Range = Range {
     whole: false,
 };
 
-/// `--task-minutes`, `--min-minutes` and their `cluster:` fields.
+/// `--min-minutes`, `cluster.min_minutes`: the least time a task asks for.
 pub const MINUTES: Range = Range {
     what: "minutes of a Slurm task",
     lo: 0.1,
     hi: 525_600.0,
     unit: "min",
     why: "from 6 s to a year: no site runs a task longer",
+    whole: false,
+};
+
+/// `--task-minutes`, `cluster.task_minutes`: the estimated minutes packed into one task.
+pub const TASK_MINUTES: Range = Range {
+    what: "estimated minutes packed into one Slurm task",
+    lo: 1e-9,
+    hi: 525_600.0,
+    unit: "min",
+    why: "any positive target (1e-9: one instance a task) up to a year",
     whole: false,
 };
 
@@ -121,7 +131,7 @@ pub const PIXEL_M: Range = Range {
 };
 
 /// Every range, for the table of docs/CONVENTIONS.md.
-pub const ALL: [(&str, Range); 10] = [
+pub const ALL: [(&str, Range); 11] = [
     ("--resamples (fit and wear)", RESAMPLES),
     ("--e-star (wear)", E_STAR_PA),
     ("--hardness (wear)", HARDNESS_PA),
@@ -129,10 +139,8 @@ pub const ALL: [(&str, Range); 10] = [
     ("--tolerance (wear)", TOLERANCE),
     ("--memory-safety, cluster.memory_safety", MEMORY_SAFETY),
     ("--time-safety, cluster.time_safety", TIME_SAFETY),
-    (
-        "--task-minutes, --min-minutes, cluster.task_minutes, cluster.min_minutes",
-        MINUTES,
-    ),
+    ("--min-minutes, cluster.min_minutes", MINUTES),
+    ("--task-minutes, cluster.task_minutes", TASK_MINUTES),
     ("--loads (wear)", W_OVER_W0),
     (
         "--pixel-size, pixel_size (in m once its unit applies)",
@@ -270,7 +278,7 @@ mod tests {
         );
         let e = E_STAR_PA.check("--e-star", 1e-320).unwrap_err();
         assert!(
-            e.contains("--e-star 1e-320 Pa") && e.contains("[1000, 1e13] Pa"),
+            e.contains("--e-star 1e-320 Pa") && e.contains("[1, 1e13] Pa"),
             "{e}"
         );
         assert!(MEMORY_SAFETY.check("--memory-safety", 1e20).is_err());

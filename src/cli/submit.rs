@@ -165,12 +165,16 @@ fn campaign_dir(data: &Path, profile: &str, dry_run: bool) -> anyhow::Result<(Pa
     unreachable!("some suffix is free")
 }
 
-pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
-    let pipeline = load(&args.store.config)?;
-    let origin = args.store.config.display().to_string();
-    let cluster = cluster_config(&pipeline.cluster, &args);
-    // The file's block was checked when it was loaded: what fails here came from an option.
-    cluster.validate(&origin).map_err(|e| match e {
+/// The pipeline's `cluster:` block with the command line's overrides, checked. The file's
+/// block was checked when it was loaded: what fails here came from an option, and the
+/// message names the option and the field it overrides.
+fn checked_cluster(
+    pipeline: &wearcoef::config::Pipeline,
+    args: &SubmitArgs,
+    origin: &str,
+) -> anyhow::Result<ClusterConfig> {
+    let cluster = cluster_config(&pipeline.cluster, args);
+    cluster.validate(origin).map_err(|e| match e {
         wearcoef::config::ConfigError::Invalid {
             field,
             value,
@@ -179,12 +183,19 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
         } => {
             let name = field.trim_start_matches("cluster.");
             anyhow::Error::from(super::InputError(format!(
-                "--{} {value}: {allowed}",
+                "--{} {value} (cluster.{name} of {origin}): {allowed}",
                 name.replace('_', "-")
             )))
         }
         other => other.into(),
     })?;
+    Ok(cluster)
+}
+
+pub fn submit(args: SubmitArgs) -> anyhow::Result<ExitCode> {
+    let pipeline = load(&args.store.config)?;
+    let origin = args.store.config.display().to_string();
+    let cluster = checked_cluster(&pipeline, &args, &origin)?;
     std::fs::create_dir_all(&args.store.data)
         .with_context(|| format!("cannot create {}", args.store.data.display()))?;
     let data = args.store.data.canonicalize()?;

@@ -350,28 +350,9 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     if let Some(stream) = pressures {
         stream.finish()?;
     }
-    let mut areas_um2 = vec![Vec::new(); args.loads.len()];
-    for (&i, &a) in tables.clusters.maps().iter().zip(tables.clusters.areas()) {
-        areas_um2[i as usize].push(a as f64 * pixel_m2 * 1e12);
-    }
-    let rows_of_page = tables.rows.clone();
-    let page = super::wear_page::Page {
-        rows: &rows_of_page,
-        areas_um2,
-        psd: &psd,
-        report: &report,
-    };
-    let psd = wearcoef::stages::surface::psd_table(&psd)?;
-    write_outputs(&dir, tables, &report, psd, pixel_m2)?;
-    // The tables are kept whatever the page does: a page that cannot be drawn is a warning.
-    let drawn = super::wear_page::write(&page, &dir);
-    if let Err(e) = &drawn {
-        wearcoef::note!(
-            "warning: the page (wear.png, wear.svg, index.html) could not be drawn: {e:#}; the tables are written"
-        );
-    }
+    let drawn = write_run(&dir, tables, &report, &psd, pixel_m2, args.loads.len())?;
     staged.commit()?;
-    if drawn.is_err() {
+    if !drawn {
         return Ok(ExitCode::FAILURE);
     }
     out!(
@@ -380,6 +361,38 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         args.out.display()
     )?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The tables, then the page, into the staging directory `dir`. The tables are kept
+/// whatever the page does: a page that cannot be drawn is a warning (and `Ok(false)`).
+fn write_run(
+    dir: &Path,
+    tables: Tables,
+    report: &serde_json::Value,
+    psd: &[wearcoef::psd::PsdBin],
+    pixel_m2: f64,
+    loads: usize,
+) -> anyhow::Result<bool> {
+    let mut areas_um2 = vec![Vec::new(); loads];
+    for (&i, &a) in tables.clusters.maps().iter().zip(tables.clusters.areas()) {
+        areas_um2[i as usize].push(a as f64 * pixel_m2 * 1e12);
+    }
+    let rows_of_page = tables.rows.clone();
+    let page = super::wear_page::Page {
+        rows: &rows_of_page,
+        areas_um2,
+        psd,
+        report,
+    };
+    let psd_table = wearcoef::stages::surface::psd_table(psd)?;
+    write_outputs(dir, tables, report, psd_table, pixel_m2)?;
+    let drawn = super::wear_page::write(&page, dir);
+    if let Err(e) = &drawn {
+        wearcoef::note!(
+            "warning: the page (wear.png, wear.svg, index.html) could not be drawn: {e:#}; the tables are written"
+        );
+    }
+    Ok(drawn.is_ok())
 }
 
 /// The loads table's columns, in order, with their JSON keys (all numbers; nulls where no

@@ -107,9 +107,9 @@ impl ClusterConfig {
         if self.solve_cpus == 0 {
             return Err(invalid("solve_cpus", "0".into(), "must be ≥ 1"));
         }
-        use crate::ranges::{MEMORY_SAFETY, MINUTES, TIME_SAFETY};
+        use crate::ranges::{MEMORY_SAFETY, MINUTES, TASK_MINUTES, TIME_SAFETY};
         for (field, v, range) in [
-            ("task_minutes", self.task_minutes, MINUTES),
+            ("task_minutes", self.task_minutes, TASK_MINUTES),
             ("min_minutes", self.min_minutes, MINUTES),
             ("memory_safety", self.memory_safety, MEMORY_SAFETY),
             ("time_safety", self.time_safety, TIME_SAFETY),

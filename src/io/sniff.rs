@@ -45,6 +45,8 @@ pub fn sniff(head: &[u8]) -> Content {
         Content::Foreign("a TIFF image: not read here (its heights have no stated unit); export the map as X3P, SDF or a text matrix")
     } else if starts(b"\x89PNG") || starts(b"\xff\xd8\xff") {
         Content::Foreign("an image (PNG or JPEG): an image's grey levels are not heights; export the map as X3P, SDF or a text matrix")
+    } else if starts(b"DIGITAL SURF") {
+        Content::Foreign("a Digital Surf file (.sur): not read here; SurfaceTopography or Gwyddion read it, then save it as X3P or NetCDF")
     } else if starts(b"\\*File list") {
         Content::Foreign(
             "a Bruker Nanoscope file: not read here; SurfaceTopography or Gwyddion read it",

@@ -423,7 +423,7 @@ fn the_application_modules_import_only_their_layer_and_lower_ones() {
             "analytic" | "clusters" | "contact" | "grid" | "pages" | "powerlaw" | "psd"
             | "spectral" | "statistics" | "surface" | "topography" => 0,
             // `note!`, the crate's stderr macro, belongs to the lowest layer.
-            "io" | "machine" | "format" | "note" => 1,
+            "io" | "machine" | "format" | "ranges" | "note" => 1,
             "store" | "config" => 2,
             "stages" | "figures" => 3,
             "pipeline" => 4,

@@ -172,7 +172,7 @@ fn topography_command_states_units_and_removes_the_plane() {
     std::fs::write(dir.path().join("map.x3p"), b"PK").unwrap();
     for (file, says) in [
         ("holes.npy", "1 of 2400 points are missing"),
-        ("map.x3p", "not a readable zip archive"),
+        ("map.x3p", "is named .x3p but holds text"),
     ] {
         let out = run_in(
             dir.path(),
