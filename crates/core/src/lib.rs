@@ -33,6 +33,7 @@ pub mod grid;
 pub mod pages;
 pub mod powerlaw;
 pub mod psd;
+pub mod resample;
 pub mod spectral;
 pub mod statistics;
 pub mod surface;
