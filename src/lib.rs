@@ -17,8 +17,8 @@
 //!    Slurm.
 
 pub use wearcoef_core::{
-    analytic, clusters, contact, grid, pages, powerlaw, psd, spectral, statistics, surface,
-    topography,
+    analytic, clusters, contact, grid, pages, powerlaw, psd, resample, spectral, statistics,
+    surface, topography,
 };
 
 /// `eprintln!` that never panics: a closed standard error (`wearcoef run 2>&1 | head -1`)

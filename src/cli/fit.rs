@@ -31,6 +31,11 @@ pub struct FitArgs {
     /// multiply by (λ_s/Δl)².
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub a_star: Vec<f64>,
+    /// Column naming the realization of each cluster (tables of several realizations
+    /// concatenated): with 5 or more, every interval is over whole realizations, each
+    /// resample refitting x_min, A_s and the cut-off. Absent: intervals from the clusters.
+    #[arg(long, default_value = "realization")]
+    pub realization_column: String,
     #[arg(long)]
     pub json: bool,
 }
@@ -82,11 +87,18 @@ fn read_areas(
     Ok((df, cells))
 }
 
-/// Per load (`load_index`, or one group without it): W/W0, the areas of the clusters that do
-/// not percolate, and how many percolating ones were left out.
-type LoadGroups = std::collections::BTreeMap<Option<u32>, (f64, Vec<u64>, usize)>;
+/// One load's clusters: W/W0, the areas of the clusters that do not percolate, how many
+/// percolating ones were left out, and the realization of each area (when the table says).
+type LoadGroup = (f64, Vec<u64>, usize, Option<Vec<i64>>);
 
-fn group_by_load(df: &polars::prelude::DataFrame, cells: &[u64]) -> anyhow::Result<LoadGroups> {
+/// Per load (`load_index`, or one group without it).
+type LoadGroups = std::collections::BTreeMap<Option<u32>, LoadGroup>;
+
+fn group_by_load(
+    df: &polars::prelude::DataFrame,
+    cells: &[u64],
+    realization_column: &str,
+) -> anyhow::Result<LoadGroups> {
     use wearcoef::store::table;
     // Any integer type (pandas writes int64): cast, refusing what is not a load index.
     let loads: Vec<Option<u32>> = match df.column("load_index") {
@@ -108,13 +120,37 @@ fn group_by_load(df: &polars::prelude::DataFrame, cells: &[u64]) -> anyhow::Resu
         table::f64_column(df, "w_over_w0").unwrap_or_else(|_| vec![f64::NAN; df.height()]);
     let percolating: Vec<bool> =
         table::bool_column(df, "percolating").unwrap_or_else(|_| vec![false; df.height()]);
+    let realization: Option<Vec<i64>> = match df.column(realization_column) {
+        Ok(c) => Some(
+            c.strict_cast(&polars::prelude::DataType::Int64)
+                .map_err(|_| {
+                    InputError(format!(
+                        "column '{realization_column}' ({}) must hold whole numbers naming each cluster's realization",
+                        c.dtype()
+                    ))
+                })?
+                .i64()?
+                .iter()
+                .map(|v| v.unwrap_or(-1))
+                .collect(),
+        ),
+        Err(_) => None,
+    };
     let mut groups = LoadGroups::default();
     for i in 0..cells.len() {
-        let g = groups.entry(loads[i]).or_insert((w[i], Vec::new(), 0));
+        let g = groups.entry(loads[i]).or_insert((
+            w[i],
+            Vec::new(),
+            0,
+            realization.as_ref().map(|_| Vec::new()),
+        ));
         if percolating[i] {
             g.2 += 1;
         } else {
             g.1.push(cells[i]);
+            if let (Some(ids), Some(r)) = (g.3.as_mut(), realization.as_ref()) {
+                ids.push(r[i]);
+            }
         }
     }
     Ok(groups)
@@ -172,6 +208,83 @@ pub(crate) fn fit_row(
     row
 }
 
+/// Intervals over whole realizations, added to `row`: α by both estimators (each
+/// resample refitting x_min and the cut-off, or A_s and A_m), and K, 𝒦 at each A* (within
+/// [0, 1]); with fewer than 5 realizations, none, and `ci95_method` says why.
+fn over_realizations(
+    row: &mut serde_json::Value,
+    data: &[u64],
+    ids: &[i64],
+    a_star: &[f64],
+    resamples: usize,
+    seed: u64,
+) {
+    use wearcoef::powerlaw;
+    use wearcoef::resample::{self, NoInterval};
+    let mut by: std::collections::BTreeMap<i64, Vec<u64>> = Default::default();
+    for (&a, &r) in data.iter().zip(ids) {
+        by.entry(r).or_default().push(a);
+    }
+    let groups: Vec<Vec<u64>> = by.into_values().collect();
+    let pooled =
+        |g: &[&Vec<u64>]| -> Vec<u64> { g.iter().flat_map(|v| v.iter().copied()).collect() };
+    let truncated = |g: &[&Vec<u64>]| -> Option<f64> {
+        let d = pooled(g);
+        let m = d.iter().copied().max()?;
+        powerlaw::fit_discrete_tail(&d, Some(m))
+            .ok()
+            .map(|t| t.fit.alpha)
+    };
+    let plateau = |g: &[&Vec<u64>]| -> Option<f64> {
+        powerlaw::fit_plateau_power_law(&pooled(g))
+            .ok()
+            .map(|p| p.alpha)
+    };
+    let put = |row: &mut serde_json::Value, ci: Result<resample::Interval, NoInterval>| match ci {
+        Ok(c) => {
+            row["realization_ci95_low"] = json!(c.low);
+            row["realization_ci95_high"] = json!(c.high);
+            row["ci95_method"] = json!(resample::METHOD);
+        }
+        Err(e) => row["ci95_method"] = json!(e.reason()),
+    };
+    row["realizations"] = json!(groups.len());
+    put(
+        row,
+        resample::over_realizations(&groups, &truncated, resamples, seed, None),
+    );
+    put(
+        &mut row["plateau"],
+        resample::over_realizations(&groups, &plateau, resamples, seed, None),
+    );
+    for (k, &a) in a_star.iter().enumerate() {
+        let wear = |g: &[&Vec<u64>], upscaled: bool| -> Option<f64> {
+            let m = wearcoef::statistics::wear_at(&pooled(g), a);
+            let v = if upscaled { m.k_upscaled } else { m.k_archard };
+            v.is_finite().then_some(v)
+        };
+        let unit = Some((0.0, 1.0));
+        let k_ci = resample::over_realizations(&groups, &|g| wear(g, false), resamples, seed, unit);
+        let ku_ci = resample::over_realizations(&groups, &|g| wear(g, true), resamples, seed, unit);
+        let smallest = groups
+            .iter()
+            .map(|g| g.iter().filter(|&&x| x as f64 > a).count())
+            .min()
+            .unwrap_or(0);
+        let m = &mut row["wear"][k];
+        m["clusters_above_smallest_realization"] = json!(smallest);
+        for (name, ci) in [("k_archard", k_ci), ("k_upscaled", ku_ci)] {
+            match ci {
+                Ok(c) => {
+                    m[format!("{name}_ci95_low")] = json!(c.low);
+                    m[format!("{name}_ci95_high")] = json!(c.high);
+                }
+                Err(e) => m[format!("{name}_ci95_method")] = json!(e.reason()),
+            }
+        }
+    }
+}
+
 /// `fit`'s rows as text, one line per load.
 fn print_fit_rows(out: &[serde_json::Value]) -> anyhow::Result<()> {
     for r in out {
@@ -222,6 +335,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
         resamples,
         seed,
         a_star,
+        realization_column,
         json,
     } = args;
     if let Some(bad) = a_star.iter().find(|a| !(a.is_finite() && **a >= 0.0)) {
@@ -242,19 +356,23 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let (df, cells) = read_areas(&areas, &column)?;
-    let groups = group_by_load(&df, &cells)?;
+    let groups = group_by_load(&df, &cells, &realization_column)?;
     let out: Vec<serde_json::Value> = groups
         .into_iter()
-        .map(|(load, (w, data, excluded))| {
+        .map(|(load, (w, data, excluded, ids))| {
             let mut row = fit_row(load, w, &data, excluded, resamples, seed);
             row["wear"] = a_star
                 .iter()
                 .map(|&a| {
                     let m = wearcoef::statistics::wear_at(&data, a);
                     json!({"a_star_px": a, "k_archard": m.k_archard,
-                           "k_upscaled": m.k_upscaled, "area_above_px": m.area_above_px})
+                           "k_upscaled": m.k_upscaled, "area_above_px": m.area_above_px,
+                           "clusters_above": data.iter().filter(|&&x| x as f64 > a).count()})
                 })
                 .collect();
+            if let Some(ids) = ids {
+                over_realizations(&mut row, &data, &ids, &a_star, resamples, seed);
+            }
             row
         })
         .collect();

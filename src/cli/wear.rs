@@ -265,13 +265,13 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let (e_star, a_star_m2, hardness_pa) = settings(&args)?;
+    check_output_dir(&args.out)?;
     let Prepared {
         map,
         mut report,
         psd,
     } = prepare(&args.prepare)?;
     check_wear_memory(&map)?;
-    check_output_dir(&args.out)?;
     let slope = map.rms_slope();
     check_loads_below_hardness(&args.loads, hardness_pa, e_star, slope)?;
     // Everything is written into a staging directory, moved onto --out when complete.

@@ -421,7 +421,7 @@ fn the_application_modules_import_only_their_layer_and_lower_ones() {
         Some(match top {
             // The core crate's modules, re-exported.
             "analytic" | "clusters" | "contact" | "grid" | "pages" | "powerlaw" | "psd"
-            | "spectral" | "statistics" | "surface" | "topography" => 0,
+            | "resample" | "spectral" | "statistics" | "surface" | "topography" => 0,
             // `note!`, the crate's stderr macro, belongs to the lowest layer.
             "io" | "machine" | "format" | "ranges" | "note" => 1,
             "store" | "config" => 2,

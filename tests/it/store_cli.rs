@@ -544,3 +544,126 @@ fn fit_recovers_a_known_exponent_from_a_table_of_areas() {
         );
     }
 }
+
+/// `fit` with a realization column: intervals over whole realizations for α by both
+/// estimators and for K, 𝒦 at each A* (inside [0, 1]), with the counts behind each; a
+/// table of 4 realizations gets none and says why. Ten realizations whose exponents differ
+/// (α_r from 1.4 to 1.9): the two halves' intervals overlap, and each is wider than the
+/// interval that resamples clusters as if independent.
+#[test]
+fn fit_gives_intervals_over_realizations() {
+    use polars::prelude::*;
+    use rand::{RngExt, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let (mut realization, mut area) = (Vec::new(), Vec::new());
+    for r in 0..10i64 {
+        let alpha = 1.4 + 0.5 * (r as f64 * 0.618).fract();
+        for _ in 0..400 {
+            let u: f64 = rng.random();
+            // Continuous Pareto above 1, floored: a discrete tail of exponent ≈ α.
+            let x = (1.0 - u).powf(-1.0 / (alpha - 1.0)).floor().min(1e6) as u64;
+            realization.push(r);
+            area.push(x.max(1));
+        }
+    }
+    let write = |name: &str, keep: &dyn Fn(i64) -> bool| {
+        let rows: Vec<usize> = (0..area.len()).filter(|&i| keep(realization[i])).collect();
+        let mut df = DataFrame::new(
+            rows.len(),
+            vec![
+                Column::new(
+                    "realization".into(),
+                    rows.iter().map(|&i| realization[i]).collect::<Vec<_>>(),
+                ),
+                Column::new(
+                    "area_px".into(),
+                    rows.iter().map(|&i| area[i]).collect::<Vec<_>>(),
+                ),
+            ],
+        )
+        .unwrap();
+        let path = dir.path().join(name);
+        ParquetWriter::new(std::fs::File::create(&path).unwrap())
+            .finish(&mut df)
+            .unwrap();
+        path
+    };
+    let halves = [
+        write("a.parquet", &|r| r < 5),
+        write("b.parquet", &|r| r >= 5),
+    ];
+    let four = write("four.parquet", &|r| r < 4);
+    let fit = |path: &Path| -> serde_json::Value {
+        let out = bin()
+            .args([
+                "fit",
+                "--areas",
+                path.to_str().unwrap(),
+                "--a-star",
+                "5,50",
+                "--json",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout_json(&out)[0].clone()
+    };
+    let mut intervals = Vec::new();
+    for path in &halves {
+        let row = fit(path);
+        assert_eq!(row["realizations"], 5);
+        assert_eq!(row["ci95_method"], "realization_bootstrap_t");
+        assert_eq!(row["plateau"]["ci95_method"], "realization_bootstrap_t");
+        let (lo, hi) = (
+            row["realization_ci95_low"].as_f64().unwrap(),
+            row["realization_ci95_high"].as_f64().unwrap(),
+        );
+        let alpha = row["alpha"].as_f64().unwrap();
+        assert!(lo < alpha && alpha < hi, "{lo} {alpha} {hi}");
+        let (blo, bhi) = (
+            row["bootstrap_ci95_low"].as_f64().unwrap(),
+            row["bootstrap_ci95_high"].as_f64().unwrap(),
+        );
+        assert!(
+            hi - lo > bhi - blo,
+            "over realizations [{lo}, {hi}], clusters [{blo}, {bhi}]"
+        );
+        for m in row["wear"].as_array().unwrap() {
+            for k in ["k_archard", "k_upscaled"] {
+                let (l, h) = (
+                    m[format!("{k}_ci95_low")].as_f64().unwrap(),
+                    m[format!("{k}_ci95_high")].as_f64().unwrap(),
+                );
+                assert!(
+                    (0.0..=1.0).contains(&l) && (0.0..=1.0).contains(&h) && l <= h,
+                    "{m}"
+                );
+            }
+            assert!(
+                m["clusters_above"].as_u64().unwrap()
+                    >= m["clusters_above_smallest_realization"].as_u64().unwrap()
+            );
+        }
+        intervals.push((lo, hi));
+    }
+    assert!(
+        intervals[0].0 <= intervals[1].1 && intervals[1].0 <= intervals[0].1,
+        "{intervals:?}"
+    );
+    let row = fit(&four);
+    assert_eq!(row["realizations"], 4);
+    assert_eq!(
+        row["ci95_method"],
+        "none: 4 realizations (an interval needs 5)"
+    );
+    assert!(row["realization_ci95_low"].is_null());
+    assert_eq!(
+        row["wear"][0]["k_archard_ci95_method"],
+        "none: 4 realizations (an interval needs 5)"
+    );
+}
