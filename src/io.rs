@@ -393,14 +393,24 @@ pub fn disk_note(dir: &std::path::Path) -> String {
     }
 }
 
-/// "cannot write `path`: `cause`", with [`disk_note`] of its directory when that file system
-/// is (nearly) full.
+/// "cannot write `path`: `cause`", with [`disk_note`] of its directory when the cause is a
+/// full disk or quota (a file system that reports no free space for another reason, such
+/// as /proc, gets no advice to make room).
 pub fn cannot_write(path: &Path, cause: &str) -> String {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    format!("cannot write {}: {cause}{}", path.display(), disk_note(dir))
+    let full = [
+        "No space left",
+        "Disk quota exceeded",
+        "os error 28",
+        "os error 122",
+    ]
+    .iter()
+    .any(|c| cause.contains(c));
+    let note = if full { disk_note(dir) } else { String::new() };
+    format!("cannot write {}: {cause}{note}", path.display())
 }
 
 /// Read a measured map by its content: its first bytes say what it is (the suffix must
