@@ -45,7 +45,8 @@ pub fn remove_dead_temporaries(dir: &Path) -> std::io::Result<usize> {
     Ok(removed)
 }
 
-/// Remove the temporaries of `path` in `dir` left by processes that no longer run.
+/// Remove the temporaries of `path` in `dir` left by processes that no longer run: files of
+/// [`write_atomically`], directories of [`StagedDir`].
 fn remove_dead_siblings(dir: &Path, path: &Path) {
     let name = path.file_name().unwrap_or_default().to_string_lossy();
     let Ok(entries) = std::fs::read_dir(dir) else {
@@ -60,7 +61,10 @@ fn remove_dead_siblings(dir: &Path, path: &Path) {
             .and_then(|pid| pid.parse::<u32>().ok())
             .is_some_and(|pid| pid != std::process::id() && !alive(pid));
         if stale {
-            let _ = std::fs::remove_file(entry.path());
+            let _ = match entry.file_type() {
+                Ok(t) if t.is_dir() => std::fs::remove_dir_all(entry.path()),
+                _ => std::fs::remove_file(entry.path()),
+            };
         }
     }
 }
@@ -178,19 +182,7 @@ impl StagedDir {
             created,
             done: false,
         };
-        if let Ok(entries) = std::fs::read_dir(&parent) {
-            for e in entries.flatten() {
-                let other = e.file_name().to_string_lossy().into_owned();
-                let pid = other
-                    .strip_prefix('.')
-                    .and_then(|o| o.strip_prefix(name.as_str()))
-                    .and_then(|o| o.strip_prefix(".tmp-"))
-                    .and_then(|p| p.parse::<u32>().ok());
-                if pid.is_some_and(|p| p != std::process::id() && !alive(p)) {
-                    let _ = std::fs::remove_dir_all(e.path());
-                }
-            }
-        }
+        remove_dead_siblings(&parent, target);
         let _ = std::fs::remove_dir_all(&staged.staging);
         if let Err(e) = std::fs::create_dir(&staged.staging) {
             staged.done = false;
