@@ -19,6 +19,16 @@ pub fn power_of_ten(e: i32) -> String {
     format!("10{}", superscript(e))
 }
 
+/// An interval `[low, high]` for a legend, with as many decimals (2 to 6) as it takes for
+/// its ends to read differently (an interval never reads `[x, x]`).
+pub fn interval_text(low: f64, high: f64) -> String {
+    let mut digits = 2;
+    while digits < 6 && format!("{low:.digits$}") == format!("{high:.digits$}") {
+        digits += 1;
+    }
+    format!("[{low:.digits$}, {high:.digits$}]")
+}
+
 /// A number for a label: plain decimals for moderate magnitudes, `m×10ⁿ` otherwise, with a
 /// true minus sign; never an `e` exponent.
 pub fn number(v: f64) -> String {
@@ -45,5 +55,15 @@ pub fn number(v: f64) -> String {
         let ms = format!("{m:.2}");
         let ms = ms.trim_end_matches('0').trim_end_matches('.');
         format!("{sign}{ms}×{}", power_of_ten(e))
+    }
+}
+
+#[cfg(test)]
+mod interval_tests {
+    #[test]
+    fn an_interval_never_reads_as_one_number() {
+        assert_eq!(super::interval_text(1.3, 1.52), "[1.30, 1.52]");
+        assert_eq!(super::interval_text(1.5061, 1.5139), "[1.506, 1.514]");
+        assert_eq!(super::interval_text(1.5, 1.5), "[1.500000, 1.500000]");
     }
 }

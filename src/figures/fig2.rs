@@ -22,21 +22,24 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     let df = inputs.table(0, "statistics", "loads.parquet")?;
     let df = &df;
     let w = f64_column(df, "w_over_w0")?;
-    let dn = f64_column(df, "dn_dac_per_ls2")?;
+    let dn = f64_column(df, "dn_dac_per_ls2_mean")?;
     let realizations = super::realizations_of(inputs, 0)?;
     let ensemble = format!("mean of {realizations} realizations, shaded: 95 % band");
     // One panel per quantity (they differ by three decades and have different units).
     let panel = |title: &str, y_label: &str, column: &str, color: usize| {
         let mean = f64_column(df, &format!("{column}_mean"))?;
-        let half = f64_column(df, &format!("{column}_ci95"))?;
+        let (low, high) = (
+            f64_column(df, &format!("{column}_ci95_low"))?,
+            f64_column(df, &format!("{column}_ci95_high"))?,
+        );
         let mut p = LinePlot::new(title, "W/W_0", y_label, true, YAxis::Log);
         p.x_marks = marked_loads.to_vec();
         p.x_mark_labels = ["b", "c", "d"].iter().map(|s| s.to_string()).collect();
         p.series = vec![
             Series {
                 band: (0..w.len())
-                    .filter(|&i| half[i].is_finite())
-                    .map(|i| (w[i], mean[i] - half[i], mean[i] + half[i]))
+                    .filter(|&i| low[i].is_finite() && high[i].is_finite())
+                    .map(|i| (w[i], low[i], high[i]))
                     .collect(),
                 ..Series::line(
                     format!("{y_label} ({ensemble})"),

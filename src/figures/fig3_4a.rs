@@ -33,11 +33,13 @@ fn pdf_points(pdf: &DataFrame, load_index: u32) -> anyhow::Result<(Vec<(f64, f64
 fn pdf_band(pdf: &DataFrame, load_index: u32) -> anyhow::Result<Vec<(f64, f64, f64)>> {
     let rows = rows_at(pdf, load_index)?;
     let x = f64_column(pdf, "centre_over_ls2")?;
-    let mean = f64_column(pdf, "pdf_mean")?;
-    let half = f64_column(pdf, "pdf_ci95")?;
+    let (low, high) = (
+        f64_column(pdf, "pdf_ci95_low")?,
+        f64_column(pdf, "pdf_ci95_high")?,
+    );
     Ok(rows
         .iter()
-        .map(|&i| (x[i], mean[i] - half[i], mean[i] + half[i]))
+        .map(|&i| (x[i], low[i], high[i]))
         .filter(|b| b.1 > 0.0 && b.2.is_finite())
         .collect())
 }
@@ -47,7 +49,7 @@ type FittedLine = (Vec<(f64, f64)>, String);
 
 /// The paper's plateau + power law fitted at one load (`p_PL`: flat to `k_s`, `(k/k_s)^(−α)`
 /// to the largest area `k_m`), drawn over `[1, k_m]` in the units of the PDF (per λ_s²), and
-/// its legend: α̂ with its 95 % profile-likelihood interval, and the truncated power law's
+/// its legend: α̂ with its 95 % interval over realizations (or why it has none), and the truncated power law's
 /// α̂ beside it (the other estimator, docs/VALIDATION.md). `None` without a fit.
 fn fitted_plateau(
     alpha_table: &DataFrame,
@@ -89,10 +91,19 @@ fn fitted_plateau(
         .map_or(String::new(), |t| {
             format!("; truncated power law: α = {t:.2}")
         });
-    let text = format!(
-        "plateau + power law, α = {a:.2}, 95 % CI [{:.2}, {:.2}]{truncated}",
-        lo[i], hi[i]
-    );
+    let interval = if lo[i].is_finite() && hi[i].is_finite() {
+        format!("95 % CI {}", super::plot::interval_text(lo[i], hi[i]))
+    } else {
+        let why = str_column(alpha_table, "ci95_method")?;
+        format!(
+            "no interval: {}",
+            why[i]
+                .trim_start_matches("none: ")
+                .replace(" (", ", ")
+                .replace(')', "")
+        )
+    };
+    let text = format!("plateau + power law, α = {a:.2}, {interval}{truncated}");
     Ok(Some((points, text)))
 }
 

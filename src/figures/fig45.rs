@@ -53,9 +53,9 @@ const FIG4B_LINEAR_UP_TO: f64 = 1e-5;
 
 /// One series per threshold of `value` against W/W0 from a table with columns
 /// `a_star_over_ls2` and `w_over_w0`: simulated values as markers joined by a thin line (a
-/// marker shape per threshold) with the 95 % band of the realizations' mean (columns
-/// `<quantity>_mean` and `<quantity>_ci95`), the fitted model as dashed lines in the same
-/// colours under one legend entry.
+/// marker shape per threshold) with the value's own 95 % band (columns `<value>_ci95_low`
+/// and `<value>_ci95_high`, `_mean` dropped: over realizations, within the quantity's
+/// bounds), the fitted model as dashed lines in the same colours under one legend entry.
 fn per_threshold(
     df: &DataFrame,
     value: &str,
@@ -68,10 +68,10 @@ fn per_threshold(
     let band = if fitted {
         None
     } else {
-        let quantity = value.trim_end_matches("_pooled").trim_end_matches("_mean");
+        let quantity = value.trim_end_matches("_mean");
         Some((
-            f64_column(df, &format!("{quantity}_mean"))?,
-            f64_column(df, &format!("{quantity}_ci95"))?,
+            f64_column(df, &format!("{quantity}_ci95_low"))?,
+            f64_column(df, &format!("{quantity}_ci95_high"))?,
         ))
     };
     let mut out: Vec<Series> = FIG45_A_STAR
@@ -92,10 +92,10 @@ fn per_threshold(
             } else {
                 let band = band
                     .as_ref()
-                    .map(|(mean, half)| {
+                    .map(|(low, high)| {
                         (0..a.len())
-                            .filter(|&i| a[i] == t && half[i].is_finite())
-                            .map(|i| (w[i], mean[i] - half[i], mean[i] + half[i]))
+                            .filter(|&i| a[i] == t && low[i].is_finite() && high[i].is_finite())
+                            .map(|i| (w[i], low[i], high[i]))
                             .collect()
                     })
                     .unwrap_or_default();
@@ -134,9 +134,18 @@ pub fn fig45(inputs: &Inputs, spectrum: &str) -> anyhow::Result<Vec<(String, Dra
     let mut rate = per_threshold(wear, "wear_rate_over_l2_mean", "R/L^2", false)?;
     let realizations = super::realizations_of(inputs, 0)?;
     let key = |what: &str| {
-        Series::band_key(format!(
-            "{what} {realizations} realizations; shaded: 95 % band of their mean"
-        ))
+        Series::band_key(
+            if realizations >= crate::resample::MIN_REALIZATIONS as u64 {
+                format!(
+                    "{what} {realizations} realizations; shaded: 95 % interval over realizations"
+                )
+            } else {
+                format!(
+                    "{what} {realizations} realizations; no interval (an interval needs {})",
+                    crate::resample::MIN_REALIZATIONS
+                )
+            },
+        )
     };
     k.push(key("markers: pooled over"));
     kk.push(key("markers: pooled over"));
@@ -193,7 +202,7 @@ pub fn fig45(inputs: &Inputs, spectrum: &str) -> anyhow::Result<Vec<(String, Dra
 fn regime(inputs: &Inputs, spectrum: &str) -> anyhow::Result<LinePlot> {
     let loads = inputs.table(0, "statistics", "loads.parquet")?;
     let w = f64_column(&loads, "w_over_w0")?;
-    let dn = f64_column(&loads, "dn_dac_per_ls2")?;
+    let dn = f64_column(&loads, "dn_dac_per_ls2_mean")?;
     let mut p = LinePlot::new(
         format!("Regime of Figs. 4b–5b: growth of the cluster count, {spectrum}"),
         "W/W_0",

@@ -59,7 +59,8 @@ pub struct CcdfTable {
     area_over_ls2: Vec<f64>,
     ccdf: Vec<f64>,
     ccdf_mean: Vec<f64>,
-    ccdf_ci95: Vec<f64>,
+    ccdf_ci95_low: Vec<f64>,
+    ccdf_ci95_high: Vec<f64>,
 }
 
 impl CcdfTable {
@@ -73,7 +74,8 @@ impl CcdfTable {
             area_over_ls2: f64_column(&df, "area_over_ls2")?,
             ccdf: f64_column(&df, "ccdf")?,
             ccdf_mean: f64_column(&df, "ccdf_mean")?,
-            ccdf_ci95: f64_column(&df, "ccdf_ci95")?,
+            ccdf_ci95_low: f64_column(&df, "ccdf_ci95_low")?,
+            ccdf_ci95_high: f64_column(&df, "ccdf_ci95_high")?,
         })
     }
 
@@ -95,8 +97,11 @@ impl CcdfTable {
         (0..self.ccdf_mean.len())
             .filter(|&i| self.load_index[i] == Some(load_index) && self.realization[i].is_none())
             .map(|i| {
-                let (m, h) = (self.ccdf_mean[i], self.ccdf_ci95[i]);
-                (self.area_over_ls2[i], m - h, m + h)
+                (
+                    self.area_over_ls2[i],
+                    self.ccdf_ci95_low[i],
+                    self.ccdf_ci95_high[i],
+                )
             })
             .filter(|b| b.1 > 0.0 && b.2.is_finite())
             .collect()

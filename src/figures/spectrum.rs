@@ -122,8 +122,10 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
             f64_column(&wear, "w_over_w0")?,
         );
         let pooled = f64_column(&wear, &format!("{quantity}_pooled"))?;
-        let mean = f64_column(&wear, &format!("{quantity}_mean"))?;
-        let half = f64_column(&wear, &format!("{quantity}_ci95"))?;
+        let (low, high) = (
+            f64_column(&wear, &format!("{quantity}_pooled_ci95_low"))?,
+            f64_column(&wear, &format!("{quantity}_pooled_ci95_high"))?,
+        );
         let model = inputs.table(n + s, "analytic", "model.parquet")?;
         let (ma, mw, mv) = (
             f64_column(&model, "a_star_over_ls2")?,
@@ -141,9 +143,8 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
                 if drawable(pooled[i]) {
                     measured[t].push((x, pooled[i]));
                 }
-                if half[i].is_finite() && (y_axis != YAxis::Log || mean[i] - half[i] > 0.0) {
-                    // K and 𝒦 are fractions: the band of their mean stops at 1.
-                    bands[t].push((x, mean[i] - half[i], (mean[i] + half[i]).min(1.0)));
+                if high[i].is_finite() && (y_axis != YAxis::Log || low[i] > 0.0) {
+                    bands[t].push((x, low[i], high[i]));
                 }
             }
             for i in model_rows.iter().copied().filter(|&i| ma[i] == a_star) {
@@ -187,7 +188,7 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
         )
     });
     plot.series.push(Series::band_key(
-        "solid: pooled over realizations; shaded: 95 % band of their mean",
+        "pooled over realizations; shaded: 95 % interval over realizations",
     ));
     Ok(plot)
 }
@@ -211,7 +212,10 @@ fn interval(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
         let loads = inputs.table(s, "statistics", "loads.parquet")?;
         let w = f64_column(&loads, "w_over_w0")?;
         let mean = f64_column(&loads, "largest_area_over_ls2_mean")?;
-        let half = f64_column(&loads, "largest_area_over_ls2_ci95")?;
+        let (low, high) = (
+            f64_column(&loads, "largest_area_over_ls2_ci95_low")?,
+            f64_column(&loads, "largest_area_over_ls2_ci95_high")?,
+        );
         let model = inputs.table(n + s, "analytic", "model.parquet")?;
         let (mw, a_m) = (
             f64_column(&model, "w_over_w0")?,
@@ -221,8 +225,8 @@ fn interval(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
             if let Some((rows, _)) = rows_near(&w, target) {
                 for i in rows.into_iter().filter(|&i| mean[i] > 0.0) {
                     largest.push((setting.value, mean[i]));
-                    if half[i].is_finite() && mean[i] - half[i] > 0.0 {
-                        band.push((setting.value, mean[i] - half[i], mean[i] + half[i]));
+                    if high[i].is_finite() && low[i] > 0.0 {
+                        band.push((setting.value, low[i], high[i]));
                     }
                 }
             }
@@ -314,7 +318,7 @@ fn transition(inputs: &Inputs, settings: &[StudyRef]) -> anyhow::Result<(LinePlo
             setting.study
         );
         let w = f64_column(&loads, "w_over_w0")?;
-        let d = f64_column(&loads, "dn_dac_per_ls2")?;
+        let d = f64_column(&loads, "dn_dac_per_ls2_mean")?;
         let (lowest, highest) = (w[0], w[w.len() - 1]);
         let change = sign_change(&w, &d);
         let value = match change {
@@ -406,19 +410,16 @@ fn physical(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
             continue;
         };
         let pooled = table.curve(index, None, false);
-        // The band's edges are steps too: mean ∓ half-width at each distinct area.
+        // The band's edges are steps too, at each distinct area.
         let rows: Vec<usize> = (0..table.ccdf.len())
             .filter(|&i| table.load_index[i] == Some(index) && table.realization[i].is_none())
             .collect();
-        let edge = |sign: f64| -> Vec<(f64, f64)> {
+        let edge = |v: &[f64]| -> Vec<(f64, f64)> {
             rows.iter()
-                .map(|&i| {
-                    let a = table.area_over_ls2[i];
-                    (a, table.ccdf_mean[i] + sign * table.ccdf_ci95[i])
-                })
+                .map(|&i| (table.area_over_ls2[i], v[i]))
                 .collect()
         };
-        let (low_edge, high_edge) = (edge(-1.0), edge(1.0));
+        let (low_edge, high_edge) = (edge(&table.ccdf_ci95_low), edge(&table.ccdf_ci95_high));
         for (t, &c) in scene.a_star_over_ll2.iter().enumerate() {
             let a_star_over_ls2 = c * setting.value * setting.value;
             let k = ccdf_at(&pooled, a_star_over_ls2);

@@ -117,7 +117,7 @@ pub enum FigureJob {
 
 impl Stage for Figures {
     const NAME: &'static str = "figures";
-    const VERSION: u32 = 11;
+    const VERSION: u32 = 12;
     type Job = FigureJob;
 
     fn compute(job: &FigureJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

@@ -12,6 +12,7 @@ use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
 use crate::powerlaw::{self, Estimator};
+use crate::resample::{self, NoInterval};
 use crate::statistics as stats;
 use crate::store::table::{col, load_columns, write};
 
@@ -24,7 +25,8 @@ pub const A_STAR_OVER_LS2: [f64; 13] = [
 ];
 /// Logarithmic bins of the area PDF (paper Fig. 3).
 pub const PDF_BINS: usize = 20;
-/// Bootstrap resamples of the exponent's interval.
+/// Resamples of the realizations behind each interval of a refitted estimate (α, pooled K
+/// and 𝒦).
 pub const BOOTSTRAP_RESAMPLES: usize = 200;
 
 /// One study's statistics. Inputs: its realizations' clusters instances, in order.
@@ -75,7 +77,7 @@ impl StatisticsJob {
 
 impl Stage for Statistics {
     const NAME: &'static str = "statistics";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
     type Job = StatisticsJob;
 
     fn compute(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {
@@ -171,7 +173,7 @@ fn compute_statistics(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyho
     write_ccdf(&study, dir)?;
     write_wear(&study, dir)?;
     // Exponents per load, pooled over realizations.
-    let fitted = write_alpha(job, dir, &study.pooled, study.ls2)?;
+    let fitted = write_alpha(&study, dir)?;
 
     Ok(json!({
         "realizations": study.realizations,
@@ -179,6 +181,60 @@ fn compute_statistics(job: &StatisticsJob, inputs: &Inputs, dir: &Path) -> anyho
         "loads_with_exponent": fitted,
         "omega": job.omega,
     }))
+}
+
+/// Means over realizations with their 95 % intervals (`resample::mean_over_realizations`),
+/// one row at a time, as the columns `<name>_mean`, `<name>_ci95` (the half-width
+/// t·s/√R before clipping: a scale, NaN without an interval), `<name>_ci95_low` and
+/// `<name>_ci95_high` (clipped to the quantity's bounds: the band to draw).
+#[derive(Default)]
+struct Band {
+    mean: Vec<f64>,
+    half: Vec<f64>,
+    low: Vec<f64>,
+    high: Vec<f64>,
+}
+
+impl Band {
+    /// Adds a row from one value per realization; returns why it has no interval.
+    fn push(&mut self, values: &[f64], bounds: Option<(f64, f64)>) -> Option<NoInterval> {
+        let (m, ci) = resample::mean_over_realizations(values, bounds);
+        self.mean.push(m);
+        match ci {
+            Ok(c) => {
+                self.half
+                    .push(resample::student_t_975(c.realizations - 1) * c.std_error);
+                self.low.push(c.low);
+                self.high.push(c.high);
+                None
+            }
+            Err(e) => {
+                self.half.push(f64::NAN);
+                self.low.push(f64::NAN);
+                self.high.push(f64::NAN);
+                Some(e)
+            }
+        }
+    }
+
+    fn columns(self, name: &str) -> [Column; 4] {
+        [
+            col(&format!("{name}_mean"), self.mean),
+            col(&format!("{name}_ci95"), self.half),
+            col(&format!("{name}_ci95_low"), self.low),
+            col(&format!("{name}_ci95_high"), self.high),
+        ]
+    }
+}
+
+/// A row's `ci95_method`: `method` when every interval of the row was given, else the
+/// first reason one was not.
+fn method_or_reason(method: &str, reasons: impl IntoIterator<Item = Option<NoInterval>>) -> String {
+    reasons
+        .into_iter()
+        .flatten()
+        .next()
+        .map_or_else(|| method.to_string(), |e| e.reason())
 }
 
 /// Per-load summary (all clusters, percolating ones included) and dN/dA_c: `loads.parquet`.
@@ -193,21 +249,40 @@ fn write_loads(study: &Study, dir: &Path) -> anyhow::Result<()> {
         ..
     } = study;
     let (ls2, pixels, loads, realizations) = (*ls2, *pixels, *loads, *realizations);
-    let per_load = |f: &dyn Fn(usize, usize) -> f64| -> Vec<(f64, f64)> {
-        (0..loads)
-            .map(|l| {
-                let v: Vec<f64> = (0..realizations).map(|r| f(r, l)).collect();
-                let (m, _, half) = stats::mean_band(&v);
-                (m, half)
-            })
-            .collect()
-    };
-    let fraction = per_load(&|r, l| s.contact_px[r][l] as f64 / pixels);
-    let count = per_load(&|r, l| s.count[r][l] as f64);
-    let largest = per_load(&|r, l| s.largest[r][l] as f64 / ls2);
-    let ac_ls2: Vec<f64> = fraction.iter().map(|f| f.0 * pixels / ls2).collect();
-    let n_mean: Vec<f64> = count.iter().map(|c| c.0).collect();
-    let dn_dac = stats::derivative(&ac_ls2, &n_mean);
+    // dN/dA_c of each realization along its own sweep, then averaged like the rest.
+    let dn_dac: Vec<Vec<f64>> = (0..realizations)
+        .map(|r| {
+            let ac: Vec<f64> = (0..loads)
+                .map(|l| s.contact_px[r][l] as f64 / ls2)
+                .collect();
+            let n: Vec<f64> = (0..loads).map(|l| s.count[r][l] as f64).collect();
+            stats::derivative(&ac, &n)
+        })
+        .collect();
+    let (mut fraction, mut count, mut largest, mut slope) = Default::default();
+    let mut method = Vec::with_capacity(loads);
+    for l in 0..loads {
+        let of = |f: &dyn Fn(usize) -> f64| (0..realizations).map(f).collect::<Vec<f64>>();
+        let reasons = [
+            Band::push(
+                &mut fraction,
+                &of(&|r| s.contact_px[r][l] as f64 / pixels),
+                Some((0.0, 1.0)),
+            ),
+            Band::push(
+                &mut count,
+                &of(&|r| s.count[r][l] as f64),
+                Some((0.0, f64::INFINITY)),
+            ),
+            Band::push(
+                &mut largest,
+                &of(&|r| s.largest[r][l] as f64 / ls2),
+                Some((0.0, f64::INFINITY)),
+            ),
+            Band::push(&mut slope, &of(&|r| dn_dac[r][l]), None),
+        ];
+        method.push(method_or_reason(resample::METHOD_MEAN, reasons));
+    }
     let perc: Vec<u32> = (0..loads)
         .map(|l| {
             (0..realizations)
@@ -215,8 +290,6 @@ fn write_loads(study: &Study, dir: &Path) -> anyhow::Result<()> {
                 .count() as u32
         })
         .collect();
-    let first = |v: &[(f64, f64)]| v.iter().map(|x| x.0).collect::<Vec<_>>();
-    let second = |v: &[(f64, f64)]| v.iter().map(|x| x.1).collect::<Vec<_>>();
     write(
         dir,
         "loads.parquet",
@@ -224,15 +297,14 @@ fn write_loads(study: &Study, dir: &Path) -> anyhow::Result<()> {
             loads,
             [
                 load_columns(&job.loads).to_vec(),
+                fraction.columns("area_fraction").to_vec(),
+                count.columns("n_clusters").to_vec(),
+                largest.columns("largest_area_over_ls2").to_vec(),
+                slope.columns("dn_dac_per_ls2").to_vec(),
                 vec![
-                    col("area_fraction_mean", first(&fraction)),
-                    col("area_fraction_ci95", second(&fraction)),
-                    col("n_clusters_mean", first(&count)),
-                    col("n_clusters_ci95", second(&count)),
-                    col("largest_area_over_ls2_mean", first(&largest)),
-                    col("largest_area_over_ls2_ci95", second(&largest)),
-                    col("dn_dac_per_ls2", dn_dac),
+                    col("realizations", vec![realizations as u32; loads]),
                     col("realizations_percolating", perc),
+                    col("ci95_method", method),
                 ],
             ]
             .concat(),
@@ -259,8 +331,7 @@ fn write_pdf(study: &Study, dir: &Path) -> anyhow::Result<usize> {
     let edges = stats::log_edges(1.0, (max_area as f64).max(2.0), job.pdf_bins);
     let (mut li, mut w, mut bin) = (Vec::new(), Vec::new(), Vec::new());
     let (mut lo, mut hi, mut centre, mut width) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut count, mut pooled_pdf, mut mean, mut half) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut count, mut pooled_pdf, mut band) = (Vec::new(), Vec::new(), Band::default());
     for l in (0..loads).filter(|_| max_area > 0) {
         let bins = stats::log_binned_pdf(&pooled[l], &edges);
         let per_real: Vec<Vec<stats::PdfBin>> = (0..realizations)
@@ -268,7 +339,7 @@ fn write_pdf(study: &Study, dir: &Path) -> anyhow::Result<usize> {
             .collect();
         for (j, b) in bins.iter().enumerate() {
             let v: Vec<f64> = per_real.iter().map(|p| p[j].density_per_px * ls2).collect();
-            let (m, _, h) = stats::mean_band(&v);
+            band.push(&v, Some((0.0, f64::INFINITY)));
             li.push(l as u32);
             w.push(job.loads[l]);
             bin.push(j as u32);
@@ -278,8 +349,6 @@ fn write_pdf(study: &Study, dir: &Path) -> anyhow::Result<usize> {
             width.push(b.width_px);
             count.push(b.count);
             pooled_pdf.push(b.density_per_px * ls2);
-            mean.push(m);
-            half.push(h);
         }
     }
     let pdf_rows = li.len();
@@ -288,7 +357,7 @@ fn write_pdf(study: &Study, dir: &Path) -> anyhow::Result<usize> {
         "pdf.parquet",
         DataFrame::new(
             pdf_rows,
-            vec![
+            [
                 col("load_index", li),
                 col("w_over_w0", w),
                 col("bin", bin),
@@ -298,9 +367,10 @@ fn write_pdf(study: &Study, dir: &Path) -> anyhow::Result<usize> {
                 col("width_px", width),
                 col("count_pooled", count),
                 col("pdf_pooled", pooled_pdf),
-                col("pdf_mean", mean),
-                col("pdf_ci95", half),
-            ],
+            ]
+            .into_iter()
+            .chain(band.columns("pdf"))
+            .collect(),
         )?,
     )?;
     Ok(pdf_rows)
@@ -327,7 +397,8 @@ fn write_ccdf(study: &Study, dir: &Path) -> anyhow::Result<()> {
         Vec::new(),
         Vec::new(),
     );
-    let (mut mean, mut half) = (Vec::<Option<f64>>::new(), Vec::<Option<f64>>::new());
+    // The band columns, null on the rows of one realization.
+    let mut band: [Vec<Option<f64>>; 4] = Default::default();
     for (l, pooled_l) in pooled.iter().enumerate() {
         let sorted: Vec<Vec<u64>> = (0..realizations)
             .filter(|&r| !s.areas[r][l].is_empty())
@@ -352,12 +423,15 @@ fn write_ccdf(study: &Study, dir: &Path) -> anyhow::Result<()> {
                         .iter()
                         .map(|x| (x.len() - x.partition_point(|&a| a <= k)) as f64 / x.len() as f64)
                         .collect();
-                    let (m, _, h) = stats::mean_band(&v);
-                    mean.push(Some(m));
-                    half.push(Some(h));
+                    let mut b = Band::default();
+                    b.push(&v, Some((0.0, 1.0)));
+                    for (c, x) in band.iter_mut().zip([b.mean, b.half, b.low, b.high]) {
+                        c.push(Some(x[0]));
+                    }
                 } else {
-                    mean.push(None);
-                    half.push(None);
+                    for c in band.iter_mut() {
+                        c.push(None);
+                    }
                 }
             }
         }
@@ -368,22 +442,74 @@ fn write_ccdf(study: &Study, dir: &Path) -> anyhow::Result<()> {
         "ccdf.parquet",
         DataFrame::new(
             rows,
-            vec![
+            [
                 col("load_index", li),
                 col("w_over_w0", w),
                 Column::new("realization".into(), real),
                 col("area_px", area),
                 col("area_over_ls2", area_ls2),
                 col("ccdf", ccdf),
-                Column::new("ccdf_mean".into(), mean),
-                Column::new("ccdf_ci95".into(), half),
-            ],
+            ]
+            .into_iter()
+            .chain(
+                ["ccdf_mean", "ccdf_ci95", "ccdf_ci95_low", "ccdf_ci95_high"]
+                    .into_iter()
+                    .zip(band)
+                    .map(|(name, v)| Column::new(name.into(), v)),
+            )
+            .collect(),
         )?,
     )?;
     Ok(())
 }
 
-/// K, 𝒦 and the wear rate on the A* grid: `wear.parquet`.
+/// One realization's clusters against a threshold: how many and how much area lie above
+/// it, of how many and how much in all (pixels).
+#[derive(Clone, Copy)]
+struct Above {
+    count: u64,
+    clusters: u64,
+    area_px: f64,
+    total_px: f64,
+}
+
+impl Above {
+    fn of(areas_px: &[u64], a_star_px: f64) -> Self {
+        let mut a = Above {
+            count: 0,
+            clusters: areas_px.len() as u64,
+            area_px: 0.0,
+            total_px: 0.0,
+        };
+        for &x in areas_px {
+            a.total_px += x as f64;
+            if x as f64 > a_star_px {
+                a.count += 1;
+                a.area_px += x as f64;
+            }
+        }
+        a
+    }
+
+    /// K and 𝒦 of the realizations drawn, pooled (None without any cluster).
+    fn pooled(drawn: &[&Above], upscaled: bool) -> Option<f64> {
+        let sum = |f: &dyn Fn(&Above) -> f64| drawn.iter().map(|a| f(a)).sum::<f64>();
+        if upscaled {
+            let total = sum(&|a| a.total_px);
+            (total > 0.0).then(|| sum(&|a| a.area_px) / total)
+        } else {
+            let n = sum(&|a| a.clusters as f64);
+            (n > 0.0).then(|| sum(&|a| a.count as f64) / n)
+        }
+    }
+}
+
+/// The means' and the pooled values' methods, for a row where both have intervals.
+const WEAR_METHODS: &str = "means: realization_mean_t; pooled: realization_bootstrap_t";
+
+/// K, 𝒦 and the wear rate on the A* grid, pooled over realizations (the pooled value with
+/// an interval from resampling whole realizations) and as means of the realizations' own
+/// values, with the counts behind them: `wear.parquet`.
 fn write_wear(study: &Study, dir: &Path) -> anyhow::Result<()> {
     let Study {
         job,
@@ -395,56 +521,96 @@ fn write_wear(study: &Study, dir: &Path) -> anyhow::Result<()> {
         ..
     } = study;
     let (ls2, pixels, realizations) = (*ls2, *pixels, *realizations);
-    let mut cols_v: [Vec<f64>; 9] = Default::default();
-    let (mut li, mut w) = (Vec::new(), Vec::new());
+    let unit = Some((0.0, 1.0));
+    let (mut li, mut w, mut a_col) = (Vec::new(), Vec::new(), Vec::new());
+    let mut pooled_cols: [Vec<f64>; 6] = Default::default();
+    let (mut k, mut kk, mut rate) = (Band::default(), Band::default(), Band::default());
+    let (mut above, mut smallest, mut method) = (Vec::new(), Vec::new(), Vec::new());
     for (l, pooled_l) in pooled.iter().enumerate() {
-        for &a_star in &job.a_star_over_ls2 {
+        for (i, &a_star) in job.a_star_over_ls2.iter().enumerate() {
             let a_px = a_star * ls2;
-            let per: Vec<stats::WearAt> = (0..realizations)
-                .map(|r| stats::wear_at(&s.areas[r][l], a_px))
+            let per: Vec<Above> = (0..realizations)
+                .map(|r| Above::of(&s.areas[r][l], a_px))
                 .collect();
             let p = stats::wear_at(pooled_l, a_px);
-            let band = |f: &dyn Fn(&stats::WearAt) -> f64| {
-                let v: Vec<f64> = per.iter().map(f).collect();
-                let (m, _, h) = stats::mean_band(&v);
-                (m, h)
+            let seed = job.seed ^ ((l * 64 + i) as u64 + 1).wrapping_mul(0x2545_F491_4F6C_DD1D);
+            let mut reasons = Vec::new();
+            for (j, (value, upscaled)) in [(p.k_archard, false), (p.k_upscaled, true)]
+                .into_iter()
+                .enumerate()
+            {
+                let ci = resample::over_realizations(
+                    &per,
+                    &|d: &[&Above]| Above::pooled(d, upscaled),
+                    job.bootstrap_resamples,
+                    seed ^ j as u64,
+                    unit,
+                );
+                pooled_cols[3 * j].push(value);
+                let (lo, hi) = match ci {
+                    Ok(c) => (c.low, c.high),
+                    Err(e) => {
+                        reasons.push(Some(e));
+                        (f64::NAN, f64::NAN)
+                    }
+                };
+                pooled_cols[3 * j + 1].push(lo);
+                pooled_cols[3 * j + 2].push(hi);
+            }
+            // A realization without any cluster at this load has no K or 𝒦 of its own.
+            let own = |f: &dyn Fn(&Above) -> f64| -> Vec<f64> {
+                per.iter()
+                    .map(|a| if a.clusters > 0 { f(a) } else { f64::NAN })
+                    .collect()
             };
-            let k = band(&|x| x.k_archard);
-            let kk = band(&|x| x.k_upscaled);
-            let rate = band(&|x| job.omega * x.area_above_px / pixels);
+            reasons.push(k.push(&own(&|a| a.count as f64 / a.clusters as f64), unit));
+            reasons.push(kk.push(
+                &own(&|a| {
+                    if a.total_px > 0.0 {
+                        a.area_px / a.total_px
+                    } else {
+                        0.0
+                    }
+                }),
+                unit,
+            ));
+            let rates: Vec<f64> = per.iter().map(|a| job.omega * a.area_px / pixels).collect();
+            reasons.push(rate.push(&rates, Some((0.0, f64::INFINITY))));
             li.push(l as u32);
             w.push(job.loads[l]);
-            for (c, v) in cols_v.iter_mut().zip([
-                a_star,
-                p.k_archard,
-                k.0,
-                k.1,
-                p.k_upscaled,
-                kk.0,
-                kk.1,
-                rate.0,
-                rate.1,
-            ]) {
-                c.push(v);
-            }
+            a_col.push(a_star);
+            above.push(per.iter().map(|a| a.count).sum::<u64>());
+            smallest.push(per.iter().map(|a| a.count).min().unwrap_or(0));
+            method.push(method_or_reason(WEAR_METHODS, reasons));
         }
     }
-    let names = [
-        "a_star_over_ls2",
-        "k_archard_pooled",
-        "k_archard_mean",
-        "k_archard_ci95",
-        "k_upscaled_pooled",
-        "k_upscaled_mean",
-        "k_upscaled_ci95",
-        "wear_rate_over_l2_mean",
-        "wear_rate_over_l2_ci95",
-    ];
     let rows = li.len();
-    let mut columns = vec![col("load_index", li), col("w_over_w0", w)];
-    for (name, v) in names.iter().zip(cols_v) {
-        columns.push(col(name, v));
-    }
+    let [kp, kp_lo, kp_hi, kkp, kkp_lo, kkp_hi] = pooled_cols;
+    let columns: Vec<Column> = [
+        vec![
+            col("load_index", li),
+            col("w_over_w0", w),
+            col("a_star_over_ls2", a_col),
+            col("k_archard_pooled", kp),
+            col("k_archard_pooled_ci95_low", kp_lo),
+            col("k_archard_pooled_ci95_high", kp_hi),
+        ],
+        k.columns("k_archard").to_vec(),
+        vec![
+            col("k_upscaled_pooled", kkp),
+            col("k_upscaled_pooled_ci95_low", kkp_lo),
+            col("k_upscaled_pooled_ci95_high", kkp_hi),
+        ],
+        kk.columns("k_upscaled").to_vec(),
+        rate.columns("wear_rate_over_l2").to_vec(),
+        vec![
+            col("clusters_above", above),
+            col("clusters_above_smallest_realization", smallest),
+            col("realizations", vec![realizations as u32; rows]),
+            col("ci95_method", method),
+        ],
+    ]
+    .concat();
     write(dir, "wear.parquet", DataFrame::new(rows, columns)?)?;
     Ok(())
 }
@@ -455,7 +621,8 @@ fn write_wear(study: &Study, dir: &Path) -> anyhow::Result<()> {
 struct AlphaRow {
     alpha: Option<f64>,
     std_error: Option<f64>,
-    ci95: Option<(f64, f64, &'static str)>,
+    ci95: Option<(f64, f64)>,
+    ci95_method: Option<String>,
     k_min: Option<f64>,
     k_max: Option<f64>,
     k_s: Option<f64>,
@@ -464,34 +631,62 @@ struct AlphaRow {
     note: String,
 }
 
+impl AlphaRow {
+    /// The interval over realizations of the estimate (refitted in each resample), or
+    /// why there is none.
+    fn with_interval(mut self, ci: Result<resample::Interval, NoInterval>) -> Self {
+        match ci {
+            Ok(c) => {
+                self.ci95 = Some((c.low, c.high));
+                self.std_error = Some(c.std_error);
+                self.ci95_method = Some(resample::METHOD.to_string());
+            }
+            Err(e) => self.ci95_method = Some(e.reason()),
+        }
+        self
+    }
+}
+
+/// The pooled areas of the realizations drawn.
+fn pool(drawn: &[&Vec<u64>]) -> Vec<u64> {
+    drawn.iter().flat_map(|v| v.iter().copied()).collect()
+}
+
+/// The discrete power law truncated at the largest area, above k_min chosen by the KS
+/// criterion (`None` if it cannot be fitted).
+fn truncated_fit(areas: &[u64]) -> Option<powerlaw::PowerLawFit> {
+    let m = areas.iter().copied().max()?;
+    powerlaw::fit_discrete_tail(areas, Some(m))
+        .ok()
+        .map(|t| t.fit)
+}
+
 /// The discrete truncated MLE at load `l`: k_min by the KS criterion, k_max the largest
-/// area, a bootstrap interval.
-fn truncated_row(job: &StatisticsJob, l: usize, areas: &[u64]) -> AlphaRow {
+/// area; its interval resamples whole realizations and refits k_min and k_max each time.
+fn truncated_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64]) -> AlphaRow {
     let k_hi = areas.iter().copied().max();
     match k_hi
         .ok_or(powerlaw::FitError::Empty)
-        .and_then(|m| powerlaw::fit_discrete_tail(areas, Some(m)).map(|t| (t, m)))
+        .and_then(|m| powerlaw::fit_discrete_tail(areas, Some(m)))
     {
-        Ok((t, m)) => {
+        Ok(t) => {
             let f = t.fit;
-            let ci = powerlaw::bootstrap_discrete(
-                areas,
-                f.lower as u64,
-                Some(m),
+            let ci = resample::over_realizations(
+                per,
+                &|d: &[&Vec<u64>]| truncated_fit(&pool(d)).map(|f| f.alpha),
                 job.bootstrap_resamples,
                 job.seed ^ (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
-            )
-            .ok();
+                None,
+            );
             AlphaRow {
                 alpha: Some(f.alpha),
-                std_error: Some(f.std_error),
-                ci95: ci.map(|c| (c.0, c.1, "bootstrap")),
                 k_min: Some(f.lower),
                 k_max: Some(f.upper),
                 n_fitted: Some(f.n as u64),
                 ks_distance: Some(f.ks_distance),
                 ..AlphaRow::default()
             }
+            .with_interval(ci)
         }
         Err(e) => AlphaRow {
             note: format!("no fit: {e}"),
@@ -500,28 +695,30 @@ fn truncated_row(job: &StatisticsJob, l: usize, areas: &[u64]) -> AlphaRow {
     }
 }
 
-/// The paper's plateau + power law fitted jointly, with its 95 % profile-likelihood
-/// interval.
-fn plateau_row(areas: &[u64]) -> AlphaRow {
+/// The plateau + power law (the model of Appendix A) fitted jointly; its interval
+/// resamples whole realizations and refits A_s and A_m each time.
+fn plateau_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64]) -> AlphaRow {
     match powerlaw::fit_plateau_power_law(areas) {
         Ok(f) => {
-            // The 95 % profile-likelihood interval (the fit succeeded, so this does).
-            let ci = powerlaw::plateau_alpha_interval(areas, &f).ok();
+            let ci = resample::over_realizations(
+                per,
+                &|d: &[&Vec<u64>]| {
+                    powerlaw::fit_plateau_power_law(&pool(d))
+                        .ok()
+                        .map(|f| f.alpha)
+                },
+                job.bootstrap_resamples,
+                job.seed ^ (l as u64 + 1).wrapping_mul(0xbf58_476d_1ce4_e5b9),
+                None,
+            );
             AlphaRow {
                 alpha: Some(f.alpha),
-                ci95: ci.map(|c| (c.low, c.high, "profile_likelihood")),
                 k_max: Some(f.k_m as f64),
                 k_s: Some(f.k_s),
                 n_fitted: Some(f.n as u64),
-                note: match ci {
-                    Some(c) if c.low_at_edge || c.high_at_edge => format!(
-                        "the interval reaches the searched range of α ({} side): the data bound α on one side only",
-                        if c.low_at_edge { "low" } else { "high" }
-                    ),
-                    _ => String::new(),
-                },
                 ..AlphaRow::default()
             }
+            .with_interval(ci)
         }
         Err(e) => AlphaRow {
             note: format!("no fit: {e}"),
@@ -532,20 +729,28 @@ fn plateau_row(areas: &[u64]) -> AlphaRow {
 
 /// One row per load and estimator; a fit that cannot be made leaves nulls and says why.
 /// Returns the number of loads the truncated power law was fitted at.
-fn write_alpha(
-    job: &StatisticsJob,
-    dir: &Path,
-    pooled: &[Vec<u64>],
-    ls2: f64,
-) -> anyhow::Result<usize> {
+fn write_alpha(study: &Study, dir: &Path) -> anyhow::Result<usize> {
+    let Study {
+        job,
+        s,
+        pooled,
+        ls2,
+        ..
+    } = study;
+    let ls2 = *ls2;
     let mut rows: Vec<(usize, Estimator, AlphaRow)> = Vec::new();
     for (l, areas) in pooled.iter().enumerate() {
+        let per: Vec<Vec<u64>> = s.areas.iter().map(|r| r[l].clone()).collect();
         rows.push((
             l,
             Estimator::DiscreteTruncated,
-            truncated_row(job, l, areas),
+            truncated_row(job, l, &per, areas),
         ));
-        rows.push((l, Estimator::DiscretePlateauPowerLaw, plateau_row(areas)));
+        rows.push((
+            l,
+            Estimator::DiscretePlateauPowerLaw,
+            plateau_row(job, l, &per, areas),
+        ));
     }
     let fitted = rows
         .iter()
@@ -581,7 +786,7 @@ fn write_alpha(
                 Column::new(
                     "ci95_method".into(),
                     rows.iter()
-                        .map(|r| r.2.ci95.map(|c| c.2.to_string()))
+                        .map(|r| r.2.ci95_method.clone())
                         .collect::<Vec<Option<String>>>(),
                 ),
                 Column::new("k_min_px".into(), opt(&|r| r.k_min)),
@@ -595,6 +800,13 @@ fn write_alpha(
                         .collect::<Vec<Option<u64>>>(),
                 ),
                 Column::new("ks_distance".into(), opt(&|r| r.ks_distance)),
+                col(
+                    "clusters",
+                    rows.iter()
+                        .map(|r| pooled[r.0].len() as u64)
+                        .collect::<Vec<u64>>(),
+                ),
+                col("realizations", vec![s.areas.len() as u32; n]),
                 col(
                     "note",
                     rows.iter()

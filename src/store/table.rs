@@ -98,6 +98,16 @@ pub fn loads_of(df: &DataFrame) -> anyhow::Result<Vec<(u32, f64)>> {
 /// written into every Parquet file's metadata (`wearcoef.units`). `None` for a name this
 /// list does not know; the client test fails on any column without a unit.
 pub fn unit_of(column: &str) -> Option<&'static str> {
+    // A band's ends, and an interval's half-width, have the unit of the quantity.
+    for suffix in ["_ci95_low", "_ci95_high", "_ci95"] {
+        if let Some(base) = column.strip_suffix(suffix) {
+            if !base.is_empty() && base != "pdf" && base != "ccdf" {
+                if let Some(u) = unit_of(&format!("{base}_mean")).or_else(|| unit_of(base)) {
+                    return Some(u);
+                }
+            }
+        }
+    }
     let unit = match column {
         // Where a row comes from.
         "realization" | "load_index" | "bin" | "cluster_id" | "count_peak_load_index" => "index",
@@ -136,17 +146,20 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
         | "realizations_percolating"
         | "n_clusters_mean"
         | "n_clusters_ci95" => "count",
-        "dn_dac_per_ls2" => "clusters per λₛ² of contact area",
-        "pdf_pooled" | "pdf_mean" | "pdf_ci95" => "1/λₛ² (density of A/λₛ²)",
+        "dn_dac_per_ls2" | "dn_dac_per_ls2_mean" => "clusters per λₛ² of contact area",
+        "pdf_pooled" | "pdf_mean" | "pdf_ci95" | "pdf_ci95_low" | "pdf_ci95_high" => {
+            "1/λₛ² (density of A/λₛ²)"
+        }
+        "clusters" | "clusters_above" | "clusters_above_smallest_realization" => "count",
         "wear_rate_over_l2_mean" | "wear_rate_over_l2_ci95" => {
             "L² (worn volume per sliding distance, ω = 1/3)"
         }
         // Dimensionless ratios and fractions.
         "alpha" | "alpha_reference" | "alpha_difference" | "std_error" | "ci95_low"
         | "ci95_high" | "ks_distance" | "ks_critical_95" | "ccdf" | "ccdf_mean" | "ccdf_ci95"
-        | "error" | "area_fraction" | "area_fraction_mean" | "area_fraction_ci95" | "k_pl"
-        | "k_upscaled_pl" | "k_pl_plateau" | "k_pl_at_load" | "a_star_over_a_s"
-        | "a_m_over_a_s" => "1",
+        | "ccdf_ci95_low" | "ccdf_ci95_high" | "error" | "area_fraction" | "area_fraction_mean"
+        | "area_fraction_ci95" | "k_pl" | "k_upscaled_pl" | "k_pl_plateau" | "k_pl_at_load"
+        | "a_star_over_a_s" | "a_m_over_a_s" => "1",
         "area_max_rel_deviation"
         | "area_max_rel_ci95"
         | "count_max_rel_deviation"

@@ -153,7 +153,10 @@ fn spectrum_figure_reads_the_studies_cluster_tables() {
     for (study, at) in studies.iter().zip(at) {
         let key = &statistics[study][0];
         let loads = table(&dir.join(format!("data/cache/statistics/{key}/loads.parquet")));
-        let (w, d) = (f64s(&loads, "w_over_w0"), f64s(&loads, "dn_dac_per_ls2"));
+        let (w, d) = (
+            f64s(&loads, "w_over_w0"),
+            f64s(&loads, "dn_dac_per_ls2_mean"),
+        );
         // The loads where dN/dA_c is defined.
         let (w, d): (Vec<f64>, Vec<f64>) = w.into_iter().zip(d).filter(|p| p.1.is_finite()).unzip();
         if d.is_empty() {

@@ -23,7 +23,7 @@ pub use legend::Fractions;
 pub use raster::{viridis, ColorBar, RasterPlot, Rgb};
 use style::PALETTE;
 pub use style::{Dash, Marker};
-pub use ticks::{number, power_of_ten, snap_zero};
+pub use ticks::{interval_text, number, power_of_ten, snap_zero};
 
 /// Columns of a figure's data file: one row per drawn point, with what a reader filters on
 /// (the panel's title, the curve, its study, load W/W₀ and threshold A*/λₛ² where it has

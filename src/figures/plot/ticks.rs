@@ -5,7 +5,7 @@ use std::ops::Range;
 
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 
-pub use crate::format::{number, power_of_ten};
+pub use crate::format::{interval_text, number, power_of_ten};
 
 /// `v`, or 0 when it is only rounding error on an axis spanning `span` (a tick computed as
 /// −1.4×10⁻¹⁷ for 0).

@@ -77,7 +77,7 @@ pub const TABLE: &str = "audit.parquet";
 
 impl Stage for Audits {
     const NAME: &'static str = "audits";
-    const VERSION: u32 = 1;
+    const VERSION: u32 = 2;
     type Job = AuditJob;
 
     fn compute(job: &AuditJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

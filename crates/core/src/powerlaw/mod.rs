@@ -21,8 +21,8 @@
 //!
 //! Sums `Σ k^(−α) (ln k)^m` are exact for `k <` [`EXACT_LIMIT`] and continued beyond by the
 //! Euler–Maclaurin formula (integral by Gauss–Legendre quadrature in
-//! `ln k`, end corrections up to the first derivative); the neglected remainder is below
-//! `1e-14` relative for `|α| ≤ 20` (tested against direct summation).
+//! `ln k`, end corrections of B₂, B₄ and B₆); tested against direct summation to 2e-12
+//! relative for −5 ≤ α ≤ 10.
 
 use rand::RngExt;
 use rand_chacha::rand_core::SeedableRng;
@@ -241,15 +241,21 @@ pub struct TailFit {
     pub candidates: usize,
 }
 
+/// Most `k_min` candidates the KS scan tries: beyond, the candidates are thinned to a
+/// logarithmic grid (every distinct value kept where they are sparser than the grid, i.e.
+/// all small areas). With areas up to 10⁵ px the grid's ratio is 1.12: finer than the
+/// KS criterion resolves, and it bounds the cost of a fit refitted in every resample.
+pub const MAX_CANDIDATES: usize = 100;
+
 /// Choose `k_min` by the KS criterion among the distinct values with at least
-/// [`MIN_TAIL`] observations at or above them, fitting on `[k_min, k_max]` each time
-/// (`k_max`: `None` for untruncated, else the cut-off, e.g. the largest value).
+/// [`MIN_TAIL`] observations at or above them (at most [`MAX_CANDIDATES`] of them,
+/// logarithmically spaced), fitting on `[k_min, k_max]` each time (`k_max`: `None` for
+/// untruncated, else the cut-off, e.g. the largest value).
 pub fn fit_discrete_tail(data: &[u64], k_max: Option<u64>) -> Result<TailFit, FitError> {
     let sorted = checked_counts(data)?;
     let b = k_max.unwrap_or(u64::MAX);
     let in_range = sorted.partition_point(|&k| k <= b);
-    let mut best: Option<PowerLawFit> = None;
-    let mut candidates = 0;
+    let mut all = Vec::new();
     let mut i = 0;
     while i < in_range {
         let k = sorted[i];
@@ -257,22 +263,50 @@ pub fn fit_discrete_tail(data: &[u64], k_max: Option<u64>) -> Result<TailFit, Fi
             break;
         }
         if k_max.is_none_or(|m| k < m) {
-            candidates += 1;
-            if let Ok(fit) = fit_discrete_sorted(&sorted, k, k_max, MIN_TAIL) {
-                if best.is_none_or(|b| fit.ks_distance < b.ks_distance) {
-                    best = Some(fit);
-                }
-            }
+            all.push(k);
         }
         i += sorted[i..].partition_point(|&v| v == k);
     }
+    let candidates = thin_to_log_grid(&all, MAX_CANDIDATES);
+    let mut best: Option<PowerLawFit> = None;
+    for &k in &candidates {
+        if let Ok(fit) = fit_discrete_sorted(&sorted, k, k_max, MIN_TAIL) {
+            if best.is_none_or(|b| fit.ks_distance < b.ks_distance) {
+                best = Some(fit);
+            }
+        }
+    }
     match best {
-        Some(fit) => Ok(TailFit { fit, candidates }),
+        Some(fit) => Ok(TailFit {
+            fit,
+            candidates: candidates.len(),
+        }),
         None => Err(FitError::TooFew {
             n: in_range,
             needed: MIN_TAIL,
         }),
     }
+}
+
+/// At most `most` of the ascending values `v` (all of them if they are no more): the first,
+/// then each value at least one step of the logarithmic grid from `v[0]` to the last
+/// above the previous kept one.
+fn thin_to_log_grid(v: &[u64], most: usize) -> Vec<u64> {
+    if v.len() <= most || most < 2 {
+        return v.to_vec();
+    }
+    let (l0, l1) = ((v[0] as f64).ln(), (v[v.len() - 1] as f64).ln());
+    let step = (l1 - l0) / (most - 1) as f64;
+    let mut out = vec![v[0]];
+    let mut next = l0 + step;
+    for &k in &v[1..] {
+        let lk = (k as f64).ln();
+        if lk >= next - 1e-12 {
+            out.push(k);
+            next = lk + step;
+        }
+    }
+    out
 }
 
 /// Percentile bootstrap interval of the discrete MLE: resample the observations in

@@ -20,9 +20,16 @@ fn direct(alpha: f64, a: u64, b: u64, k0: f64) -> [f64; 3] {
 
 #[test]
 fn euler_maclaurin_continuation_matches_direct_sums() {
-    for &alpha in &[-3.0, -0.5, 0.0, 0.999, 1.0, 1.5, 2.0, 2.7, 6.0] {
+    for &alpha in &[-5.0, -3.0, -0.5, 0.0, 0.999, 1.0, 1.5, 2.0, 2.7, 6.0, 10.0] {
         for &(a, b) in &[
             (1u64, 3000u64),
+            (127, 128),
+            (120, 150),
+            (128, 151),
+            (128, 152),
+            (60, 300),
+            (70, 20_757),
+            (2, 20_757),
             (5, 200_000),
             (40, 1_000_000),
             (1023, 1025),
@@ -93,4 +100,26 @@ fn continuous_log_stats_match_quadrature() {
         assert!((mean - qm).abs() < 1e-8, "α={alpha}: {mean} vs {qm}");
         assert!((var - qv).abs() < 1e-7, "α={alpha}: {var} vs {qv}");
     }
+}
+
+/// The KS scan's candidates: all of them when few; else at most the maximum, the smallest
+/// kept, each kept value one grid step (in ln k) above the previous, and every small area
+/// kept (they are sparser than the grid).
+#[test]
+fn candidates_thin_to_a_logarithmic_grid() {
+    let few: Vec<u64> = (1..=80).collect();
+    assert_eq!(thin_to_log_grid(&few, MAX_CANDIDATES), few);
+    let many: Vec<u64> = (1..=100_000).step_by(7).collect();
+    let kept = thin_to_log_grid(&many, MAX_CANDIDATES);
+    assert!(
+        kept.len() <= MAX_CANDIDATES && kept.len() > MAX_CANDIDATES / 2,
+        "{}",
+        kept.len()
+    );
+    assert_eq!(kept[0], 1);
+    let step = ((99_996f64).ln() - 0.0) / (MAX_CANDIDATES - 1) as f64;
+    assert!(kept
+        .windows(2)
+        .all(|w| (w[1] as f64).ln() - (w[0] as f64).ln() >= step - 1e-12));
+    assert!(kept[..5] == [1, 8, 15, 22, 29]);
 }
