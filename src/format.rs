@@ -60,10 +60,12 @@ pub fn number(v: f64) -> String {
 
 #[cfg(test)]
 mod interval_tests {
+    use super::*;
+
     #[test]
     fn an_interval_never_reads_as_one_number() {
-        assert_eq!(super::interval_text(1.3, 1.52), "[1.30, 1.52]");
-        assert_eq!(super::interval_text(1.5061, 1.5139), "[1.506, 1.514]");
-        assert_eq!(super::interval_text(1.5, 1.5), "[1.500000, 1.500000]");
+        assert_eq!(interval_text(1.3, 1.52), "[1.30, 1.52]");
+        assert_eq!(interval_text(1.5061, 1.5139), "[1.506, 1.514]");
+        assert_eq!(interval_text(1.5, 1.5), "[1.500000, 1.500000]");
     }
 }

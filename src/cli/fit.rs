@@ -177,6 +177,7 @@ pub(crate) fn fit_row(
             let f = t.fit;
             let ci =
                 powerlaw::bootstrap_discrete(data, f.lower as u64, Some(m), resamples, seed).ok();
+            let gof = powerlaw::goodness_of_fit(data, &f, resamples, seed ^ 1).ok();
             json!({
                 "load_index": load, "w_over_w0": (w.is_finite()).then_some(w),
                 "clusters": data.len(), "percolating_left_out": excluded,
@@ -184,6 +185,7 @@ pub(crate) fn fit_row(
                 "bootstrap_ci95_low": ci.map(|c| c.0), "bootstrap_ci95_high": ci.map(|c| c.1),
                 "x_min_px": f.lower, "x_max_px": f.upper, "n_fitted": f.n,
                 "ks_distance": f.ks_distance, "x_min_candidates": t.candidates,
+                "gof_p": gof.map(|g| g.p_value), "gof_samples": gof.map(|g| g.samples),
             })
         }
         Err(e) => json!({

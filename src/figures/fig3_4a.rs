@@ -85,11 +85,16 @@ fn fitted_plateau(
             (k / ls2, w / z * ls2)
         })
         .collect();
+    // The truncated power law's α̂ only where its own goodness of fit does not reject it.
+    let gof = f64_column(alpha_table, "gof_p")?;
     let truncated = row(Estimator::DiscreteTruncated)
-        .map(|j| alpha[j])
-        .filter(|a| a.is_finite())
-        .map_or(String::new(), |t| {
-            format!("; truncated power law: α = {t:.2}")
+        .filter(|&j| alpha[j].is_finite())
+        .map_or(String::new(), |j| {
+            if gof[j] > crate::powerlaw::REJECT_AT {
+                format!("; truncated power law: α = {:.2}", alpha[j])
+            } else {
+                format!("; truncated power law rejected (p = {:.2})", gof[j])
+            }
         });
     let interval = if lo[i].is_finite() && hi[i].is_finite() {
         format!("95 % CI {}", super::plot::interval_text(lo[i], hi[i]))

@@ -108,6 +108,11 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
             }
         }
     }
+    named_unit(column)
+}
+
+/// The unit of a column named in full (not by a band's suffix).
+fn named_unit(column: &str) -> Option<&'static str> {
     let unit = match column {
         // Where a row comes from.
         "realization" | "load_index" | "bin" | "cluster_id" | "count_peak_load_index" => "index",
@@ -156,10 +161,10 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
         }
         // Dimensionless ratios and fractions.
         "alpha" | "alpha_reference" | "alpha_difference" | "std_error" | "ci95_low"
-        | "ci95_high" | "ks_distance" | "ks_critical_95" | "ccdf" | "ccdf_mean" | "ccdf_ci95"
-        | "ccdf_ci95_low" | "ccdf_ci95_high" | "error" | "area_fraction" | "area_fraction_mean"
-        | "area_fraction_ci95" | "k_pl" | "k_upscaled_pl" | "k_pl_plateau" | "k_pl_at_load"
-        | "a_star_over_a_s" | "a_m_over_a_s" => "1",
+        | "ci95_high" | "ks_distance" | "gof_p" | "ks_critical_95" | "ccdf" | "ccdf_mean"
+        | "ccdf_ci95" | "ccdf_ci95_low" | "ccdf_ci95_high" | "error" | "area_fraction"
+        | "area_fraction_mean" | "area_fraction_ci95" | "k_pl" | "k_upscaled_pl"
+        | "k_pl_plateau" | "k_pl_at_load" | "a_star_over_a_s" | "a_m_over_a_s" => "1",
         "area_max_rel_deviation"
         | "area_max_rel_ci95"
         | "count_max_rel_deviation"

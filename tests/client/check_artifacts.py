@@ -61,7 +61,8 @@ SCHEMAS = {
         ("load_index", U32), ("w_over_w0", F64), ("estimator", STR), ("alpha", F64),
         ("std_error", F64), ("ci95_low", F64), ("ci95_high", F64), ("ci95_method", STR),
         ("k_min_px", F64), ("k_max_px", F64), ("k_s_px", F64), ("k_s_over_ls2", F64),
-        ("n_fitted", U64), ("ks_distance", F64), ("clusters", U64), ("realizations", U32),
+        ("n_fitted", U64), ("ks_distance", F64), ("gof_p", F64), ("clusters", U64),
+        ("realizations", U32),
         ("note", STR)],
     ("analytic", "model.parquet"): [
         ("load_index", U32), ("w_over_w0", F64), ("a_star_over_ls2", F64), ("alpha", F64),

@@ -625,6 +625,9 @@ fn fit_gives_intervals_over_realizations() {
         );
         let alpha = row["alpha"].as_f64().unwrap();
         assert!(lo < alpha && alpha < hi, "{lo} {alpha} {hi}");
+        // Clauset's p-value of the power law above x_min is given, from as many samples.
+        let p = row["gof_p"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&p) && row["gof_samples"].as_u64() > Some(0));
         let (blo, bhi) = (
             row["bootstrap_ci95_low"].as_f64().unwrap(),
             row["bootstrap_ci95_high"].as_f64().unwrap(),

@@ -285,6 +285,10 @@ mod tests {
     /// intervals over realizations must cover it in 92–98 % (binomial standard deviation
     /// 1.1 % at 95 %: the band is ±2.75 of them); intervals that resample clusters as if
     /// independent, the scheme replaced, cover it far less often (here < 80 %).
+    /// The same ensembles split into two disjoint halves of 5 realizations: their intervals
+    /// must be disjoint in at most 4 % of ensembles (two calibrated 95 % intervals of
+    /// independent halves are disjoint about 1 % of the time; 4 % is 6 binomial standard
+    /// deviations above); the intervals over clusters are disjoint far more often (> 10 %).
     #[test]
     fn intervals_over_realizations_cover_the_population_value() {
         let (a, delta, r, m): (f64, f64, usize, usize) = (1.8, 0.3, 10, 100);
@@ -298,6 +302,7 @@ mod tests {
             (s > 0.0).then(|| 1.0 + n / s)
         };
         let (mut covered, mut covered_clusters) = (0, 0);
+        let (mut disjoint, mut disjoint_clusters) = (0, 0);
         let ensembles = 400;
         for e in 0..ensembles {
             let mut rng = ChaCha8Rng::seed_from_u64(1000 + e);
@@ -315,18 +320,35 @@ mod tests {
             if ci.low <= population && population <= ci.high {
                 covered += 1;
             }
+            let (a, b) = groups.split_at(r / 2);
+            let (a, b) = (
+                over_realizations(a, &estimate, 200, e, None).unwrap(),
+                over_realizations(b, &estimate, 200, e + 7, None).unwrap(),
+            );
+            if a.high < b.low || b.high < a.low {
+                disjoint += 1;
+            }
             // The replaced scheme: clusters resampled as independent, percentile interval.
-            let pooled: Vec<f64> = groups.iter().flatten().copied().collect();
-            let mut alphas: Vec<f64> = (0..200)
-                .map(|_| {
-                    let mut draws =
-                        (0..pooled.len()).map(|_| pooled[rng.random_range(0..pooled.len())]);
-                    mle(&mut draws).unwrap()
-                })
-                .collect();
-            alphas.sort_by(f64::total_cmp);
-            if alphas[4] <= population && population <= alphas[194] {
+            let mut over_clusters = |groups: &[Vec<f64>]| -> (f64, f64) {
+                let pooled: Vec<f64> = groups.iter().flatten().copied().collect();
+                let mut alphas: Vec<f64> = (0..200)
+                    .map(|_| {
+                        let mut draws =
+                            (0..pooled.len()).map(|_| pooled[rng.random_range(0..pooled.len())]);
+                        mle(&mut draws).unwrap()
+                    })
+                    .collect();
+                alphas.sort_by(f64::total_cmp);
+                (alphas[4], alphas[194])
+            };
+            let (lo, hi) = over_clusters(&groups);
+            if lo <= population && population <= hi {
                 covered_clusters += 1;
+            }
+            let (a, b) = groups.split_at(r / 2);
+            let (a, b) = (over_clusters(a), over_clusters(b));
+            if a.1 < b.0 || b.1 < a.0 {
+                disjoint_clusters += 1;
             }
         }
         let share = covered as f64 / ensembles as f64;
@@ -338,6 +360,14 @@ mod tests {
         assert!(
             share_clusters < 0.8,
             "coverage over clusters {share_clusters}"
+        );
+        let halves = disjoint as f64 / ensembles as f64;
+        let halves_clusters = disjoint_clusters as f64 / ensembles as f64;
+        eprintln!("coverage {share} (clusters {share_clusters}); disjoint halves {halves} (clusters {halves_clusters})");
+        assert!(halves <= 0.04, "disjoint halves over realizations {halves}");
+        assert!(
+            halves_clusters > 0.1,
+            "disjoint halves over clusters {halves_clusters}"
         );
     }
 }

@@ -440,6 +440,8 @@ pub fn fit_continuous(
     })
 }
 
+mod gof;
+pub use gof::{goodness_of_fit, GoodnessOfFit, REJECT_AT};
 mod plateau;
 pub use plateau::{fit_plateau_power_law, plateau_alpha_interval, PlateauFit, PlateauInterval};
 
