@@ -24,7 +24,14 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     let w = f64_column(df, "w_over_w0")?;
     let dn = f64_column(df, "dn_dac_per_ls2_mean")?;
     let realizations = super::realizations_of(inputs, 0)?;
-    let ensemble = format!("mean of {realizations} realizations, shaded: 95 % band");
+    let ensemble = if realizations >= crate::resample::MIN_REALIZATIONS as u64 {
+        format!("mean of {realizations} realizations, shaded: 95 % interval")
+    } else {
+        format!(
+            "mean of {realizations} realizations; no interval (an interval needs {})",
+            crate::resample::MIN_REALIZATIONS
+        )
+    };
     // One panel per quantity (they differ by three decades and have different units).
     let panel = |title: &str, y_label: &str, column: &str, color: usize| {
         let mean = f64_column(df, &format!("{column}_mean"))?;
@@ -96,12 +103,22 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     );
     f.x_marks = marked_loads.to_vec();
     f.x_mark_labels = ["b", "c", "d"].iter().map(|s| s.to_string()).collect();
+    let (dn_low, dn_high) = (
+        f64_column(df, "dn_dac_per_ls2_ci95_low")?,
+        f64_column(df, "dn_dac_per_ls2_ci95_high")?,
+    );
     f.series = vec![
-        Series::line(
-            "dN/dA_c (central differences of ensemble means)",
-            w.iter().copied().zip(dn).collect(),
-            0,
-        ),
+        Series {
+            band: (0..w.len())
+                .filter(|&i| dn_low[i].is_finite() && dn_high[i].is_finite())
+                .map(|i| (w[i], dn_low[i], dn_high[i]))
+                .collect(),
+            ..Series::line(
+                format!("dN/dA_c ({ensemble}; each realization's central differences)"),
+                w.iter().copied().zip(dn).collect(),
+                0,
+            )
+        },
         Series {
             rgb: Some((0, 0, 0)),
             width: 1,

@@ -215,7 +215,7 @@ fn regime(inputs: &Inputs, spectrum: &str) -> anyhow::Result<LinePlot> {
         Series {
             marker: Some(Marker::Circle),
             ..Series::line(
-                "dN/dA_c (central differences of ensemble means; > 0: nucleation)",
+                "dN/dA_c (mean of the realizations' central differences; > 0: nucleation)",
                 w.iter().copied().zip(dn).collect(),
                 0,
             )
