@@ -28,7 +28,8 @@ pub const FIG6_POINTS: usize = 121;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AreaLoadSlopeRecord {
     pub kappa: f64,
-    pub kappa_ci95_correlated: f64,
+    /// None below 5 realizations (the means have no interval).
+    pub kappa_ci95_correlated: Option<f64>,
     pub kappa_at_lowest_load: f64,
     pub kappa_at_highest_load: f64,
     pub w_over_w0_range: [f64; 2],
@@ -39,7 +40,7 @@ impl AreaLoadSlopeRecord {
     fn new(s: &stats::AreaLoadSlope) -> Self {
         Self {
             kappa: s.kappa,
-            kappa_ci95_correlated: s.kappa_band,
+            kappa_ci95_correlated: s.kappa_band.is_finite().then_some(s.kappa_band),
             kappa_at_lowest_load: s.kappa_at_lowest,
             kappa_at_highest_load: s.kappa_at_highest,
             w_over_w0_range: [s.lowest_load, s.highest_load],
@@ -99,7 +100,7 @@ impl AnalyticJob {
 
 impl Stage for Analytic {
     const NAME: &'static str = "analytic";
-    const VERSION: u32 = 2;
+    const VERSION: u32 = 3;
     type Job = AnalyticJob;
 
     fn compute(job: &AnalyticJob, inputs: &Inputs, dir: &Path) -> anyhow::Result<Value> {

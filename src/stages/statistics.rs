@@ -241,6 +241,8 @@ fn method_or_reason(method: &str, reasons: impl IntoIterator<Item = Option<NoInt
 }
 
 /// Per-load summary (all clusters, percolating ones included) and dN/dA_c: `loads.parquet`.
+// `l` indexes every `[realization][load]` table of the sample, not one slice.
+#[allow(clippy::needless_range_loop)]
 fn write_loads(study: &Study, dir: &Path) -> anyhow::Result<()> {
     let Study {
         job,

@@ -210,7 +210,8 @@ pub struct AreaLoadSlope {
 }
 
 /// [`AreaLoadSlope`] of mean areas `area` (with 95 % half-widths `band`) at loads `w`; `None`
-/// when no load lies in `(0, max_load]` or a value there is not finite.
+/// when no load lies in `(0, max_load]` or an area there is not finite. Without a band at
+/// one of those loads (fewer than 5 realizations), κ has none either (`kappa_band` NaN).
 pub fn area_load_slope(
     w: &[f64],
     area: &[f64],
@@ -220,11 +221,7 @@ pub fn area_load_slope(
     let kept: Vec<usize> = (0..w.len().min(area.len()).min(band.len()))
         .filter(|&i| w[i] > 0.0 && w[i] <= max_load)
         .collect();
-    if kept.is_empty()
-        || kept
-            .iter()
-            .any(|&i| !(area[i].is_finite() && band[i].is_finite()))
-    {
+    if kept.is_empty() || kept.iter().any(|&i| !area[i].is_finite()) {
         return None;
     }
     let ww: f64 = kept.iter().map(|&i| w[i] * w[i]).sum();
@@ -233,7 +230,11 @@ pub fn area_load_slope(
     let hi = *kept.iter().max_by(|&&a, &&b| w[a].total_cmp(&w[b]))?;
     Some(AreaLoadSlope {
         kappa: slope(area),
-        kappa_band: slope(band),
+        kappa_band: if kept.iter().all(|&i| band[i].is_finite()) {
+            slope(band)
+        } else {
+            f64::NAN
+        },
         kappa_at_lowest: area[lo] / w[lo],
         kappa_at_highest: area[hi] / w[hi],
         lowest_load: w[lo],
@@ -340,11 +341,15 @@ mod tests {
         assert!(
             (s.kappa_at_lowest - 1.99).abs() < 1e-12 && (s.kappa_at_highest - 1.5).abs() < 1e-12
         );
-        // Nothing in range, or a NaN in range: no fit.
+        // Nothing in range, or a NaN area in range: no fit; a NaN band: κ without a band.
         assert_eq!(area_load_slope(&w, &a, &band, 1e-4), None);
         let mut nan = a.clone();
         nan[2] = f64::NAN;
         assert_eq!(area_load_slope(&w, &nan, &band, 0.06), None);
+        let mut no_band = band.clone();
+        no_band[2] = f64::NAN;
+        let s = area_load_slope(&w, &a, &no_band, 0.06).unwrap();
+        assert!((s.kappa - num / den).abs() < 1e-14 && s.kappa_band.is_nan());
     }
 
     #[test]

@@ -244,12 +244,15 @@ fn analytic_lines(
     if let Some(s) = AreaLoadSlopeRecord::of(&manifest.results)? {
         writeln!(
             slopes,
-            "<li>{}: κ = {:.3} ± {:.3} (least squares through the origin over {} loads, \
+            "<li>{}: κ = {:.3}{} (least squares through the origin over {} loads, \
              W/W₀ = {}–{}); A<sub>c</sub>/(L² W/W₀) = {:.3} at the lowest load, {:.3} at \
              the highest.</li>",
             escape(study),
             s.kappa,
-            s.kappa_ci95_correlated,
+            s.kappa_ci95_correlated.map_or_else(
+                || " (no interval: fewer than 5 realizations)".to_string(),
+                |b| format!(" ± {b:.3}")
+            ),
             s.loads,
             number(s.w_over_w0_range[0]),
             number(s.w_over_w0_range[1]),
