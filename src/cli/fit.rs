@@ -166,15 +166,9 @@ pub(crate) fn fit_row(
     seed: u64,
 ) -> serde_json::Value {
     use wearcoef::powerlaw;
-    let fit = data
-        .iter()
-        .copied()
-        .max()
-        .ok_or(powerlaw::FitError::Empty)
-        .and_then(|m| powerlaw::fit_discrete_tail(data, Some(m)).map(|t| (t, m)));
-    let mut row = match fit {
-        Ok((t, m)) => {
-            let f = t.fit;
+    let mut row = match powerlaw::fit_tail_at_max(data) {
+        Ok(t) => {
+            let (f, m) = (t.fit, t.fit.upper as u64);
             let ci =
                 powerlaw::bootstrap_discrete(data, f.lower as u64, Some(m), resamples, seed).ok();
             let gof = powerlaw::goodness_of_fit(data, &f, resamples, seed ^ 1).ok();
@@ -231,9 +225,7 @@ fn over_realizations(
     let pooled =
         |g: &[&Vec<u64>]| -> Vec<u64> { g.iter().flat_map(|v| v.iter().copied()).collect() };
     let truncated = |g: &[&Vec<u64>]| -> Option<f64> {
-        let d = pooled(g);
-        let m = d.iter().copied().max()?;
-        powerlaw::fit_discrete_tail(&d, Some(m))
+        powerlaw::fit_tail_at_max(&pooled(g))
             .ok()
             .map(|t| t.fit.alpha)
     };

@@ -199,25 +199,34 @@ struct Band {
 }
 
 impl Band {
-    /// Adds a row from one value per realization; returns why it has no interval.
-    fn push(&mut self, values: &[f64], bounds: Option<(f64, f64)>) -> Option<NoInterval> {
+    /// One row, `[mean, half-width, low, high]` (NaN without an interval), from one value
+    /// per realization, and why it has no interval.
+    fn row(values: &[f64], bounds: Option<(f64, f64)>) -> ([f64; 4], Option<NoInterval>) {
         let (m, ci) = resample::mean_over_realizations(values, bounds);
-        self.mean.push(m);
         match ci {
             Ok(c) => {
-                self.half
-                    .push(resample::student_t_975(c.realizations - 1) * c.std_error);
-                self.low.push(c.low);
-                self.high.push(c.high);
-                None
+                let half = resample::student_t_975(c.realizations - 1) * c.std_error;
+                ([m, half, c.low, c.high], None)
             }
-            Err(e) => {
-                self.half.push(f64::NAN);
-                self.low.push(f64::NAN);
-                self.high.push(f64::NAN);
-                Some(e)
-            }
+            Err(e) => ([m, f64::NAN, f64::NAN, f64::NAN], Some(e)),
         }
+    }
+
+    /// Adds a row from one value per realization; returns why it has no interval.
+    fn push(&mut self, values: &[f64], bounds: Option<(f64, f64)>) -> Option<NoInterval> {
+        let (row, why) = Self::row(values, bounds);
+        for (c, v) in [
+            &mut self.mean,
+            &mut self.half,
+            &mut self.low,
+            &mut self.high,
+        ]
+        .into_iter()
+        .zip(row)
+        {
+            c.push(v);
+        }
+        why
     }
 
     fn columns(self, name: &str) -> [Column; 4] {
@@ -428,10 +437,9 @@ fn write_ccdf(study: &Study, dir: &Path) -> anyhow::Result<()> {
                         .iter()
                         .map(|x| (x.len() - x.partition_point(|&a| a <= k)) as f64 / x.len() as f64)
                         .collect();
-                    let mut b = Band::default();
-                    b.push(&v, Some((0.0, 1.0)));
-                    for (c, x) in band.iter_mut().zip([b.mean, b.half, b.low, b.high]) {
-                        c.push(Some(x[0]));
+                    let (row, _) = Band::row(&v, Some((0.0, 1.0)));
+                    for (c, x) in band.iter_mut().zip(row) {
+                        c.push(Some(x));
                     }
                 } else {
                     for c in band.iter_mut() {

@@ -49,28 +49,19 @@ fn pool(drawn: &[&Vec<u64>]) -> Vec<u64> {
     drawn.iter().flat_map(|v| v.iter().copied()).collect()
 }
 
-/// The discrete power law truncated at the largest area, above k_min chosen by the KS
-/// criterion (`None` if it cannot be fitted).
-fn truncated_fit(areas: &[u64]) -> Option<powerlaw::PowerLawFit> {
-    let m = areas.iter().copied().max()?;
-    powerlaw::fit_discrete_tail(areas, Some(m))
-        .ok()
-        .map(|t| t.fit)
-}
-
 /// The discrete truncated MLE at load `l`: k_min by the KS criterion, k_max the largest
 /// area; its interval resamples whole realizations and refits k_min and k_max each time.
 fn truncated_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64]) -> AlphaRow {
-    let k_hi = areas.iter().copied().max();
-    match k_hi
-        .ok_or(powerlaw::FitError::Empty)
-        .and_then(|m| powerlaw::fit_discrete_tail(areas, Some(m)))
-    {
+    match powerlaw::fit_tail_at_max(areas) {
         Ok(t) => {
             let f = t.fit;
             let ci = resample::over_realizations(
                 per,
-                &|d: &[&Vec<u64>]| truncated_fit(&pool(d)).map(|f| f.alpha),
+                &|d: &[&Vec<u64>]| {
+                    powerlaw::fit_tail_at_max(&pool(d))
+                        .ok()
+                        .map(|t| t.fit.alpha)
+                },
                 job.bootstrap_resamples,
                 job.seed ^ (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
                 None,

@@ -10,7 +10,7 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::{checked_counts, fit_discrete_tail, FitError, PowerLawFit};
+use super::{checked_counts, fit_tail_at_max, FitError, PowerLawFit};
 
 /// The widest fitted range `[k_min, k_max]` sampled from (its cumulative table is held in
 /// memory: 8 bytes a value).
@@ -26,8 +26,7 @@ pub struct GoodnessOfFit {
     pub samples: usize,
 }
 
-/// The p-value of `fit` (from [`fit_discrete_tail`] on `data`, truncated at the largest
-/// value) by `samples` synthetic samples, seeded by `seed` (the same on any number of
+/// The p-value of `fit` (from [`fit_tail_at_max`] on `data`) by `samples` synthetic samples, seeded by `seed` (the same on any number of
 /// threads). A synthetic sample that cannot be fitted counts as fitting worse.
 pub fn goodness_of_fit(
     data: &[u64],
@@ -72,9 +71,7 @@ pub fn goodness_of_fit(
                     }
                 })
                 .collect();
-            let m = synthetic.iter().copied().max().unwrap_or(0);
-            fit_discrete_tail(&synthetic, Some(m))
-                .map_or(true, |t| t.fit.ks_distance >= fit.ks_distance)
+            fit_tail_at_max(&synthetic).map_or(true, |t| t.fit.ks_distance >= fit.ks_distance)
         })
         .count();
     Ok(GoodnessOfFit {

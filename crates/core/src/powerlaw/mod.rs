@@ -288,6 +288,14 @@ pub fn fit_discrete_tail(data: &[u64], k_max: Option<u64>) -> Result<TailFit, Fi
     }
 }
 
+/// [`fit_discrete_tail`] truncated at the sample's largest value (the MLE of an upper
+/// bound): the fit of `alpha.parquet`'s truncated estimator, of `wearcoef fit`, and of each
+/// of their resamples and synthetic samples.
+pub fn fit_tail_at_max(data: &[u64]) -> Result<TailFit, FitError> {
+    let m = data.iter().copied().max().ok_or(FitError::Empty)?;
+    fit_discrete_tail(data, Some(m))
+}
+
 /// At most `most` of the ascending values `v` (all of them if they are no more): the first,
 /// then each value at least one step of the logarithmic grid from `v[0]` to the last
 /// above the previous kept one.

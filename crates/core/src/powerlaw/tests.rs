@@ -152,8 +152,7 @@ fn goodness_of_fit_tells_a_power_law_from_a_lognormal() {
         })
         .collect();
     let p_of = |d: &[u64]| {
-        let m = *d.iter().max().unwrap();
-        let fit = fit_discrete_tail(d, Some(m)).unwrap().fit;
+        let fit = fit_tail_at_max(d).unwrap().fit;
         goodness_of_fit(d, &fit, 100, 9).unwrap().p_value
     };
     let p_power = p_of(&power);
@@ -161,8 +160,7 @@ fn goodness_of_fit_tells_a_power_law_from_a_lognormal() {
     eprintln!("power law p = {p_power}, lognormal p = {p_lognormal}");
     assert!(p_power > 0.2, "power law p = {p_power}");
     assert!(p_lognormal <= REJECT_AT, "lognormal p = {p_lognormal}");
-    let m = *power.iter().max().unwrap();
-    let fit = fit_discrete_tail(&power, Some(m)).unwrap().fit;
+    let fit = fit_tail_at_max(&power).unwrap().fit;
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
