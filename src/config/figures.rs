@@ -66,6 +66,17 @@ impl FigureKind {
     }
 }
 
+/// The loads at which a figure shows a study's α̂ with its interval
+/// ([`FigureDecl::exponent_loads`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ExponentLoads {
+    Nowhere,
+    /// The loads of the study's sweep nearest (in ln W) to these W/W0.
+    Nearest(Vec<f64>),
+    /// The loads nearest to those of the figure's study with the fewest loads.
+    OfSparsestStudy,
+}
+
 /// One entry of the `figures:` block.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -160,6 +171,24 @@ impl FigureDecl {
             _ => {}
         }
         out
+    }
+
+    /// Where this figure (or its report section) shows `study`'s α̂ with its interval: the
+    /// loads whose intervals and tail tests the statistics stage must compute.
+    pub fn exponent_loads(&self, study: &str) -> ExponentLoads {
+        use FigureKind::*;
+        match self.kind {
+            // Fig. 2 and Figs. 4b–5 draw no exponent; the model fits of Figs. 4b–5 use the
+            // point estimates, computed at every load regardless.
+            Fig6 | Fig2 | Fig45 | LoadResolution => ExponentLoads::Nowhere,
+            Fig3Fig4a => ExponentLoads::Nearest(self.loads_for(study)),
+            Plastic | Spectrum | AppendixB1 | AppendixB2 => {
+                ExponentLoads::Nearest(self.loads.clone())
+            }
+            // A convergence figure's report compares its settings at the loads of the one
+            // with the fewest.
+            Convergence => ExponentLoads::OfSparsestStudy,
+        }
     }
 
     /// Check the declaration's fields against its kind and the declared studies and

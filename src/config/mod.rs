@@ -19,7 +19,7 @@ mod limits;
 mod measured;
 mod sizes;
 pub use cluster::ClusterConfig;
-pub use figures::{FigureDecl, FigureKind};
+pub use figures::{ExponentLoads, FigureDecl, FigureKind};
 
 /// A configuration error: a YAML syntax/schema problem or an invalid value.
 #[derive(Debug, thiserror::Error)]

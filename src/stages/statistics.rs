@@ -58,6 +58,12 @@ pub struct StatisticsJob {
     /// key) for the `n × n` grid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map_pixels: Option<u64>,
+    /// The load indices at which α̂'s intervals (refitted over resampled realizations) and
+    /// the tail's goodness of fit are computed: the loads the profile's figures show them
+    /// at. `None` (and not in the key): every load. Elsewhere `alpha.parquet` holds the
+    /// point estimates only, and says why.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exponent_interval_loads: Option<Vec<u32>>,
 }
 
 impl StatisticsJob {
@@ -74,7 +80,15 @@ impl StatisticsJob {
             min_tail: powerlaw::MIN_TAIL,
             omega: stats::OMEGA,
             map_pixels: None,
+            exponent_interval_loads: None,
         }
+    }
+
+    /// Whether α̂'s interval and tests are computed at load `l`.
+    pub fn exponent_interval_at(&self, l: usize) -> bool {
+        self.exponent_interval_loads
+            .as_ref()
+            .is_none_or(|v| v.contains(&(l as u32)))
     }
 }
 

@@ -16,7 +16,7 @@ use super::sources::measured_surfaces;
 
 mod figures;
 pub use super::sources::SourceFile;
-use crate::config::{Pipeline, StudyPlan};
+use crate::config::{ExponentLoads, Pipeline, StudyPlan};
 use crate::stages::analytic::{Analytic, AnalyticJob};
 use crate::stages::clusters::{Clusters, ClustersJob};
 use crate::stages::contact::{Contact, ContactJob};
@@ -196,7 +196,8 @@ impl Plan {
         let mut b = Builder::default();
         let mut keys: Vec<StudyKeys> = Vec::new();
         for plan in &plans {
-            keys.push(study_instances(&mut b, plan)?);
+            let shown = exponent_interval_loads(plan, &plans, &figures, profile);
+            keys.push(study_instances(&mut b, plan, shown)?);
         }
         for (name, decl) in &figures {
             figures::figure_instances(&mut b, name, decl, profile, &keys)?;
@@ -299,7 +300,44 @@ fn surface_instances(b: &mut Builder, plan: &StudyPlan) -> anyhow::Result<Vec<In
     Ok(out)
 }
 
-fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> anyhow::Result<StudyKeys<'a>> {
+/// The load indices of `plan`'s sweep at which the profile's figures show α̂ with its
+/// interval: the union over the figures that use the study.
+fn exponent_interval_loads(
+    plan: &StudyPlan,
+    plans: &[StudyPlan],
+    figures: &[(&str, &crate::config::FigureDecl)],
+    profile: &str,
+) -> Vec<u32> {
+    let mut out: Vec<u32> = Vec::new();
+    let mut nearest =
+        |loads: &[f64]| {
+            out.extend(loads.iter().filter_map(|&w| {
+                crate::statistics::nearest_in_log(&plan.loads, w).map(|i| i as u32)
+            }))
+        };
+    for (_, decl) in figures.iter().filter(|f| f.1.uses(&plan.name, profile)) {
+        match decl.exponent_loads(&plan.name) {
+            ExponentLoads::Nowhere => {}
+            ExponentLoads::Nearest(loads) => nearest(&loads),
+            ExponentLoads::OfSparsestStudy => {
+                let sparsest = plans
+                    .iter()
+                    .filter(|p| decl.uses(&p.name, profile))
+                    .min_by_key(|p| p.loads.len());
+                nearest(sparsest.map_or(&plan.loads, |p| &p.loads));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+fn study_instances<'a>(
+    b: &mut Builder,
+    plan: &'a StudyPlan,
+    exponent_interval_loads: Vec<u32>,
+) -> anyhow::Result<StudyKeys<'a>> {
     let studies = std::slice::from_ref(&plan.name);
     let surfaces = surface_instances(b, plan)?;
     let window = match (&plan.measured, surfaces.first()) {
@@ -341,6 +379,7 @@ fn study_instances<'a>(b: &mut Builder, plan: &'a StudyPlan) -> anyhow::Result<S
         plan.seed,
     );
     job.map_pixels = window.map(|[rows, cols]| (rows * cols) as u64);
+    job.exponent_interval_loads = Some(exponent_interval_loads);
     let statistics = b.add::<Statistics>(&job, clusters.clone(), studies, None, None);
     let job = AnalyticJob::Fitted {
         lambda_s_px: plan.surface.lambda_s_px,

@@ -44,6 +44,18 @@ impl AlphaRow {
     }
 }
 
+/// Why a row has its point estimate only.
+pub const NOT_SHOWN: &str =
+    "not computed: no figure of the profile shows α at this load (wearcoef fit gives it)";
+
+/// A row with its point estimate only: no figure shows its interval or tests.
+fn point_only(row: AlphaRow) -> AlphaRow {
+    AlphaRow {
+        ci95_method: Some(NOT_SHOWN.to_string()),
+        ..row
+    }
+}
+
 /// The pooled areas of the realizations drawn.
 fn pool(drawn: &[&Vec<u64>]) -> Vec<u64> {
     drawn.iter().flat_map(|v| v.iter().copied()).collect()
@@ -53,6 +65,14 @@ fn pool(drawn: &[&Vec<u64>]) -> Vec<u64> {
 /// area; its interval resamples whole realizations and refits k_min and k_max each time.
 fn truncated_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64]) -> AlphaRow {
     match powerlaw::fit_tail_at_max(areas) {
+        Ok(t) if !job.exponent_interval_at(l) => point_only(AlphaRow {
+            alpha: Some(t.fit.alpha),
+            k_min: Some(t.fit.lower),
+            k_max: Some(t.fit.upper),
+            n_fitted: Some(t.fit.n as u64),
+            ks_distance: Some(t.fit.ks_distance),
+            ..AlphaRow::default()
+        }),
         Ok(t) => {
             let f = t.fit;
             let ci = resample::over_realizations(
@@ -104,6 +124,13 @@ fn truncated_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64])
 /// resamples whole realizations and refits A_s and A_m each time.
 fn plateau_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64]) -> AlphaRow {
     match powerlaw::fit_plateau_power_law(areas) {
+        Ok(f) if !job.exponent_interval_at(l) => point_only(AlphaRow {
+            alpha: Some(f.alpha),
+            k_max: Some(f.k_m as f64),
+            k_s: Some(f.k_s),
+            n_fitted: Some(f.n as u64),
+            ..AlphaRow::default()
+        }),
         Ok(f) => {
             let ci = resample::over_realizations(
                 per,
