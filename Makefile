@@ -29,8 +29,8 @@ test:
 test-client: build
 	bash tests/client/run.sh
 
-# Measured surfaces against SurfaceTopography and ContactMechanics (PyPI, venv installed if
-# missing): readers, preparation, the non-periodic solve.
+# Measured surfaces against SurfaceTopography and ContactMechanics, the tail tests against
+# powerlaw (PyPI, venv installed if missing): readers, preparation, the non-periodic solve.
 test-measured: build
 	bash tests/measured/run.sh
 

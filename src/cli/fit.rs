@@ -180,6 +180,7 @@ pub(crate) fn fit_row(
                 "x_min_px": f.lower, "x_max_px": f.upper, "n_fitted": f.n,
                 "ks_distance": f.ks_distance, "x_min_candidates": t.candidates,
                 "gof_p": gof.map(|g| g.p_value), "gof_samples": gof.map(|g| g.samples),
+                "tail_tests": tail_tests_json(data, f.lower as u64),
             })
         }
         Err(e) => json!({
@@ -202,6 +203,43 @@ pub(crate) fn fit_row(
         Err(e) => json!({"alpha": null, "note": format!("no fit: {e}")}),
     };
     row
+}
+
+/// The likelihood-ratio tests of the power law above `k_min` against its alternatives, as
+/// JSON: per alternative its fitted parameters, `R` (positive favours the power law), `R`
+/// normalised and its p-value; and what the tail is by them.
+pub(crate) fn tail_tests_json(data: &[u64], k_min: u64) -> serde_json::Value {
+    use wearcoef::powerlaw;
+    match powerlaw::compare_tail(data, k_min) {
+        Ok(c) => {
+            let mut tests = serde_json::Map::new();
+            for (alt, t) in powerlaw::Alternative::ALL.iter().zip(&c.tests) {
+                let v = match t {
+                    Ok(t) => {
+                        let mut params = serde_json::Map::new();
+                        for (name, v) in alt.parameter_names().iter().zip(t.parameters) {
+                            if !name.is_empty() {
+                                params.insert(name.to_string(), json!(v));
+                            }
+                        }
+                        json!({
+                            "parameters": params, "loglikelihood": t.loglikelihood,
+                            "ratio": t.ratio, "normalised_ratio": t.normalised_ratio,
+                            "p": t.p_value, "nested": alt.nested(),
+                        })
+                    }
+                    Err(e) => json!({"note": format!("no fit: {e}")}),
+                };
+                tests.insert(alt.name().to_string(), v);
+            }
+            json!({
+                "k_min_px": c.k_min, "n": c.n, "alpha_power_law": c.alpha,
+                "loglikelihood": c.loglikelihood, "tests": tests,
+                "verdict": powerlaw::tail_verdict(&c),
+            })
+        }
+        Err(e) => json!({"note": format!("no test: {e}")}),
+    }
 }
 
 /// Intervals over whole realizations, added to `row`: α by both estimators (each

@@ -29,7 +29,12 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thiserror::Error;
 
+mod compare;
 mod sums;
+pub use compare::{
+    compare_tail, cutoff_normalisation, tail_verdict, Alternative, Comparison, TailComparison,
+    SIGNIFICANT_AT,
+};
 use sums::{continuous_log_stats, discrete_log_stats, moments};
 pub use sums::{discrete_normalisation, EXACT_LIMIT};
 
