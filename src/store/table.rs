@@ -117,9 +117,9 @@ fn named_unit(column: &str) -> Option<&'static str> {
         // Where a row comes from.
         "realization" | "load_index" | "bin" | "cluster_id" | "count_peak_load_index" => "index",
         "stage" | "study" | "studies" | "profile" | "file" | "path" | "key" | "estimator"
-        | "ci95_method" | "note" | "kind" | "curve" | "alpha_estimator" | "panel" | "series"
-        | "x_quantity" | "y_quantity" | "status" | "error_message" | "state" | "failure"
-        | "solver_status" => "text",
+        | "ci95_method" | "note" | "tail_verdict" | "kind" | "curve" | "alpha_estimator"
+        | "panel" | "series" | "x_quantity" | "y_quantity" | "status" | "error_message"
+        | "state" | "failure" | "solver_status" => "text",
         "last_error" => "1 (relative complementarity error)",
         "converged" | "percolating" | "at_transition" | "within_rule" | "cached" | "saturated" => {
             "boolean"
@@ -160,11 +160,12 @@ fn named_unit(column: &str) -> Option<&'static str> {
             "L² (worn volume per sliding distance, ω = 1/3)"
         }
         // Dimensionless ratios and fractions.
-        "alpha" | "alpha_reference" | "alpha_difference" | "std_error" | "ci95_low"
-        | "ci95_high" | "ks_distance" | "gof_p" | "ks_critical_95" | "ccdf" | "ccdf_mean"
-        | "ccdf_ci95" | "ccdf_ci95_low" | "ccdf_ci95_high" | "error" | "area_fraction"
-        | "area_fraction_mean" | "area_fraction_ci95" | "k_pl" | "k_upscaled_pl"
-        | "k_pl_plateau" | "k_pl_at_load" | "a_star_over_a_s" | "a_m_over_a_s" => "1",
+        "alpha" | "alpha_reference" | "alpha_difference" | "alpha_above_k_min" | "std_error"
+        | "ci95_low" | "ci95_high" | "ks_distance" | "gof_p" | "ks_critical_95" | "ccdf"
+        | "ccdf_mean" | "ccdf_ci95" | "ccdf_ci95_low" | "ccdf_ci95_high" | "error"
+        | "area_fraction" | "area_fraction_mean" | "area_fraction_ci95" | "k_pl"
+        | "k_upscaled_pl" | "k_pl_plateau" | "k_pl_at_load" | "a_star_over_a_s"
+        | "a_m_over_a_s" => "1",
         "area_max_rel_deviation"
         | "area_max_rel_ci95"
         | "count_max_rel_deviation"
@@ -219,6 +220,8 @@ fn named_unit(column: &str) -> Option<&'static str> {
         _ if column.ends_with("_seconds") => "s",
         _ if column.ends_with("_px") => "Δl (grid spacings)",
         _ if column.starts_with("k_archard") || column.starts_with("k_upscaled") => "1",
+        // Likelihood-ratio tests: R/(σ√n) and its p-value.
+        _ if column.starts_with("lr_") => "1",
         _ if column.ends_with("_over_ls2")
             || column.ends_with("_over_ls2_mean")
             || column.ends_with("_over_ls2_ci95") =>

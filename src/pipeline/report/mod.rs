@@ -189,6 +189,9 @@ fn alpha_rows(
         f64_column(&df, "ci95_low")?,
         f64_column(&df, "ci95_high")?,
     );
+    // The truncated fit's goodness of fit and likelihood-ratio verdict, where computed.
+    let gof = f64_column(&df, "gof_p").unwrap_or_else(|_| vec![f64::NAN; w.len()]);
+    let verdict = str_column(&df, "tail_verdict").unwrap_or_else(|_| vec![String::new(); w.len()]);
     let mut sweep: Vec<f64> = w.clone();
     sweep.sort_by(f64::total_cmp);
     sweep.dedup();
@@ -217,13 +220,29 @@ fn alpha_rows(
         }
     };
     for load in shown {
+        let tail = (0..w.len())
+            .find(|&i| w[i] == load && est[i] == "discrete_truncated_mle")
+            .map(|i| {
+                let p = if gof[i].is_finite() {
+                    format!("goodness of fit p = {:.2}", gof[i])
+                } else {
+                    "no goodness of fit".to_string()
+                };
+                if verdict[i].is_empty() {
+                    p
+                } else {
+                    format!("{p}; {}", verdict[i])
+                }
+            })
+            .unwrap_or_default();
         writeln!(
             out,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             escape(study),
             number(load),
             cell(load, "discrete_plateau_power_law_mle"),
             cell(load, "discrete_truncated_mle"),
+            escape(&tail),
         )?;
     }
     Ok(())
@@ -540,8 +559,9 @@ fn exponents(
         writeln!(
             h,
             "<details><summary>Exponents α̂ at the loads drawn</summary>\n<table>\n\
-             <tr><th>study</th><th>W/W₀</th><th>plateau + power law (the paper's) α̂ [95 %]</th>\
-             <th>truncated power law α̂ [95 %]</th></tr>\n{alphas}</table>\n</details>"
+             <tr><th>study</th><th>W/W₀</th><th>plateau + power law (Appendix A's model) α̂ [95 %]</th>\
+             <th>power law truncated at the largest area, above x<sub>min</sub>: α̂ [95 %]</th>\
+             <th>the tail above x<sub>min</sub>: Clauset et al.'s goodness of fit; likelihood ratios against the power law</th></tr>\n{alphas}</table>\n</details>"
         )?;
     }
     Ok(())

@@ -25,6 +25,8 @@ struct AlphaRow {
     ks_distance: Option<f64>,
     /// Clauset et al.'s goodness-of-fit p-value (truncated power law only).
     gof_p: Option<f64>,
+    /// The likelihood-ratio tests of the power law above k_min (truncated power law only).
+    tail: Option<powerlaw::TailComparison>,
     note: String,
 }
 
@@ -93,6 +95,7 @@ fn truncated_row(job: &StatisticsJob, l: usize, per: &[Vec<u64>], areas: &[u64])
                 job.seed ^ (l as u64 + 2).wrapping_mul(0x94d0_49bb_1331_11eb),
             );
             AlphaRow {
+                tail: powerlaw::compare_tail(areas, f.lower as u64).ok(),
                 alpha: Some(f.alpha),
                 k_min: Some(f.lower),
                 k_max: Some(f.upper),
@@ -191,63 +194,92 @@ pub(super) fn write_alpha(study: &Study, dir: &Path) -> anyhow::Result<usize> {
     let opt =
         |f: &dyn Fn(&AlphaRow) -> Option<f64>| rows.iter().map(|r| f(&r.2)).collect::<Vec<_>>();
     let n = rows.len();
-    write(
-        dir,
-        "alpha.parquet",
-        DataFrame::new(
-            n,
-            vec![
-                col(
-                    "load_index",
-                    rows.iter().map(|r| r.0 as u32).collect::<Vec<u32>>(),
-                ),
-                col(
-                    "w_over_w0",
-                    rows.iter().map(|r| job.loads[r.0]).collect::<Vec<f64>>(),
-                ),
-                col(
-                    "estimator",
-                    rows.iter()
-                        .map(|r| r.1.name().to_string())
-                        .collect::<Vec<String>>(),
-                ),
-                Column::new("alpha".into(), opt(&|r| r.alpha)),
-                Column::new("std_error".into(), opt(&|r| r.std_error)),
-                Column::new("ci95_low".into(), opt(&|r| r.ci95.map(|c| c.0))),
-                Column::new("ci95_high".into(), opt(&|r| r.ci95.map(|c| c.1))),
-                Column::new(
-                    "ci95_method".into(),
-                    rows.iter()
-                        .map(|r| r.2.ci95_method.clone())
-                        .collect::<Vec<Option<String>>>(),
-                ),
-                Column::new("k_min_px".into(), opt(&|r| r.k_min)),
-                Column::new("k_max_px".into(), opt(&|r| r.k_max)),
-                Column::new("k_s_px".into(), opt(&|r| r.k_s)),
-                Column::new("k_s_over_ls2".into(), opt(&|r| r.k_s.map(|k| k / ls2))),
-                Column::new(
-                    "n_fitted".into(),
-                    rows.iter()
-                        .map(|r| r.2.n_fitted)
-                        .collect::<Vec<Option<u64>>>(),
-                ),
-                Column::new("ks_distance".into(), opt(&|r| r.ks_distance)),
-                Column::new("gof_p".into(), opt(&|r| r.gof_p)),
-                col(
-                    "clusters",
-                    rows.iter()
-                        .map(|r| pooled[r.0].len() as u64)
-                        .collect::<Vec<u64>>(),
-                ),
-                col("realizations", vec![s.areas.len() as u32; n]),
-                col(
-                    "note",
-                    rows.iter()
-                        .map(|r| r.2.note.clone())
-                        .collect::<Vec<String>>(),
-                ),
-            ],
-        )?,
+    // Per alternative: the normalised ratio R/(σ√n) (positive favours the power law) and
+    // its p-value.
+    let mut tests: Vec<Column> = Vec::new();
+    for (i, alt) in powerlaw::Alternative::ALL.iter().enumerate() {
+        let test = |r: &AlphaRow| {
+            r.tail
+                .as_ref()
+                .and_then(|t| t.tests[i].as_ref().ok())
+                .copied()
+        };
+        tests.push(Column::new(
+            format!("lr_{}_normalised_ratio", alt.name()).into(),
+            opt(&|r| test(r).map(|t| t.normalised_ratio)),
+        ));
+        tests.push(Column::new(
+            format!("lr_{}_p", alt.name()).into(),
+            opt(&|r| test(r).map(|t| t.p_value)),
+        ));
+    }
+    let mut table = DataFrame::new(
+        n,
+        vec![
+            col(
+                "load_index",
+                rows.iter().map(|r| r.0 as u32).collect::<Vec<u32>>(),
+            ),
+            col(
+                "w_over_w0",
+                rows.iter().map(|r| job.loads[r.0]).collect::<Vec<f64>>(),
+            ),
+            col(
+                "estimator",
+                rows.iter()
+                    .map(|r| r.1.name().to_string())
+                    .collect::<Vec<String>>(),
+            ),
+            Column::new("alpha".into(), opt(&|r| r.alpha)),
+            Column::new("std_error".into(), opt(&|r| r.std_error)),
+            Column::new("ci95_low".into(), opt(&|r| r.ci95.map(|c| c.0))),
+            Column::new("ci95_high".into(), opt(&|r| r.ci95.map(|c| c.1))),
+            Column::new(
+                "ci95_method".into(),
+                rows.iter()
+                    .map(|r| r.2.ci95_method.clone())
+                    .collect::<Vec<Option<String>>>(),
+            ),
+            Column::new("k_min_px".into(), opt(&|r| r.k_min)),
+            Column::new("k_max_px".into(), opt(&|r| r.k_max)),
+            Column::new("k_s_px".into(), opt(&|r| r.k_s)),
+            Column::new("k_s_over_ls2".into(), opt(&|r| r.k_s.map(|k| k / ls2))),
+            Column::new(
+                "n_fitted".into(),
+                rows.iter()
+                    .map(|r| r.2.n_fitted)
+                    .collect::<Vec<Option<u64>>>(),
+            ),
+            Column::new("ks_distance".into(), opt(&|r| r.ks_distance)),
+            Column::new("gof_p".into(), opt(&|r| r.gof_p)),
+            Column::new(
+                "alpha_above_k_min".into(),
+                opt(&|r| r.tail.as_ref().map(|t| t.alpha)),
+            ),
+            col(
+                "clusters",
+                rows.iter()
+                    .map(|r| pooled[r.0].len() as u64)
+                    .collect::<Vec<u64>>(),
+            ),
+            col("realizations", vec![s.areas.len() as u32; n]),
+            Column::new(
+                "tail_verdict".into(),
+                rows.iter()
+                    .map(|r| r.2.tail.as_ref().map(powerlaw::tail_verdict))
+                    .collect::<Vec<Option<String>>>(),
+            ),
+            col(
+                "note",
+                rows.iter()
+                    .map(|r| r.2.note.clone())
+                    .collect::<Vec<String>>(),
+            ),
+        ],
     )?;
+    for c in tests {
+        table.with_column(c)?;
+    }
+    write(dir, "alpha.parquet", table)?;
     Ok(fitted)
 }
