@@ -3,11 +3,12 @@
 
 use polars::prelude::*;
 
+use super::plot::TENTATIVE_BELOW_CLUSTERS;
 use super::plot::{Dash, LinePlot, Marker, Series, YAxis};
 use super::{tolerance_line, Drawn};
 use crate::stages::audits::{FIG45_A_STAR, FIG45_CURVES, LOAD_RESOLUTION_TOLERANCE, TABLE};
 use crate::store::inputs::Inputs;
-use crate::store::table::{bool_column, f64_column, str_column};
+use crate::store::table::{bool_column, f64_column, str_column, u64_column};
 
 /// Fig. 6: K_PL and 𝒦_PL against A_m/A_s for α = 1.5 and several A*/A_s.
 ///
@@ -74,6 +75,11 @@ fn per_threshold(
             f64_column(df, &format!("{quantity}_ci95_high"))?,
         ))
     };
+    let hollow = if fitted {
+        Vec::new()
+    } else {
+        tentative(df, value)?
+    };
     let mut out: Vec<Series> = FIG45_A_STAR
         .iter()
         .enumerate()
@@ -101,6 +107,10 @@ fn per_threshold(
                     .unwrap_or_default();
                 Series {
                     marker: Some(Marker::ALL[c % Marker::ALL.len()]),
+                    hollow: (0..a.len())
+                        .filter(|&i| a[i] == t)
+                        .map(|i| hollow[i])
+                        .collect(),
                     width: 1,
                     a_star_over_ls2: Some(t),
                     band,
@@ -117,6 +127,40 @@ fn per_threshold(
         });
     }
     Ok(out)
+}
+
+/// Per row of a `wear.parquet`, whether `value` is tentative (drawn hollow): it rests on
+/// fewer than [`TENTATIVE_BELOW_CLUSTERS`] clusters above A* (pooled over realizations),
+/// or its 95 % interval reaches 0.
+pub fn tentative(wear: &DataFrame, value: &str) -> anyhow::Result<Vec<bool>> {
+    let quantity = value.trim_end_matches("_mean");
+    let low = f64_column(wear, &format!("{quantity}_ci95_low"))?;
+    let above = u64_column(wear, "clusters_above")?;
+    Ok(low
+        .iter()
+        .zip(&above)
+        .map(|(&l, &n)| n < TENTATIVE_BELOW_CLUSTERS || (l.is_finite() && l <= 0.0))
+        .collect())
+}
+
+/// The legend entry of hollow markers, when `series` draw any.
+pub fn hollow_key(series: &[Series]) -> Option<Series> {
+    series
+        .iter()
+        .any(|s| s.hollow.iter().any(|&h| h))
+        .then(|| Series {
+            marker: Some(Marker::Circle),
+            hollow: vec![true],
+            width: 0,
+            rgb: Some((90, 90, 90)),
+            ..Series::line(
+                format!(
+                    "hollow: fewer than {TENTATIVE_BELOW_CLUSTERS} clusters above A*, or an interval reaching 0"
+                ),
+                Vec::new(),
+                0,
+            )
+        })
 }
 
 /// Figs. 4b (K vs load), 5a (𝒦 vs load) and 5b (wear rate vs load), simulated (solid,
@@ -150,6 +194,11 @@ pub fn fig45(inputs: &Inputs, spectrum: &str) -> anyhow::Result<Vec<(String, Dra
     k.push(key("markers: pooled over"));
     kk.push(key("markers: pooled over"));
     rate.push(key("markers: mean of"));
+    for s in [&mut k, &mut kk, &mut rate] {
+        if let Some(h) = hollow_key(s) {
+            s.push(h);
+        }
+    }
     let plot = |title: &str, y: &str, y_axis: YAxis, series: Vec<Series>| {
         let mut p = LinePlot::new(title, "W/W_0", y, true, y_axis);
         p.series = series;

@@ -78,20 +78,31 @@ pub fn plastic(
                 f64_column(&wear, "w_over_w0")?,
                 f64_column(&wear, column)?,
             );
+            let (low, high) = (
+                f64_column(&wear, &format!("{column}_ci95_low"))?,
+                f64_column(&wear, &format!("{column}_ci95_high"))?,
+            );
+            let hollow = super::fig45::tentative(&wear, column)?;
             for (t, (&a_star, dash)) in PLASTIC_A_STAR
                 .iter()
                 .zip([Dash::Solid, Dash::Dashed])
                 .enumerate()
             {
-                let points = (0..a.len())
+                let drawn: Vec<usize> = (0..a.len())
                     // A log axis cannot draw K = 0 (no cluster above A* yet).
                     .filter(|&i| a[i] == a_star && v[i].is_finite())
                     .filter(|&i| y_axis != YAxis::Log || v[i] > 0.0)
-                    .map(|i| (w[i], v[i]))
                     .collect();
+                let points = drawn.iter().map(|&i| (w[i], v[i])).collect();
                 plot.series.push(Series {
                     dash,
                     marker: Some(Marker::ALL[s % Marker::ALL.len()]),
+                    hollow: drawn.iter().map(|&i| hollow[i]).collect(),
+                    band: drawn
+                        .iter()
+                        .filter(|&&i| low[i].is_finite() && high[i].is_finite())
+                        .map(|&i| (w[i], low[i], high[i]))
+                        .collect(),
                     study: Some(setting.study.clone()),
                     a_star_over_ls2: Some(a_star),
                     // One legend entry per hardness; the dash says the threshold.
@@ -118,6 +129,9 @@ pub fn plastic(
                     0,
                 )
             });
+        }
+        if let Some(h) = super::fig45::hollow_key(&plot.series) {
+            plot.series.push(h);
         }
         out.push((stem.to_string(), Drawn::Line(plot)));
     }

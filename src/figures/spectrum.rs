@@ -9,11 +9,11 @@
 use polars::prelude::*;
 
 use super::plastic::{alpha_against, AlphaAxis};
-use super::plot::{Dash, LinePlot, Marker, Series, YAxis};
+use super::plot::{Dash, LinePlot, Marker, Series, YAxis, TENTATIVE_BELOW_CLUSTERS};
 use super::Drawn;
 use crate::stages::figures::StudyRef;
 use crate::store::inputs::Inputs;
-use crate::store::table::{f64_column, u32_column};
+use crate::store::table::{f64_column, u32_column, u64_column};
 
 /// What the spectrum figure draws, besides its settings (ordered by λ_l/λ_s).
 pub struct SpectrumScene<'a> {
@@ -113,6 +113,7 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
     }
     let n = scene.settings.len();
     let mut measured = vec![Vec::new(); scene.a_star_over_ls2.len()];
+    let mut hollow = vec![Vec::new(); scene.a_star_over_ls2.len()];
     let mut bands = vec![Vec::new(); scene.a_star_over_ls2.len()];
     let mut fitted = vec![Vec::new(); scene.a_star_over_ls2.len()];
     for (s, setting) in scene.settings.iter().enumerate() {
@@ -126,6 +127,7 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
             f64_column(&wear, &format!("{quantity}_pooled_ci95_low"))?,
             f64_column(&wear, &format!("{quantity}_pooled_ci95_high"))?,
         );
+        let tentative = super::fig45::tentative(&wear, &format!("{quantity}_pooled"))?;
         let model = inputs.table(n + s, "analytic", "model.parquet")?;
         let (ma, mw, mv) = (
             f64_column(&model, "a_star_over_ls2")?,
@@ -142,6 +144,7 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
             for i in rows.iter().copied().filter(|&i| a[i] == a_star) {
                 if drawable(pooled[i]) {
                     measured[t].push((x, pooled[i]));
+                    hollow[t].push(tentative[i]);
                 }
                 if high[i].is_finite() && (y_axis != YAxis::Log || low[i] > 0.0) {
                     bands[t].push((x, low[i], high[i]));
@@ -158,6 +161,7 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
     for (t, &a_star) in scene.a_star_over_ls2.iter().enumerate() {
         plot.series.push(Series {
             marker: Some(Marker::ALL[t % Marker::ALL.len()]),
+            hollow: std::mem::take(&mut hollow[t]),
             a_star_over_ls2: Some(a_star),
             w_over_w0: Some(w_plateau),
             band: std::mem::take(&mut bands[t]),
@@ -190,6 +194,9 @@ fn at_plateau(inputs: &Inputs, scene: &SpectrumScene, upscaled: bool) -> anyhow:
     plot.series.push(Series::band_key(
         "pooled over realizations; shaded: 95 % interval over realizations",
     ));
+    if let Some(h) = super::fig45::hollow_key(&plot.series) {
+        plot.series.push(h);
+    }
     Ok(plot)
 }
 
@@ -403,13 +410,22 @@ fn physical(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
         true,
         YAxis::Log,
     );
-    let mut curves = vec![(Vec::new(), Vec::new()); scene.a_star_over_ll2.len()];
+    // Per threshold: the points, the band and which points are tentative.
+    let mut curves = vec![(Vec::new(), Vec::new(), Vec::new()); scene.a_star_over_ll2.len()];
     for (s, setting) in scene.settings.iter().enumerate() {
         let table = super::CcdfTable::read(inputs, s)?;
         let Some(&(index, _)) = super::pick_loads(&table.loads(), &[w_plateau]).first() else {
             continue;
         };
         let pooled = table.curve(index, None, false);
+        // The clusters pooled at that load (percolating ones left out, as in the CCDF):
+        // K·N of them lie above A*.
+        let alpha = inputs.table(s, "statistics", "alpha.parquet")?;
+        let pooled_count = u32_column(&alpha, "load_index")?
+            .iter()
+            .zip(u64_column(&alpha, "clusters")?)
+            .find(|(l, _)| **l == Some(index))
+            .map_or(0, |(_, n)| n);
         // The band's edges are steps too, at each distinct area.
         let rows: Vec<usize> = (0..table.ccdf.len())
             .filter(|&i| table.load_index[i] == Some(index) && table.realization[i].is_none())
@@ -423,22 +439,29 @@ fn physical(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
         for (t, &c) in scene.a_star_over_ll2.iter().enumerate() {
             let a_star_over_ls2 = c * setting.value * setting.value;
             let k = ccdf_at(&pooled, a_star_over_ls2);
-            if k > 0.0 {
-                curves[t].0.push((setting.value, k));
-            }
             let (low, high) = (
                 ccdf_at(&low_edge, a_star_over_ls2),
                 ccdf_at(&high_edge, a_star_over_ls2),
             );
+            if k > 0.0 {
+                curves[t].0.push((setting.value, k));
+                let above = (k * pooled_count as f64).round() as u64;
+                curves[t]
+                    .2
+                    .push(above < TENTATIVE_BELOW_CLUSTERS || !(low > 0.0));
+            }
             if low > 0.0 && high.is_finite() {
                 // A probability: the band of the mean stops at 1.
                 curves[t].1.push((setting.value, low, high.min(1.0)));
             }
         }
     }
-    for (t, ((points, band), &c)) in curves.into_iter().zip(scene.a_star_over_ll2).enumerate() {
+    for (t, ((points, band, hollow), &c)) in
+        curves.into_iter().zip(scene.a_star_over_ll2).enumerate()
+    {
         plot.series.push(Series {
             marker: Some(Marker::ALL[t % Marker::ALL.len()]),
+            hollow,
             w_over_w0: Some(w_plateau),
             band,
             ..Series::line(
@@ -451,6 +474,9 @@ fn physical(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
     plot.series.push(Series::band_key(
         "pooled over realizations; shaded: 95 % band of their mean",
     ));
+    if let Some(h) = super::fig45::hollow_key(&plot.series) {
+        plot.series.push(h);
+    }
     Ok(plot)
 }
 

@@ -121,9 +121,8 @@ fn named_unit(column: &str) -> Option<&'static str> {
         | "panel" | "series" | "x_quantity" | "y_quantity" | "status" | "error_message"
         | "state" | "failure" | "solver_status" => "text",
         "last_error" => "1 (relative complementarity error)",
-        "converged" | "percolating" | "at_transition" | "within_rule" | "cached" | "saturated" => {
-            "boolean"
-        }
+        "converged" | "hollow" | "percolating" | "at_transition" | "within_rule" | "cached"
+        | "saturated" => "boolean",
         // Loads and pressures.
         "w_over_w0" | "count_peak_w_over_w0" => "W₀ = E*·h′rms·L²",
         "mean_pressure" | "hardness_pressure" => "E*",

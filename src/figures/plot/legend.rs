@@ -119,7 +119,8 @@ impl LegendBox {
                 draw_path(area, vec![(x, yc), (x + self.sample, yc)], s.dash, style)?;
             }
             if let Some(m) = s.marker {
-                draw_marker(area, m, (x + self.sample / 2, yc), marker_r, color)?;
+                let hollow = !s.hollow.is_empty() && s.hollow.iter().all(|&h| h);
+                draw_marker(area, m, (x + self.sample / 2, yc), marker_r, color, hollow)?;
             }
             let top = yc - (0.2 * self.text_px).round() as i32;
             text::draw(

@@ -296,6 +296,17 @@ impl LinePlot {
         })
     }
 
+    /// The hollow flags of the points of `s` that [`Self::pixel_paths`] keeps, in order.
+    fn kept_hollow(&self, s: &Series) -> Vec<bool> {
+        let keep = finite_on(self.x_log, self.y_axis);
+        s.points
+            .iter()
+            .enumerate()
+            .filter(|(_, &p)| keep(&self.drawn_at(p)))
+            .map(|(i, _)| s.hollow.get(i).copied().unwrap_or(false))
+            .collect()
+    }
+
     /// The curves (points kept on the axes), the marks (`x_marks`, then `y_marks` and the
     /// floor across `xs`) and the bands (polygons: the upper edge forward, the lower back; a
     /// low end off a logarithmic axis drawn at the axis' bottom), in pixels of the plotting
@@ -420,8 +431,10 @@ impl LinePlot {
                 draw_path(plot, pts.clone(), s.dash, color.stroke_width(s.width))?;
             }
             if let Some(m) = s.marker {
-                for &p in &pts {
-                    draw_marker(plot, m, p, marker_r, color)?;
+                let hollow = self.kept_hollow(s);
+                for (i, &p) in pts.iter().enumerate() {
+                    let h = hollow.get(i).copied().unwrap_or(false);
+                    draw_marker(plot, m, p, marker_r, color, h)?;
                 }
             }
         }
@@ -520,8 +533,9 @@ impl LinePlot {
             });
             let study = s.study.clone().unwrap_or_default();
             let (load, a_star) = (opt(s.w_over_w0), opt(s.a_star_over_ls2));
-            for (x, y) in &s.points {
+            for (i, (x, y)) in s.points.iter().enumerate() {
                 let band = s.band_at(*x);
+                let hollow = s.hollow.get(i).copied().unwrap_or(false);
                 out.write_record([
                     panel,
                     &series,
@@ -534,6 +548,7 @@ impl LinePlot {
                     &y.to_string(),
                     &opt(band.map(|b| b.0)),
                     &opt(band.map(|b| b.1)),
+                    if hollow { "true" } else { "false" },
                 ])?;
             }
         }

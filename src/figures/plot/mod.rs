@@ -28,9 +28,10 @@ pub use ticks::{interval_text, number, power_of_ten, snap_zero};
 /// Columns of a figure's data file: one row per drawn point, with what a reader filters on
 /// (the panel's title, the curve, its study, load W/W₀ and threshold A*/λₛ² where it has
 /// them) and the point with its axes' quantities, as plain Unicode, and the 95 % band drawn
-/// around it where there is one (empty otherwise). Every quantity of the figures is
-/// dimensionless (normalised as its axis label says).
-pub const DATA_COLUMNS: [&str; 11] = [
+/// around it where there is one (empty otherwise), and whether its marker is drawn hollow (a
+/// tentative value: see [`Series::hollow`]). Every quantity of the figures is dimensionless
+/// (normalised as its axis label says).
+pub const DATA_COLUMNS: [&str; 12] = [
     "panel",
     "series",
     "study",
@@ -42,7 +43,12 @@ pub const DATA_COLUMNS: [&str; 11] = [
     "y",
     "y_ci95_low",
     "y_ci95_high",
+    "hollow",
 ];
+
+/// A value resting on fewer clusters than this is drawn hollow (and so is one whose 95 %
+/// interval reaches 0).
+pub const TENTATIVE_BELOW_CLUSTERS: u64 = 10;
 
 /// The embedded text font's bytes.
 pub(super) static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
@@ -88,6 +94,11 @@ pub struct Series {
     pub width: u32,
     /// Marker at each point.
     pub marker: Option<Marker>,
+    /// Per point, whether its marker is drawn hollow: a tentative value (one resting on
+    /// fewer than [`TENTATIVE_BELOW_CLUSTERS`] clusters, or whose interval reaches 0).
+    /// Empty: every marker filled. A legend-only series (no points) with one `true` shows
+    /// a hollow marker in the legend.
+    pub hollow: Vec<bool>,
     /// The curve's name in the data file when it has no legend entry (e.g. a fit drawn under
     /// a shared entry).
     pub name: String,
@@ -110,6 +121,7 @@ impl Default for Series {
             dash: Dash::Solid,
             width: 2,
             marker: None,
+            hollow: Vec::new(),
             name: String::new(),
             study: None,
             w_over_w0: None,

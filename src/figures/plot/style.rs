@@ -23,6 +23,8 @@ pub enum Marker {
     Square,
     Triangle,
     Diamond,
+    /// A triangle pointing down.
+    TriangleDown,
     Cross,
     /// A hollow circle twice the size of the others, around a point (a chosen setting).
     Ring,
@@ -35,7 +37,7 @@ impl Marker {
         Marker::Square,
         Marker::Triangle,
         Marker::Diamond,
-        Marker::Cross,
+        Marker::TriangleDown,
     ];
 }
 
@@ -46,7 +48,13 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
     c: (i32, i32),
     r: i32,
     color: RGBColor,
+    hollow: bool,
 ) -> DrawResult {
+    if hollow && !matches!(m, Marker::Cross | Marker::Ring) {
+        // White inside, the colour as a 2-px outline.
+        draw_marker(area, m, c, r, WHITE, false)?;
+        return draw_outline(area, m, c, r, color);
+    }
     let fill = color.filled();
     let (x, y) = c;
     match m {
@@ -65,6 +73,10 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
             ],
             fill,
         )),
+        Marker::TriangleDown => area.draw(&Polygon::new(
+            vec![(x, y + r + 1), (x + r + 1, y - r), (x - r - 1, y - r)],
+            fill,
+        )),
         Marker::Cross => {
             let s = color.stroke_width(2);
             area.draw(&PathElement::new(vec![(x - r, y - r), (x + r, y + r)], s))
@@ -72,6 +84,49 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
             area.draw(&PathElement::new(vec![(x - r, y + r), (x + r, y - r)], s))
         }
         Marker::Ring => area.draw(&Circle::new(c, 2 * r + 2, color.stroke_width(2))),
+    }
+    .map_err(plot_err)
+}
+
+/// The outline of a filled marker (Circle, Square, Triangles, Diamond).
+fn draw_outline<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    m: Marker,
+    c: (i32, i32),
+    r: i32,
+    color: RGBColor,
+) -> DrawResult {
+    let s = color.stroke_width(2);
+    let (x, y) = c;
+    let closed = |v: Vec<(i32, i32)>| {
+        let mut v = v;
+        v.push(v[0]);
+        PathElement::new(v, s)
+    };
+    match m {
+        Marker::Square => area.draw(&closed(vec![
+            (x - r, y - r),
+            (x + r, y - r),
+            (x + r, y + r),
+            (x - r, y + r),
+        ])),
+        Marker::Triangle => area.draw(&closed(vec![
+            (x, y - r - 1),
+            (x + r + 1, y + r),
+            (x - r - 1, y + r),
+        ])),
+        Marker::Diamond => area.draw(&closed(vec![
+            (x, y - r - 1),
+            (x + r + 1, y),
+            (x, y + r + 1),
+            (x - r - 1, y),
+        ])),
+        Marker::TriangleDown => area.draw(&closed(vec![
+            (x, y + r + 1),
+            (x + r + 1, y - r),
+            (x - r - 1, y - r),
+        ])),
+        _ => area.draw(&Circle::new(c, r, s)),
     }
     .map_err(plot_err)
 }
