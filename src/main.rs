@@ -69,10 +69,12 @@ enum Command {
     /// area fraction). Areas in any one unit.
     Model(cli::tools::ModelArgs),
 
-    /// Fit α to a table of cluster areas, per load: discrete truncated power law by maximum
-    /// likelihood (x_min by the KS criterion, a bootstrap 95 % interval) and the paper's
-    /// plateau + power law (profile-likelihood interval, A_s, A_m); with --a-star the
-    /// counted K and 𝒦.
+    /// Fit α to a table of cluster areas, per load: the discrete power law truncated at the
+    /// largest area by maximum likelihood (x_min by the KS criterion, a bootstrap 95 %
+    /// interval, Clauset et al.'s goodness of fit and likelihood-ratio tests against a
+    /// cut-off, lognormal, exponential and stretched exponential tail) and the plateau +
+    /// power law of Appendix A (profile-likelihood interval, A_s, A_m); with several
+    /// realizations, intervals over them; with --a-star the counted K and 𝒦.
     Fit(cli::fit::FitArgs),
 
     /// Label the contact clusters of a map, or of each map of a stack, on the periodic torus

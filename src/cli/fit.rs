@@ -1,5 +1,6 @@
 //! `wearcoef fit`: the exponent of a table of cluster areas, per load, by both estimators
-//! (the truncated power law, and the paper's plateau + power law with its A_s and A_m).
+//! (the power law truncated at the largest area above x_min, and the plateau + power law of
+//! Appendix A with its A_s and A_m).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -189,7 +190,7 @@ pub(crate) fn fit_row(
             "alpha": null, "note": format!("no fit: {e}"),
         }),
     };
-    // The paper's plateau + power law: its α, 95 % profile-likelihood interval, and the
+    // The plateau + power law (Appendix A's model): its α, 95 % profile-likelihood interval, and the
     // plateau's end A_s and cut-off A_m that `wearcoef model` takes.
     row["plateau"] = match powerlaw::fit_plateau_power_law(data) {
         Ok(p) => {

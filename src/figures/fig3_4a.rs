@@ -47,7 +47,7 @@ fn pdf_band(pdf: &DataFrame, load_index: u32) -> anyhow::Result<Vec<(f64, f64, f
 /// Points of a fitted curve and its legend text.
 type FittedLine = (Vec<(f64, f64)>, String);
 
-/// The paper's plateau + power law fitted at one load (`p_PL`: flat to `k_s`, `(k/k_s)^(−α)`
+/// The plateau + power law (Appendix A's model) fitted at one load (`p_PL`: flat to `k_s`, `(k/k_s)^(−α)`
 /// to the largest area `k_m`), drawn over `[1, k_m]` in the units of the PDF (per λ_s²), and
 /// its legend: α̂ with its 95 % interval over realizations (or why it has none), and the truncated power law's
 /// α̂ beside it (the other estimator, docs/VALIDATION.md). `None` without a fit.
@@ -90,7 +90,9 @@ fn fitted_plateau(
     let truncated = row(Estimator::DiscreteTruncated)
         .filter(|&j| alpha[j].is_finite())
         .map_or(String::new(), |j| {
-            if gof[j] > crate::powerlaw::REJECT_AT {
+            if gof[j].is_nan() {
+                format!("; truncated power law: α = {:.2} (not tested)", alpha[j])
+            } else if gof[j] > crate::powerlaw::REJECT_AT {
                 format!("; truncated power law: α = {:.2}", alpha[j])
             } else {
                 format!("; truncated power law rejected (p = {:.2})", gof[j])

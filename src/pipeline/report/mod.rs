@@ -8,15 +8,17 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
+mod exponents;
 mod verdicts;
 
+use exponents::{exponents, Systematic};
 use verdicts::audit_lines;
 
 use super::gallery::{FigureRecord, Provenance};
 use crate::config::{FigureKind, Pipeline, StudyPlan};
 use crate::format::number;
 use crate::stages::analytic::AreaLoadSlopeRecord;
-use crate::store::table::{f64_column, str_column};
+use crate::store::table::f64_column;
 use crate::store::Store;
 
 /// A study's sizes as the report's parameter table shows them.
@@ -139,7 +141,7 @@ pub fn caption(stem: &str) -> &'static str {
         "fig2e" => "Contact area A<sub>c</sub>/L² (top) and the largest cluster (bottom) against load: ensemble means with their 95 % bands; dashed vertical lines b, c, d mark the loads of Figs. 2b–d. Not in the paper: the small-load law A<sub>c</sub>/L² = κ W/W₀ fitted up to W/W₀ = 0.06 (black dashes; κ below). The paper draws both on one plot.",
         "fig2f" => "dN/dA<sub>c</sub> by central differences of the ensemble means: positive where contact grows by new clusters, negative where clusters merge.",
         "fig2_convergence" => "Not in the paper: how far the first r realizations' means of Figs. 2e–f are from all of them (the realization audit), against its 5 % tolerance.",
-        "fig3" => "Pooled PDF of cluster areas for λ<sub>l</sub>/λ<sub>s</sub> = 8, 32, 128 (H = 0.8) at three loads, with the paper's plateau + power-law model fitted by maximum likelihood at the largest load (dashes, one per spectrum) and its 95 % interval; the discrete truncated power law's α̂ is named beside it. Inset: H = 0.6, 0.7, 0.8 on equal boxes at one load.",
+        "fig3" => "Pooled PDF of cluster areas for λ<sub>l</sub>/λ<sub>s</sub> = 8, 32, 128 (H = 0.8) at three loads, with the plateau + power law (the model of Appendix A; the paper says only “a maximum likelihood estimator”) fitted by maximum likelihood at the largest load (dashes, one per spectrum) and its 95 % interval over realizations; the α̂ of the power law truncated at the largest area above x<sub>min</sub> is named beside it, or “rejected” where its goodness of fit rejects it. Inset: H = 0.6, 0.7, 0.8 on equal boxes at one load.",
         "fig4a" => "K(A*) = P(A > A*), the pooled complementary distribution, for the studies and loads of Fig. 3.",
         "fig4b" => "Archard's wear coefficient K against load for five A*: simulated (markers, pooled over realizations; shaded: the 95 % band of the realizations' mean), and the plateau + power-law model fitted to the same distributions (dashes, same colours). The y axis is linear below 10⁻⁵, as in the paper.",
         "fig5a" => "The up-scaled coefficient 𝒦 = A<sub>c</sub>*/A<sub>c</sub> against load, simulated (with 95 % bands) and fitted, for the A* of Fig. 4b. Bounded by 1.",
@@ -164,88 +166,6 @@ pub fn caption(stem: &str) -> &'static str {
         s if s.contains("load_resolution") => "Not in the paper: Figs. 4b and 5 from fewer loads, interpolated, against a finer sweep of the same realizations, in units of the 95 % band.",
         _ => "",
     }
-}
-
-/// One row per load of a statistics instance's exponents, the two estimators side by side
-/// (α̂ and its 95 % interval), at the loads of the sweep nearest to `loads` (all when empty).
-fn alpha_rows(
-    store: &Store,
-    key: &str,
-    study: &str,
-    loads: &[f64],
-    out: &mut String,
-) -> anyhow::Result<()> {
-    let Some(manifest) = store.lookup("statistics", key)? else {
-        return Ok(());
-    };
-    let Ok(path) = store.read_output(&manifest, "alpha.parquet") else {
-        return Ok(());
-    };
-    let df = crate::store::table::read(&path)?;
-    let (w, est, a, lo, hi) = (
-        f64_column(&df, "w_over_w0")?,
-        str_column(&df, "estimator")?,
-        f64_column(&df, "alpha")?,
-        f64_column(&df, "ci95_low")?,
-        f64_column(&df, "ci95_high")?,
-    );
-    // The truncated fit's goodness of fit and likelihood-ratio verdict, where computed.
-    let gof = f64_column(&df, "gof_p").unwrap_or_else(|_| vec![f64::NAN; w.len()]);
-    let verdict = str_column(&df, "tail_verdict").unwrap_or_else(|_| vec![String::new(); w.len()]);
-    let mut sweep: Vec<f64> = w.clone();
-    sweep.sort_by(f64::total_cmp);
-    sweep.dedup();
-    let shown: Vec<f64> = if loads.is_empty() {
-        sweep.clone()
-    } else {
-        let mut v: Vec<f64> = loads
-            .iter()
-            .filter_map(|&t| crate::statistics::nearest_in_log(&sweep, t).map(|i| sweep[i]))
-            .collect();
-        v.sort_by(f64::total_cmp);
-        v.dedup();
-        v
-    };
-    let cell = |load: f64, estimator: &str| -> String {
-        match (0..w.len()).find(|&i| w[i] == load && est[i] == estimator) {
-            Some(i) if a[i].is_finite() => {
-                let ci = if lo[i].is_finite() && hi[i].is_finite() {
-                    format!(" [{:.2}, {:.2}]", lo[i], hi[i])
-                } else {
-                    String::new()
-                };
-                format!("{:.2}{ci}", a[i])
-            }
-            _ => "–".into(),
-        }
-    };
-    for load in shown {
-        let tail = (0..w.len())
-            .find(|&i| w[i] == load && est[i] == "discrete_truncated_mle")
-            .map(|i| {
-                let p = if gof[i].is_finite() {
-                    format!("goodness of fit p = {:.2}", gof[i])
-                } else {
-                    "no goodness of fit".to_string()
-                };
-                if verdict[i].is_empty() {
-                    p
-                } else {
-                    format!("{p}; {}", verdict[i])
-                }
-            })
-            .unwrap_or_default();
-        writeln!(
-            out,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            escape(study),
-            number(load),
-            cell(load, "discrete_plateau_power_law_mle"),
-            cell(load, "discrete_truncated_mle"),
-            escape(&tail),
-        )?;
-    }
-    Ok(())
 }
 
 /// The plateau of K and the area–load slope of an analytic instance: table rows (A*/λₛ²,
@@ -407,13 +327,14 @@ pub fn render(store: &Store, provenance: &Provenance, context: &Context) -> anyh
         (audit, n.to_string())
     });
     names.dedup();
+    let systematic = Systematic::of(store, provenance, context)?;
     for name in names {
         let records: Vec<&FigureRecord> = provenance
             .figures
             .iter()
             .filter(|f| f.figure == name)
             .collect();
-        section(&mut h, store, name, &records, context)?;
+        section(&mut h, store, name, &records, context, &systematic)?;
     }
     writeln!(h, "</body>\n</html>")?;
     Ok(h)
@@ -440,6 +361,7 @@ fn section(
     name: &str,
     records: &[&FigureRecord],
     context: &Context,
+    systematic: &Systematic,
 ) -> anyhow::Result<()> {
     let desc = context.descriptions.get(name).cloned().unwrap_or_default();
     let heading = if desc.is_empty() { name } else { desc.as_str() };
@@ -452,7 +374,7 @@ fn section(
     let studies = studies_of(records);
     h.push_str(&parameter_table(context, &studies));
     images(h, records, &studies, context)?;
-    exponents(h, store, name, records, &studies, context)?;
+    exponents(h, store, name, records, &studies, context, systematic)?;
     fits(h, store, records)?;
     let mut audits = String::new();
     for fig in records {
@@ -511,58 +433,6 @@ fn images(
                 links.join("; ")
             )?;
         }
-    }
-    Ok(())
-}
-
-/// The exponents α̂ of both estimators at the loads a figure draws (its declared loads; a
-/// convergence figure's shared loads), for figures that draw exponents.
-fn exponents(
-    h: &mut String,
-    store: &Store,
-    name: &str,
-    records: &[&FigureRecord],
-    studies: &[String],
-    context: &Context,
-) -> anyhow::Result<()> {
-    if matches!(
-        context.kinds.get(name),
-        Some(FigureKind::Fig2 | FigureKind::Fig6) | None
-    ) {
-        return Ok(());
-    }
-    let mut loads = context.figure_loads.get(name).cloned().unwrap_or_default();
-    if loads.is_empty() && context.kinds.get(name) == Some(&FigureKind::Convergence) {
-        // A convergence figure compares its settings at the loads they share: the fewest.
-        loads = studies
-            .iter()
-            .filter_map(|s| context.sizes.get(s))
-            .map(|s| s.loads.clone())
-            .min_by_key(|l| l.len())
-            .unwrap_or_default();
-    }
-    let mut alphas = String::new();
-    let mut seen: Vec<&str> = Vec::new();
-    for d in records
-        .iter()
-        .flat_map(|r| &r.drawn_from)
-        .filter(|d| d.stage == "statistics")
-    {
-        // A study drawn twice (Fig. 3's λ_l/λ_s = 128 is also its inset's H = 0.8) once.
-        if seen.contains(&d.key.as_str()) {
-            continue;
-        }
-        seen.push(&d.key);
-        alpha_rows(store, &d.key, &d.studies.join(", "), &loads, &mut alphas)?;
-    }
-    if !alphas.is_empty() {
-        writeln!(
-            h,
-            "<details><summary>Exponents α̂ at the loads drawn</summary>\n<table>\n\
-             <tr><th>study</th><th>W/W₀</th><th>plateau + power law (Appendix A's model) α̂ [95 %]</th>\
-             <th>power law truncated at the largest area, above x<sub>min</sub>: α̂ [95 %]</th>\
-             <th>the tail above x<sub>min</sub>: Clauset et al.'s goodness of fit; likelihood ratios against the power law</th></tr>\n{alphas}</table>\n</details>"
-        )?;
     }
     Ok(())
 }

@@ -15,7 +15,7 @@
 //!   between the empirical and fitted CDFs of the tail.
 //! - Bootstrap: resample the tail with replacement (bounds fixed), refit, percentile
 //!   interval. Deterministic for a given seed.
-//! - The paper's plateau + power law `p_PL` (flat up to `k_s`, `(k/k_s)^(−α)` from there
+//! - The plateau + power law `p_PL` of the paper's Appendix A (flat up to `k_s`, `(k/k_s)^(−α)` from there
 //!   to `k_m`), fitted jointly in `(α, k_s)` with `k_m = max k` (the MLE of an upper
 //!   bound), discrete as well.
 //!
