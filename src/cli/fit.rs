@@ -341,7 +341,7 @@ fn print_fit_rows(out: &[serde_json::Value]) -> anyhow::Result<()> {
         let p = &r["plateau"];
         match p["alpha"].as_f64() {
             Some(a) => out!(
-                "{load}: plateau + power law (the paper's): α = {a:.4} (95 % profile likelihood [{:.4}, {:.4}]), A_s = {:.2} px, A_m = {} px",
+                "{load}: plateau + power law (Appendix A): α = {a:.4} (95 % profile likelihood [{:.4}, {:.4}]), A_s = {:.2} px, A_m = {} px",
                 p["profile_ci95_low"].as_f64().unwrap_or(f64::NAN),
                 p["profile_ci95_high"].as_f64().unwrap_or(f64::NAN),
                 p["a_s_px"].as_f64().unwrap_or(f64::NAN),

@@ -26,7 +26,7 @@ const ESTIMATORS: [(&str, &str, Dash, Marker); 2] = [
     ),
     (
         "discrete_plateau_power_law_mle",
-        "plateau + power law (the paper's)",
+        "plateau + power law (Appendix A)",
         Dash::Dashed,
         Marker::Square,
     ),
