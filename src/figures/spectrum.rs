@@ -448,7 +448,7 @@ fn physical(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
                 let above = (k * pooled_count as f64).round() as u64;
                 curves[t]
                     .2
-                    .push(above < TENTATIVE_BELOW_CLUSTERS || !(low > 0.0));
+                    .push(above < TENTATIVE_BELOW_CLUSTERS || low.is_nan() || low <= 0.0);
             }
             if low > 0.0 && high.is_finite() {
                 // A probability: the band of the mean stops at 1.
