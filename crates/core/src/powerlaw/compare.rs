@@ -148,6 +148,23 @@ struct Tail {
 }
 
 impl Tail {
+    /// The values `k ≥ k_min` of a sorted sample.
+    fn of_sorted(sorted: &[u64], k_min: u64) -> Self {
+        let tail = &sorted[sorted.partition_point(|&k| k < k_min)..];
+        let mut values: Vec<(f64, f64)> = Vec::new();
+        for &k in tail {
+            match values.last_mut() {
+                Some(last) if last.0 == k as f64 => last.1 += 1.0,
+                _ => values.push((k as f64, 1.0)),
+            }
+        }
+        Tail {
+            k_min,
+            values,
+            n: tail.len(),
+        }
+    }
+
     /// `Σ count · f(k)`.
     fn sum(&self, f: impl Fn(f64) -> f64) -> f64 {
         self.values.iter().map(|&(k, c)| c * f(k)).sum()
@@ -159,19 +176,7 @@ impl Tail {
 pub fn compare_tail(data: &[u64], k_min: u64) -> Result<TailComparison, FitError> {
     let sorted = checked_counts(data)?;
     let pl = fit_discrete(&sorted, k_min, None)?;
-    let start = sorted.partition_point(|&k| k < k_min);
-    let mut values: Vec<(f64, f64)> = Vec::new();
-    for &k in &sorted[start..] {
-        match values.last_mut() {
-            Some(last) if last.0 == k as f64 => last.1 += 1.0,
-            _ => values.push((k as f64, 1.0)),
-        }
-    }
-    let tail = Tail {
-        k_min,
-        values,
-        n: sorted.len() - start,
-    };
+    let tail = Tail::of_sorted(&sorted, k_min);
     let ln_z = discrete_normalisation(pl.alpha, k_min, u64::MAX).ln();
     let ln_pl = |k: f64| -pl.alpha * k.ln() - ln_z;
     let tests = Alternative::ALL

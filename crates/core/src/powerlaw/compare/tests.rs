@@ -233,20 +233,9 @@ fn fits_recover_their_parameters_and_are_local_maxima() {
 }
 
 fn build_tail(data: &[u64], a: u64) -> Tail {
-    let mut v: Vec<u64> = data.iter().copied().filter(|&k| k >= a).collect();
+    let mut v = data.to_vec();
     v.sort_unstable();
-    let mut values: Vec<(f64, f64)> = Vec::new();
-    for &k in &v {
-        match values.last_mut() {
-            Some(l) if l.0 == k as f64 => l.1 += 1.0,
-            _ => values.push((k as f64, 1.0)),
-        }
-    }
-    Tail {
-        k_min: a,
-        n: v.len(),
-        values,
-    }
+    Tail::of_sorted(&v, a)
 }
 
 #[test]
