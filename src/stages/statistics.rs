@@ -12,7 +12,7 @@ use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
 
-mod alpha;
+pub(crate) mod alpha;
 use crate::powerlaw;
 use crate::resample::{self, NoInterval};
 use crate::statistics as stats;

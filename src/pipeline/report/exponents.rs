@@ -128,6 +128,7 @@ fn alpha_rows(
     // The truncated fit's goodness of fit and likelihood-ratio verdict, where computed.
     let gof = f64_column(&df, "gof_p").unwrap_or_else(|_| vec![f64::NAN; w.len()]);
     let verdict = str_column(&df, "tail_verdict").unwrap_or_else(|_| vec![String::new(); w.len()]);
+    let method = str_column(&df, "ci95_method").unwrap_or_else(|_| vec![String::new(); w.len()]);
     let mut sweep: Vec<f64> = w.clone();
     sweep.sort_by(f64::total_cmp);
     sweep.dedup();
@@ -161,6 +162,8 @@ fn alpha_rows(
             .map(|i| {
                 let p = if gof[i].is_finite() {
                     format!("goodness of fit p = {:.2}", gof[i])
+                } else if method[i] == crate::stages::statistics::alpha::NOT_SHOWN {
+                    "point estimates only: no figure draws α at this load".to_string()
                 } else {
                     "no goodness of fit".to_string()
                 };
