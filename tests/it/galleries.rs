@@ -14,9 +14,12 @@ use wearcoef::pipeline::plan::Plan;
 /// The note a gallery that lags its profile carries.
 const REDRAW_NOTE: &str = "REDRAW.md";
 
+/// A stage and the studies of one instance a figure is drawn from.
+type Source = (String, Vec<String>);
+
 /// Each figure with the stages and studies it is drawn from, keys aside: what a lagging
 /// gallery still shares with its profile now.
-fn figures_and_sources(p: &Provenance) -> Vec<(String, Vec<(String, Vec<String>)>)> {
+fn figures_and_sources(p: &Provenance) -> Vec<(String, Vec<Source>)> {
     let mut v: Vec<_> = p
         .figures
         .iter()
