@@ -65,6 +65,14 @@ def fmt(x, digits=3):
     return f"{x:.{digits}g}"
 
 
+def interval(r, low="ci95_low", high="ci95_high", digits=3):
+    """' [low, high]' where the store has an interval, else ''."""
+    lo, hi = r[low], r[high]
+    if pd.notna(lo) and pd.notna(hi):
+        return f" [{fmt(lo, digits)}, {fmt(hi, digits)}]"
+    return ""
+
+
 def alpha_rows(store, study, loads, out, key):
     a = store.table("statistics", study, "alpha.parquet")
     if a is None:
@@ -79,9 +87,32 @@ def alpha_rows(store, study, loads, out, key):
         for t in loads:
             w = nearest(a.w_over_w0, t)
             r = a[(a.w_over_w0 == w) & (a.estimator == estimator)].iloc[0]
-            parts.append(f"{fmt(r.alpha)} [{fmt(r.ci95_low)}, {fmt(r.ci95_high)}] at {fmt(w, 2)}")
+            ci = interval(r) or f" (no interval: {r.ci95_method})"
+            counts = ""
+            if "clusters" in r and pd.notna(r.clusters):
+                counts = f", {int(r.clusters)} clusters, {int(r.realizations)} realizations"
+            tail = ""
+            if estimator == "discrete_truncated_mle" and "gof_p" in r and pd.notna(r.gof_p):
+                tail = f"; GOF p = {r.gof_p:.2f}; {r.tail_verdict}"
+            parts.append(f"{fmt(r.alpha)}{ci} at {fmt(w, 2)}{counts}{tail}")
         cells.append(f"{name}: " + "; ".join(parts))
     out[key] = " | ".join(cells)
+
+
+def tentative(r):
+    """Drawn hollow: fewer than 10 clusters above A*, or a pooled interval reaching 0."""
+    lo = r.get("k_archard_pooled_ci95_low", np.nan)
+    return r.clusters_above < 10 or (pd.notna(lo) and lo <= 0)
+
+
+def k_cell(r, column, digits):
+    """A pooled K or 𝒦 with its interval over realizations and the counts behind it."""
+    ci = interval(r, f"{column}_pooled_ci95_low", f"{column}_pooled_ci95_high", digits)
+    flag = ", tentative" if tentative(r) else ""
+    return (
+        f"{fmt(r[f'{column}_pooled'], digits)}{ci} "
+        f"({int(r.clusters_above)} clusters, fewest in a realization {int(r.clusters_above_smallest_realization)}{flag})"
+    )
 
 
 def wear_rows(store, study, out):
@@ -109,17 +140,14 @@ def wear_rows(store, study, out):
         else:
             transitions.append(f"{fmt(a_star, 3)} λ_s²: {fmt(w[first - 1], 2)}–{fmt(w[first], 2)}")
         # Growth of K from the first load after the transition to the largest load.
-        growth.append(f"{fmt(a_star, 3)} λ_s²: ×{fmt(k[-1] / k[first], 2)}")
-        positive.extend(k[first:][k[first:] > 0])
+        growth.append(
+            f"{fmt(a_star, 3)} λ_s²: ×{fmt(k[-1] / k[first], 2)} "
+            f"(from {k_cell(rows.iloc[first], 'k_archard', 2)})"
+        )
+        positive.extend((k[i], rows.iloc[i]) for i in range(first, len(k)) if k[i] > 0)
         last = rows.iloc[-1]
-        levels.append(
-            f"{fmt(a_star, 3)} λ_s²: {fmt(last.k_archard_pooled, 2)} "
-            f"(mean {fmt(last.k_archard_mean, 2)} ± {fmt(last.k_archard_ci95, 1)})"
-        )
-        kup.append(
-            f"{fmt(a_star, 3)} λ_s²: {fmt(last.k_upscaled_pooled)} "
-            f"(mean {fmt(last.k_upscaled_mean)} ± {fmt(last.k_upscaled_ci95, 2)})"
-        )
+        levels.append(f"{fmt(a_star, 3)} λ_s²: {k_cell(last, 'k_archard', 2)}")
+        kup.append(f"{fmt(a_star, 3)} λ_s²: {k_cell(last, 'k_upscaled', 3)}")
         # Wear rate against load in log–log over the upper half of the sweep.
         r = rows.wear_rate_over_l2_mean.values
         upper = (w >= math.sqrt(w[first] * w_max)) & (r > 0)
@@ -130,7 +158,17 @@ def wear_rows(store, study, out):
     out["K_levels"] = "; ".join(levels) + f" at W/W0 = {fmt(w_max, 2)}"
     out["K_after"] = "; ".join(growth) + f" (from the first load after the transition to W/W0 = {fmt(w_max, 2)})"
     if positive:
-        out["K_range"] = f"{fmt(min(positive), 2)} to {fmt(max(positive), 2)} (pooled K > 0, A* = 2–512 λ_s², all loads)"
+        lo = min(positive, key=lambda p: p[0])[1]
+        hi = max(positive, key=lambda p: p[0])[1]
+        firm = [p for p in positive if not tentative(p[1])]
+        text = (
+            f"{k_cell(lo, 'k_archard', 2)} to {k_cell(hi, 'k_archard', 2)} "
+            "(pooled K > 0, A* = 2–512 λ_s², all loads)"
+        )
+        if firm:
+            f = min(firm, key=lambda p: p[0])[1]
+            text += f"; the smallest not tentative: {k_cell(f, 'k_archard', 2)} at W/W0 = {fmt(f.w_over_w0, 2)}, A* = {fmt(f.a_star_over_ls2, 3)} λ_s²"
+        out["K_range"] = text
     out["Kup_at_max"] = "; ".join(kup) + f" at W/W0 = {fmt(w_max, 2)}"
     out["rate_slope"] = "; ".join(slopes) + " (d ln R / d ln W over the upper half of each post-transition range)"
 
@@ -141,12 +179,14 @@ def regime(store, study, out, key):
         out[key] = "absent"
         return
     w = loads.w_over_w0.values
-    d = loads.dn_dac_per_ls2.values
+    d = loads.dn_dac_per_ls2_mean.values
     n = loads.n_clusters_mean.values
     peak = w[int(np.argmax(n))]
     neg = w[d < 0]
     sign = f"dN/dA_c < 0 from W/W0 = {fmt(neg[0], 2)}" if len(neg) else f"dN/dA_c > 0 at every load ({fmt(w[0], 2)}–{fmt(w[-1], 2)})"
-    out[key] = f"{sign}; N peaks at W/W0 = {fmt(peak, 2)}"
+    lo, hi = loads.dn_dac_per_ls2_ci95_low.values, loads.dn_dac_per_ls2_ci95_high.values
+    resolved = f"; interval above 0 at {int(np.sum(lo > 0))}, below 0 at {int(np.sum(hi < 0))} of {len(w)} loads" if np.isfinite(lo).any() else "; no interval"
+    out[key] = f"{sign}; N peaks at W/W0 = {fmt(peak, 2)}{resolved} ({int(loads.realizations.iloc[0])} realizations)"
 
 
 def ks(a, b):
@@ -174,9 +214,12 @@ def hurst(store, out):
     est = "discrete_plateau_power_law_mle"
     ra = a[(a.estimator == est)].iloc[0]
     rb = b[(b.estimator == est) & (b.w_over_w0 == nearest(b.w_over_w0, 0.06))].iloc[0]
+    h7 = store.table("statistics", "fig3_h07", "alpha.parquet")
+    rc = h7[(h7.estimator == est)].iloc[0]
     parts.append(
-        f"plateau + power-law α̂: H = 0.6 {fmt(ra.alpha)} [{fmt(ra.ci95_low)}, {fmt(ra.ci95_high)}], "
-        f"H = 0.8 {fmt(rb.alpha)} [{fmt(rb.ci95_low)}, {fmt(rb.ci95_high)}]"
+        f"plateau + power-law α̂: H = 0.6 {fmt(ra.alpha)}{interval(ra)} ({int(ra.realizations)} realizations), "
+        f"H = 0.7 {fmt(rc.alpha)}{interval(rc)} ({int(rc.realizations)}), "
+        f"H = 0.8 {fmt(rb.alpha)}{interval(rb)} ({int(rb.realizations)})"
     )
     out["hurst"] = "; ".join(parts) + " (W/W0 = 0.06, equal boxes)"
 
@@ -202,8 +245,12 @@ def area_load(store, out):
     ac = loads.area_fraction_mean.values
     ratio = ac / w
     slope = np.polyfit(np.log(w), np.log(ac), 1)[0]
+    lo = loads.area_fraction_ci95_low.values / w
+    hi = loads.area_fraction_ci95_high.values / w
     out["area_load"] = (
-        f"A_c/(L² W/W0) = {fmt(ratio[0])} at {fmt(w[0], 2)}, {fmt(ratio[-1])} at {fmt(w[-1], 2)}; "
+        f"A_c/(L² W/W0) = {fmt(ratio[0])} [{fmt(lo[0])}, {fmt(hi[0])}] at {fmt(w[0], 2)}, "
+        f"{fmt(ratio[-1])} [{fmt(lo[-1])}, {fmt(hi[-1])}] at {fmt(w[-1], 2)} "
+        f"({int(loads.realizations.iloc[0])} realizations); "
         f"log–log slope {slope:.3f} (λ_l/λ_s = 128)"
     )
 
@@ -225,7 +272,7 @@ def plastic(store, out):
         cells = []
         for a_star in [2.0, 32.0, 128.0]:
             r = last[last.a_star_over_ls2 == a_star].iloc[0]
-            cells.append(f"A* = {fmt(a_star, 3)} λ_s²: K {fmt(r.k_archard_pooled, 2)}, 𝒦 {fmt(r.k_upscaled_pooled)}")
+            cells.append(f"A* = {fmt(a_star, 3)} λ_s²: K {k_cell(r, 'k_archard', 2)}, 𝒦 {k_cell(r, 'k_upscaled', 3)}")
         out[f"plastic_wear_H{h}"] = "; ".join(cells) + f" at W/W0 = {fmt(w_max, 2)}"
         lt = store.table("statistics", study, "loads.parquet")
         if lt is not None:
