@@ -169,7 +169,8 @@ pub fn caption(stem: &str) -> &'static str {
 }
 
 /// The plateau of K and the area–load slope of an analytic instance: table rows (A*/λₛ²,
-/// load, α̂, K_PL plateau, K_PL at the load, simulated K ± band) and a sentence on κ.
+/// load, α̂, K_PL plateau, K_PL at the load, simulated K with its interval and counts) and a
+/// sentence on κ.
 fn analytic_lines(
     store: &Store,
     key: &str,
@@ -204,31 +205,110 @@ fn analytic_lines(
     };
     let df = crate::store::table::read(&path)?;
     let c = |name: &str| f64_column(&df, name);
-    let (a, w, alpha, lim, at, k, ci) = (
+    let (a, w, alpha, lim, at) = (
         c("a_star_over_ls2")?,
         c("w_over_w0")?,
         c("alpha")?,
         c("k_pl_plateau")?,
         c("k_pl_at_load")?,
-        c("k_archard_mean")?,
-        c("k_archard_ci95")?,
     );
+    let simulated = SimulatedK::of_inputs(store, &manifest.inputs)?;
     for i in 0..a.len() {
         writeln!(
             plateau,
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{}</td>\
-             <td>{} ± {}</td></tr>",
+             <td>{}</td></tr>",
             escape(study),
             number(a[i]),
             number(w[i]),
             alpha[i],
             number(lim[i]),
             number(at[i]),
-            number(k[i]),
-            number(ci[i])
+            simulated.cell(a[i], w[i]),
         )?;
     }
     Ok(())
+}
+
+/// The simulated K of a statistics instance's `wear.parquet`, per (A*/λₛ², W/W₀): pooled, its
+/// interval over realizations (clipped to [0, 1]) and the clusters above A* behind it.
+struct SimulatedK {
+    rows: Vec<SimulatedRow>,
+}
+
+struct SimulatedRow {
+    a_star_over_ls2: f64,
+    w_over_w0: f64,
+    pooled: f64,
+    low: f64,
+    high: f64,
+    clusters: u64,
+    fewest_in_a_realization: u64,
+}
+
+impl SimulatedK {
+    /// From the first of `inputs` that is a statistics instance with a wear table.
+    fn of_inputs(store: &Store, inputs: &[String]) -> anyhow::Result<Self> {
+        for key in inputs {
+            let Some(m) = store.lookup("statistics", key)? else {
+                continue;
+            };
+            let Ok(path) = store.read_output(&m, "wear.parquet") else {
+                continue;
+            };
+            let df = crate::store::table::read(&path)?;
+            let c = |name: &str| f64_column(&df, name);
+            let (a, w, k, lo, hi, n, fewest) = (
+                c("a_star_over_ls2")?,
+                c("w_over_w0")?,
+                c("k_archard_pooled")?,
+                c("k_archard_pooled_ci95_low")?,
+                c("k_archard_pooled_ci95_high")?,
+                crate::store::table::u64_column(&df, "clusters_above")?,
+                crate::store::table::u64_column(&df, "clusters_above_smallest_realization")?,
+            );
+            let rows = (0..a.len())
+                .map(|i| SimulatedRow {
+                    a_star_over_ls2: a[i],
+                    w_over_w0: w[i],
+                    pooled: k[i],
+                    low: lo[i],
+                    high: hi[i],
+                    clusters: n[i],
+                    fewest_in_a_realization: fewest[i],
+                })
+                .collect();
+            return Ok(Self { rows });
+        }
+        Ok(Self { rows: Vec::new() })
+    }
+
+    /// "0.0127 [0.0111, 0.0143]; 95 clusters, fewest in a realization 11" (no interval
+    /// below 5 realizations), or "–" where the table has no such row.
+    fn cell(&self, a_star_over_ls2: f64, w_over_w0: f64) -> String {
+        let Some(r) = self
+            .rows
+            .iter()
+            .find(|r| r.a_star_over_ls2 == a_star_over_ls2 && r.w_over_w0 == w_over_w0)
+        else {
+            return "–".into();
+        };
+        let interval = if r.low.is_finite() && r.high.is_finite() {
+            format!(" [{}, {}]", number(r.low), number(r.high))
+        } else {
+            String::new()
+        };
+        // Drawn hollow in the figures: a K on few clusters, or whose interval reaches 0.
+        let tentative = r.pooled > 0.0
+            && (r.clusters < crate::figures::plot::TENTATIVE_BELOW_CLUSTERS || r.low <= 0.0);
+        format!(
+            "{}{interval}; {} clusters, fewest in a realization {}{}",
+            number(r.pooled),
+            r.clusters,
+            r.fewest_in_a_realization,
+            if tentative { " (tentative)" } else { "" }
+        )
+    }
 }
 
 /// The parameter table of a figure's studies: this profile's sizes beside the paper's.
@@ -470,7 +550,8 @@ fn fits(h: &mut String, store: &Store, records: &[&FigureRecord]) -> anyhow::Res
              <p>K<sub>PL</sub>(A*) in the limit A<sub>m</sub> → ∞ from the power-law fit \
              (α̂, A<sub>s</sub>) at the largest load up to W/W₀ = {max}, beside the model at \
              that load's cut-off A<sub>m</sub> \
-             and the simulated K (ensemble mean ± 95 % band) there.</p>\n<table>\n\
+             and the simulated K there (pooled over realizations, its 95 % interval over \
+             them, and the clusters above A* behind it).</p>\n<table>\n\
              <tr><th>study</th><th>A*/λₛ²</th><th>W/W₀</th><th>α̂</th>\
              <th>K<sub>PL</sub> plateau</th><th>K<sub>PL</sub> at W</th><th>simulated K at W</th></tr>\n\
              {plateau}</table>\n</details>"
