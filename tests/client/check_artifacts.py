@@ -61,9 +61,11 @@ SCHEMAS = {
         ("load_index", U32), ("w_over_w0", F64), ("estimator", STR), ("alpha", F64),
         ("std_error", F64), ("ci95_low", F64), ("ci95_high", F64), ("ci95_method", STR),
         ("k_min_px", F64), ("k_max_px", F64), ("k_s_px", F64), ("k_s_over_ls2", F64),
-        ("n_fitted", U64), ("ks_distance", F64), ("gof_p", F64), ("clusters", U64),
-        ("realizations", U32),
-        ("note", STR)],
+        ("n_fitted", U64), ("ks_distance", F64), ("gof_p", F64), ("alpha_above_k_min", F64),
+        ("clusters", U64), ("realizations", U32), ("tail_verdict", STR), ("note", STR)]
+    + [(f"lr_{alt}_{what}", F64)
+       for alt in ["exponential_cutoff", "lognormal", "exponential", "stretched_exponential"]
+       for what in ["normalised_ratio", "p"]],
     ("analytic", "model.parquet"): [
         ("load_index", U32), ("w_over_w0", F64), ("a_star_over_ls2", F64), ("alpha", F64),
         ("a_s_over_ls2", F64), ("a_m_over_ls2", F64), ("k_pl", F64), ("k_upscaled_pl", F64)],
@@ -130,7 +132,7 @@ failures = []
 
 # Columns of a figure's data file (src/figures/plot/mod.rs, DATA_COLUMNS).
 DATA_COLUMNS = ["panel", "series", "study", "w_over_w0", "a_star_over_ls2",
-                "x_quantity", "x", "y_quantity", "y", "y_ci95_low", "y_ci95_high"]
+                "x_quantity", "x", "y_quantity", "y", "y_ci95_low", "y_ci95_high", "hollow"]
 
 
 def check(cond, message):
