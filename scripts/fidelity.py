@@ -291,6 +291,48 @@ def plastic(store, out):
             out[f"plastic_saturated_H{h}"] = f"{fmt(m[0], 2)} at W/W0 = {fmt(t.w_over_w0.iloc[0], 2)} to {fmt(m[-1], 2)} at {fmt(t.w_over_w0.iloc[-1], 2)}"
 
 
+SPECTRUM = [("spec_ll8", 8), ("spec_ll32", 32), ("spec_ll128", 128), ("spec_ll256", 256), ("spec_ll512", 512), ("spec_ll1024", 1024)]
+
+
+def above(ccdf, n_pooled, a_star):
+    """K = P(A > A*) from a pooled exact CCDF, and the clusters above A* (K times the pool)."""
+    rows = ccdf[ccdf.area_over_ls2 <= a_star]
+    k = 1.0 if rows.empty else float(rows.ccdf.iloc[-1])
+    return k, int(round(k * n_pooled))
+
+
+def spectrum(store, out):
+    """Per width at W/W0 = 0.06: α̂ by both estimators, the largest cluster, K and 𝒦 at fixed
+    A*/λ_s² with counts, and K at A* = λ_l²/32 and λ_l²/128 with the clusters above."""
+    for study, width in SPECTRUM:
+        a = store.table("statistics", study, "alpha.parquet")
+        if a is None:
+            out[f"spectrum_{width}"] = "absent"
+            continue
+        alpha_rows(store, study, [0.06], out, f"spectrum_alpha_{width}")
+        loads = store.table("statistics", study, "loads.parquet")
+        w = nearest(loads.w_over_w0, 0.06)
+        lr = loads[loads.w_over_w0 == w].iloc[0]
+        n_pooled = lr.n_clusters_mean * lr.realizations
+        wear = store.table("statistics", study, "wear.parquet")
+        last = wear[wear.w_over_w0 == w]
+        cells = [
+            f"largest cluster {fmt(lr.largest_area_over_ls2_mean, 3)} λ_s² (mean), "
+            f"{int(round(n_pooled))} clusters in {int(lr.realizations)} realizations"
+        ]
+        for a_star in [2.0, 512.0]:
+            r = last[last.a_star_over_ls2 == a_star]
+            if not r.empty:
+                r = r.iloc[0]
+                cells.append(f"A* = {fmt(a_star, 3)} λ_s²: K {k_cell(r, 'k_archard', 2)}, 𝒦 {k_cell(r, 'k_upscaled', 3)}")
+        c = store.table("statistics", study, "ccdf.parquet")
+        pooled = c[(c.w_over_w0 == w) & c.realization.isna()].sort_values("area_over_ls2")
+        for div in [32, 128]:
+            k, n = above(pooled, n_pooled, width * width / div)
+            cells.append(f"A* = λ_l²/{div}: K {fmt(k, 2)} on {n} clusters")
+        out[f"spectrum_{width}"] = "; ".join(cells) + f" at W/W0 = {fmt(w, 2)}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("data")
@@ -310,6 +352,7 @@ def main():
     settings(store, "figB1", out, "b1")
     settings(store, "figB2", out, "b2")
     plastic(store, out)
+    spectrum(store, out)
     for k, v in out.items():
         print(f"{k}: {v}")
     if args.json:
