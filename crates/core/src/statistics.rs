@@ -81,6 +81,11 @@ pub fn log_edges(lo: f64, hi: f64, count: usize) -> Vec<f64> {
     edges
 }
 
+/// A K, 𝒦 or wear rate resting on fewer clusters above A* than this (pooled over
+/// realizations) is tentative: drawn hollow, flagged in the report, and no verdict rests on
+/// it (so is one whose 95 % interval reaches 0).
+pub const TENTATIVE_BELOW_CLUSTERS: u64 = 10;
+
 /// Index of the positive value of `values` nearest to `target` (> 0) in log scale,
 /// i.e. minimising `|ln(v / target)|` (the first on a tie); `None` if no value is positive.
 /// Used wherever a requested load is matched to a sweep's loads.

@@ -48,7 +48,7 @@ pub const DATA_COLUMNS: [&str; 12] = [
 
 /// A value resting on fewer clusters than this is drawn hollow (and so is one whose 95 %
 /// interval reaches 0).
-pub const TENTATIVE_BELOW_CLUSTERS: u64 = 10;
+pub use crate::statistics::TENTATIVE_BELOW_CLUSTERS;
 
 /// The embedded text font's bytes.
 pub(super) static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");

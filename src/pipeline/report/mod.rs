@@ -300,7 +300,7 @@ impl SimulatedK {
         };
         // Drawn hollow in the figures: a K on few clusters, or whose interval reaches 0.
         let tentative = r.pooled > 0.0
-            && (r.clusters < crate::figures::plot::TENTATIVE_BELOW_CLUSTERS || r.low <= 0.0);
+            && (r.clusters < crate::statistics::TENTATIVE_BELOW_CLUSTERS || r.low <= 0.0);
         format!(
             "{}{interval}; {} clusters, fewest in a realization {}{}",
             number(r.pooled),
