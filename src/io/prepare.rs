@@ -235,17 +235,32 @@ pub const WARN_FILLED_FRACTION: f64 = 0.05;
 /// they varied before is flat: what is left is the fit's rounding, not roughness.
 pub const FLAT_RESIDUE: f64 = 1e-9;
 
-/// Whether a map of pixels `dx × dy` can be solved: the half-space is solved on square
-/// pixels.
-pub fn check_square_pixels(dx: f64, dy: f64) -> Result<(), String> {
-    if (dx - dy).abs() > crate::contact::window::SQUARE_PIXEL * dx.max(dy) {
+/// Pixels longer than wide by more than this are refused: the pressure would be resolved
+/// along one side by a fraction of the other, and such a ratio is more often a wrong pixel
+/// size than an instrument's.
+pub const MAX_PIXEL_ASPECT: f64 = 64.0;
+
+/// Pixels longer than wide by more than this are solved with a warning: the contact is
+/// resolved along the long side as a map of that coarser pixel.
+pub const WARN_PIXEL_ASPECT: f64 = 4.0;
+
+/// Whether a map of pixels `dx × dy` can be solved (rectangular pixels are solved as
+/// measured, without resampling), and the warning it calls for.
+pub fn check_pixel_aspect(dx: f64, dy: f64) -> Result<Option<String>, String> {
+    let aspect = dx.max(dy) / dx.min(dy);
+    if aspect > MAX_PIXEL_ASPECT {
         return Err(format!(
-            "its pixels are {} × {} m, not square: the contact is solved on square pixels; resample the map to square pixels (e.g. with Gwyddion or SurfaceTopography), or state the pixel size if the file's is wrong",
+            "its pixels are {} × {} m, {aspect:.0} times longer than wide (at most {MAX_PIXEL_ASPECT:.0} is solved): check the pixel size the file or pipeline.yaml states",
             crate::ranges::show(dx),
             crate::ranges::show(dy)
         ));
     }
-    Ok(())
+    Ok((aspect > WARN_PIXEL_ASPECT).then(|| {
+        format!(
+            "its pixels are {aspect:.1} times longer than wide: the contact is resolved along the long side as on a map of {} m pixels",
+            crate::ranges::show(dx.max(dy))
+        )
+    }))
 }
 
 /// Refuse a fill that would invent more than [`MAX_FILLED_FRACTION`] of a map; a warning
@@ -305,7 +320,7 @@ pub fn check_not_flat(before: &[f64], after: &[f64], form: &str) -> Result<(), S
 
 /// What [`prepare`] would refuse in a map already read, checked without filling it or
 /// computing its spectrum (so that a plan refuses it before any work): the units, a pixel
-/// size in range and square, the share a fill would invent, and a map flat once its form
+/// size in range and of a sane aspect, the share a fill would invent, and a map flat once its form
 /// is removed.
 pub fn check_for_contact(
     read: &super::measured::MeasuredMap,
@@ -320,7 +335,7 @@ pub fn check_for_contact(
     };
     let (scale, _) = height_scale(p, read.height_unit_m, &bad).map_err(plain)?;
     let ((dx, dy), _) = pixel_size(p, read, &bad).map_err(plain)?;
-    check_square_pixels(dx, dy)?;
+    check_pixel_aspect(dx, dy)?;
     let missing = read.missing();
     if p.fill == FillArg::Harmonic {
         check_filled_share(missing, read.rows * read.cols)?;
@@ -373,6 +388,7 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
         FormArg::Plane => Some(Form::Plane),
         FormArg::Curvature => Some(Form::Curvature),
     };
+    let aspect_warning = check_pixel_aspect(dx, dy).map_err(bad)?;
     let mut fill_warning = None;
     if p.fill == FillArg::Harmonic {
         fill_warning = check_filled_share(missing, rows * cols).map_err(bad)?;
@@ -405,6 +421,7 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
     } else {
         spectrum(&map)
     };
+    warnings.extend(aspect_warning);
     warnings.extend(fill_warning);
     for w in &warnings {
         crate::note!("warning: {name}: {w}");

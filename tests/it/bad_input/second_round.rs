@@ -598,12 +598,12 @@ fn measured_studies_are_checked_when_the_plan_is_made() {
             ],
         ),
         study(
-            "non-square pixels",
+            "pixels 100 times longer than wide",
             "[rough.npy]",
-            "{height_unit: um, pixel_size: 1, pixel_size_y: 2}",
+            "{height_unit: um, pixel_size: 1, pixel_size_y: 100}",
             "run --profile t",
             2,
-            &["studies.m.measured.files[0]", "not square"],
+            &["studies.m.measured.files[0]", "100 times longer than wide"],
         ),
         study(
             "a device",

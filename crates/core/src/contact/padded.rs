@@ -1,7 +1,9 @@
-//! The free-boundary (non-periodic) elastic half-space on a square grid: a measured surface
-//! is not periodic, so the deflection of each node is the Boussinesq response to the
+//! The free-boundary (non-periodic) elastic half-space on a square grid of nodes: a measured
+//! surface is not periodic, so the deflection of each node is the Boussinesq response to the
 //! pressure of every pixel of the grid alone, with nothing beyond it. The influence of a
-//! pixel (uniform pressure on a Δl × Δl square, Love's closed form) is convolved by FFT on
+//! pixel (uniform pressure on a Δx × Δy rectangle, Love's closed form; square pixels are the
+//! case Δy = Δx, and an instrument's rectangular pixels are solved as measured, without
+//! resampling) is convolved by FFT on
 //! a grid of twice the side, the pressure zero-padded (Hockney's method, as ContactMechanics
 //! does): on the `2n` torus, two nodes of the `n` window are never more than `n − 1` apart,
 //! so the circular convolution is the free-space one on the window.
@@ -60,21 +62,32 @@ pub fn rectangle_integral(x: f64, y: f64, sx: f64, sy: f64) -> f64 {
 }
 
 impl PaddedOperator {
-    /// The operator on `grid`'s window (its spacing is the pixel side) for the effective
-    /// modulus `e_star` (> 0).
+    /// The operator on `grid`'s window of square pixels (its spacing is the pixel side) for
+    /// the effective modulus `e_star` (> 0).
     pub fn new(grid: Grid, e_star: f64) -> Self {
+        Self::with_aspect(grid, e_star, 1.0)
+    }
+
+    /// The operator on `grid`'s window of rectangular pixels: `Δx` is the grid's spacing
+    /// and `Δy = aspect · Δx` (`aspect` finite and > 0). Node `(i, j)` sits at
+    /// `(j Δx, i Δy)`; the kernel is Love's integral over the `Δx × Δy` pixel.
+    pub fn with_aspect(grid: Grid, e_star: f64, aspect: f64) -> Self {
         assert!(
             e_star.is_finite() && e_star > 0.0,
             "E* must be finite and > 0"
         );
+        assert!(
+            aspect.is_finite() && aspect > 0.0,
+            "the pixel aspect Δy/Δx must be finite and > 0"
+        );
         let n = grid.n();
-        let s = grid.spacing();
+        let (sx, sy) = (grid.spacing(), grid.spacing() * aspect);
         let scale = 1.0 / (std::f64::consts::PI * e_star);
         let kernel: Vec<f64> = (0..n * n)
             .into_par_iter()
             .map(|i| {
                 let (dy, dx) = ((i / n) as f64, (i % n) as f64);
-                scale * rectangle_integral(dx * s, dy * s, s, s)
+                scale * rectangle_integral(dx * sx, dy * sy, sx, sy)
             })
             .collect();
         // The kernel on the 2n torus (offsets beyond n − 1 never pair two nodes of the
@@ -333,8 +346,8 @@ mod tests {
     /// and whose padded blocks straddle it; and its energy is ⟨p, K p⟩.
     #[test]
     fn padded_convolution_is_the_free_space_sum() {
-        for n in [6usize, 16, 70] {
-            let op = PaddedOperator::new(Grid::unit(n).unwrap(), 1.7);
+        for (n, aspect) in [(6usize, 1.0), (16, 1.0), (70, 1.0), (16, 2.466), (70, 0.37)] {
+            let op = PaddedOperator::with_aspect(Grid::unit(n).unwrap(), 1.7, aspect);
             assert!(op.smallest_eigenvalue_ratio() > 0.0);
             let mut state = 12345u64;
             let p: Vec<f64> = (0..n * n)
@@ -358,7 +371,7 @@ mod tests {
                     let (a, b) = (u[iy * n + ix], direct[ix]);
                     assert!(
                         (a - b).abs() <= 1e-12 * b.abs(),
-                        "n = {n}, ({iy}, {ix}): {a} vs {b}"
+                        "n = {n}, aspect {aspect}, ({iy}, {ix}): {a} vs {b}"
                     );
                     dot += p[iy * n + ix] * b;
                 }

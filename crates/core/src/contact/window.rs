@@ -10,7 +10,11 @@
 //! the far nodes inflate; the tolerance is scaled by the ratio of the window's deviation
 //! to the square's, so that it means what it means for the window alone.
 //!
-//! Loads are `W/W0` with `W0 = E*·rms slope·A`, `A = rows·cols·Δl²` the window's area and
+//! Pixels are `Δx × Δy` as measured: the square is `s` nodes on a side, `s·Δx` by `s·Δy`,
+//! and the half-space's kernel is that of a `Δx × Δy` pixel, so that rectangular pixels are
+//! solved without resampling.
+//!
+//! Loads are `W/W0` with `W0 = E*·rms slope·A`, `A = rows·cols·Δx·Δy` the window's area and
 //! the rms slope that of the map without wrap-around ([`Topography::rms_slope`]): the
 //! window's mean pressure is `p̄ = (W/W0)·E*·rms slope`. Solved in units where the square
 //! is the unit box and `E* = 1`; pressures are returned in the unit of the `e_star` given.
@@ -20,9 +24,6 @@ use super::solver::{Ceiling, ContactError, NonNegative, SolveReport, SolverConfi
 use super::sweep::{check_rms_slope, sweep, LoadResult, SweepError};
 use crate::grid::Grid;
 use crate::topography::Topography;
-
-/// Relative difference of the pixel sides below which pixels are square.
-pub const SQUARE_PIXEL: f64 = 1e-6;
 
 /// One solved load of a window.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -58,7 +59,7 @@ pub struct WindowLayout {
     pub rms_slope: f64,
 }
 
-/// The contact of `map` (no missing point; square pixels) at every load `W/W0` of `loads`
+/// The contact of `map` (no missing point; pixels `dx × dy`, square or not) at every load `W/W0` of `loads`
 /// on the free-boundary half-space of modulus `e_star`, capped at `hardness·E*·rms slope`
 /// when a hardness (in the units of W/W0) is given. After each converged load,
 /// `on_load(index, window pressure row-major rows × cols, result)`.
@@ -98,7 +99,7 @@ pub fn sweep_window(
     // The square's mean pressure carries the window's load: p̄_square = p̄ · A / A_square.
     let share = (rows * cols) as f64 / (side * side) as f64;
     let square_loads: Vec<f64> = loads.iter().map(|w| w * share).collect();
-    let op = PaddedOperator::new(Grid::unit(side)?, 1.0);
+    let op = PaddedOperator::with_aspect(Grid::unit(side)?, 1.0, map.dy / map.dx);
     let mut window = vec![0.0; rows * cols];
     let to_window_error = cfg.tolerance / square_cfg.tolerance;
     let mut pass_on = |i: usize, p: &[f64], r: &LoadResult| {
@@ -168,7 +169,7 @@ pub fn sweep_window(
     Ok((layout, out))
 }
 
-/// The map in the corner of the unit square of even side `s` (lengths divided by `s·Δl`),
+/// The map in the corner of the square of even side `s` nodes (lengths divided by `s·Δx`),
 /// the rest held far below; and the ratio of the window's height deviation to the
 /// square's, which scales the tolerance.
 fn embed(map: &Topography) -> (usize, Vec<f64>, f64) {
@@ -201,12 +202,12 @@ fn embed(map: &Topography) -> (usize, Vec<f64>, f64) {
     (side, square, scale)
 }
 
-/// Square pixels, every height a number, E* a positive modulus.
+/// Pixel sides positive, every height a number, E* a positive modulus.
 fn check_map(map: &Topography, e_star: f64) -> Result<(), SweepError> {
     let cols = map.cols;
-    if (map.dx - map.dy).abs() > SQUARE_PIXEL * map.dx.max(map.dy) {
+    if !(map.dx.is_finite() && map.dx > 0.0 && map.dy.is_finite() && map.dy > 0.0) {
         return Err(ContactError::BadConfig(format!(
-            "pixels of {:e} × {:e} m: the half-space is solved on square pixels; resample the map",
+            "pixels of {:e} × {:e} m: each side must be finite and > 0",
             map.dx, map.dy
         ))
         .into());
