@@ -62,49 +62,240 @@ pub fn length_unit_m(unit: &str) -> Option<f64> {
     })
 }
 
-/// The units a text matrix states in its comment header, as SurfaceTopography writes it
-/// (`# Width: 30.0 µm`, `# Height: 18.0 µm`, `# Value units: µm`): applied to `map`.
+/// The units and sizes a text matrix states in its header lines (with or without a leading
+/// `#` or `%`), read by the keys SurfaceTopography's text reader knows (`AscReader`):
+/// - counts: `h=305 w=75`, `x-pixels=…`, `y-pixels=…` (rows and columns, checked against
+///   the numbers read);
+/// - sizes: `Width: 10 µm`, `Height: 10 µm` (`x-length`, `y-length`, `Breite`, `Höhe`);
+/// - a pixel size: `pixel size=3.69862e-007 m` (the same along x and y);
+/// - units: `Value units: m`, `z-unit`, `x-unit`, `y-unit`; `height conversion factor
+///   (-> m)=6.3e-008`, the metres per number (instrument exports in radians of phase).
+///
+/// A size without its own unit takes the heights' unit, as SurfaceTopography does.
 pub(super) fn text_header(header: &[String], map: &mut MeasuredMap) -> Result<(), String> {
-    let (mut width, mut height, mut unit) = (None, None, None);
-    for line in header
-        .iter()
-        .map(|l| l.trim())
-        .filter(|l| l.starts_with('#'))
-    {
-        let Some((key, value)) = line.trim_start_matches('#').split_once(':') else {
+    #[derive(Default)]
+    struct Found {
+        nx: Option<usize>,
+        ny: Option<usize>,
+        size_x: Option<(f64, Option<String>)>,
+        size_y: Option<(f64, Option<String>)>,
+        pixel: Option<(f64, Option<String>)>,
+        xunit: Option<String>,
+        yunit: Option<String>,
+        zunit: Option<String>,
+        zfac: Option<f64>,
+    }
+    let mut f = Found::default();
+    // A number at the start of `v`, and what follows it (a unit, or nothing).
+    let number_and_rest = |v: &str| -> Option<(f64, Option<String>)> {
+        let v = v.trim();
+        let end = v
+            .char_indices()
+            .find(|&(i, c)| {
+                !(c.is_ascii_digit()
+                    || c == '.'
+                    || c == '-'
+                    || c == '+'
+                    || ((c == 'e' || c == 'E')
+                        && v[i + c.len_utf8()..]
+                            .starts_with(|d: char| d.is_ascii_digit() || d == '-' || d == '+')))
+            })
+            .map_or(v.len(), |(i, _)| i);
+        let x = v[..end].parse::<f64>().ok()?;
+        let rest = v[end..].trim();
+        Some((x, (!rest.is_empty()).then(|| rest.to_string())))
+    };
+    let count = |v: &str| v.trim().parse::<usize>().ok();
+    for raw in header {
+        let line = raw.trim().trim_start_matches(['#', '%']).trim();
+        // `key = value`, `key: value` or (counts only) `key value`; several `key=value`
+        // pairs may share a line (`h=650 w=650`).
+        let lower = line.to_lowercase();
+        if let Some(rest) = lower.strip_prefix("height conversion factor (->") {
+            let Some((unit, value)) = rest.split_once(')') else {
+                continue;
+            };
+            let value = value.trim().trim_start_matches('=').trim();
+            let zfac = value.parse::<f64>().map_err(|_| {
+                format!("header '{line}': the height conversion factor is not a number")
+            })?;
+            f.zunit = Some(unit.trim().to_string());
+            f.zfac = Some(zfac);
+            continue;
+        }
+        if lower.starts_with("pixel size") {
+            if let Some((_, v)) = line.split_once('=') {
+                f.pixel =
+                    Some(number_and_rest(v).ok_or_else(|| {
+                        format!("header '{line}': the pixel size is not a number")
+                    })?);
+            }
+            continue;
+        }
+        let pairs: Vec<(String, String)> = if line.contains('=') {
+            // `h=650 w=650`, `x-unit = um`: no space around `=`, then split before every
+            // `key=`.
+            let tight = line.split('=').map(str::trim).collect::<Vec<_>>().join("=");
+            let mut out = Vec::new();
+            for part in tight.split_whitespace() {
+                match part.split_once('=') {
+                    Some((k, v)) => out.push((k.to_string(), v.to_string())),
+                    None => {
+                        if let Some(last) = out.last_mut() {
+                            last.1.push(' ');
+                            last.1.push_str(part);
+                        }
+                    }
+                }
+            }
+            out
+        } else if let Some((k, v)) = line.split_once(':') {
+            vec![(k.to_string(), v.to_string())]
+        } else if let Some(v) = line.strip_prefix("X Size") {
+            vec![("x size".to_string(), v.to_string())]
+        } else if let Some(v) = line.strip_prefix("Y Size") {
+            vec![("y size".to_string(), v.to_string())]
+        } else {
             continue;
         };
-        let length = |v: &str| -> Result<(f64, f64), String> {
-            let mut parts = v.split_whitespace();
-            let number = parts.next().and_then(|x| x.parse::<f64>().ok());
-            let scale = parts.next().map(|u| {
-                length_unit_m(u)
-                    .ok_or_else(|| format!("header '{}': unknown length unit '{u}'", line))
-            });
-            match (number, scale) {
-                (Some(x), Some(s)) if x > 0.0 && x.is_finite() => Ok((x, s?)),
-                _ => Err(format!("header '{line}' is not a length with its unit")),
+        for (key, value) in pairs {
+            let length = || {
+                number_and_rest(&value)
+                    .filter(|(x, _)| *x > 0.0 && x.is_finite())
+                    .ok_or_else(|| format!("header '{line}' is not a length"))
+            };
+            match key.trim().to_lowercase().as_str() {
+                // As SurfaceTopography: `h` and `X Size` count the lines (rows, along y),
+                // `w` and `Y Size` the numbers in a line (columns, along x).
+                "h" | "x-pixels" | "x size" => f.ny = count(&value),
+                "w" | "y-pixels" | "y size" => f.nx = count(&value),
+                "width" | "x-length" | "breite" => f.size_x = Some(length()?),
+                "height" | "y-length" | "höhe" => f.size_y = Some(length()?),
+                "x-unit" => f.xunit = Some(value.trim().to_string()),
+                "y-unit" => f.yunit = Some(value.trim().to_string()),
+                "z-unit" | "value units" => f.zunit = Some(value.trim().to_string()),
+                _ => {}
             }
-        };
-        match key.trim().to_ascii_lowercase().as_str() {
-            "width" => width = Some(length(value)?),
-            "height" => height = Some(length(value)?),
-            "value units" => {
-                let u = value.trim();
-                unit = Some(
-                    length_unit_m(u)
-                        .ok_or_else(|| format!("header '{line}': unknown length unit '{u}'"))?,
-                );
-            }
-            _ => {}
         }
     }
-    if let Some(u) = unit {
-        map.heights.iter_mut().for_each(|h| *h *= u);
-        map.height_unit_m = Some(u);
+    for (stated, read, what) in [
+        (f.ny, map.rows, "lines (h)"),
+        (f.nx, map.cols, "columns (w)"),
+    ] {
+        if let Some(n) = stated.filter(|&n| n != read) {
+            return Err(format!(
+                "its header states {n} {what} where the file holds {read}: truncated, or not the matrix the header describes"
+            ));
+        }
     }
-    if let (Some((w, wu)), Some((h, hu))) = (width, height) {
-        map.pixel_m = Some((w * wu / map.cols as f64, h * hu / map.rows as f64));
+    let unit_m = |u: &str| {
+        length_unit_m(u.trim()).ok_or_else(|| format!("header: unknown length unit '{}'", u.trim()))
+    };
+    let zunit_m = f.zunit.as_deref().map(unit_m).transpose()?;
+    if let Some(z) = zunit_m {
+        let scale = z * f.zfac.unwrap_or(1.0);
+        map.heights.iter_mut().for_each(|h| *h *= scale);
+        map.height_unit_m = Some(scale);
+    }
+    // A size in metres: its own unit, else the axis's, else the heights'.
+    let metres =
+        |(x, own): &(f64, Option<String>), axis: &Option<String>| -> Result<Option<f64>, String> {
+            let unit = own.as_deref().or(axis.as_deref()).or(f.zunit.as_deref());
+            Ok(match unit {
+                Some(u) => Some(x * unit_m(u)?),
+                None => None,
+            })
+        };
+    let (px, py) = match (&f.pixel, &f.size_x, &f.size_y) {
+        (Some(p), _, _) => {
+            let d = metres(p, &f.xunit)?;
+            (d, d)
+        }
+        (None, Some(w), Some(h)) => (
+            metres(w, &f.xunit)?.map(|w| w / map.cols as f64),
+            metres(h, &f.yunit)?.map(|h| h / map.rows as f64),
+        ),
+        _ => (None, None),
+    };
+    if let (Some(dx), Some(dy)) = (px, py) {
+        map.pixel_m = Some((dx, dy));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map(rows: usize, cols: usize) -> MeasuredMap {
+        MeasuredMap {
+            rows,
+            cols,
+            heights: vec![2.0; rows * cols],
+            height_unit_m: None,
+            pixel_m: None,
+            pixel_file_units: None,
+            source: Source::Text,
+        }
+    }
+
+    fn header(lines: &[&str]) -> Vec<String> {
+        lines.iter().map(|l| l.to_string()).collect()
+    }
+
+    /// An instrument's export (SurfaceTopography's matrix-4.txt): counts, one pixel size for
+    /// both axes, and the metres per number.
+    #[test]
+    fn instrument_header_of_counts_pixel_and_conversion() {
+        let lines = header(&[
+            "h=305 w=75",
+            "pixel size=3.69862e-007 m",
+            "data unit=rad",
+            "height conversion factor (-> m)=2.91818e-008",
+        ]);
+        let mut m = map(305, 75);
+        text_header(&lines, &mut m).unwrap();
+        assert_eq!(m.pixel_m, Some((3.69862e-7, 3.69862e-7)));
+        assert_eq!(m.heights[0], 2.0 * 2.91818e-8);
+        let e = text_header(&lines, &mut map(304, 75)).unwrap_err();
+        assert!(
+            e.contains("states 305 lines (h) where the file holds 304"),
+            "{e}"
+        );
+    }
+
+    /// Gwyddion's exports in English and German, sizes in their own units, heights in m; a
+    /// size without a unit takes the heights'.
+    #[test]
+    fn gwyddion_headers_and_units() {
+        for lines in [
+            [
+                "# Channel: Main",
+                "# Width: 12.34 µm",
+                "# Height: 5678.9 nm",
+                "# Value units: m",
+            ],
+            [
+                "# Kanal: Main",
+                "# Breite: 12.34 µm",
+                "# Höhe: 5678.9 nm",
+                "# Value units: m",
+            ],
+        ] {
+            let mut m = map(4, 3);
+            text_header(&header(&lines), &mut m).unwrap();
+            let (dx, dy) = m.pixel_m.unwrap();
+            assert!((dx / (12.34e-6 / 3.0) - 1.0).abs() < 1e-12, "{dx}");
+            assert!((dy / (5678.9e-9 / 4.0) - 1.0).abs() < 1e-12, "{dy}");
+            assert_eq!(m.height_unit_m, Some(1.0));
+        }
+        let mut m = map(2, 2);
+        text_header(
+            &header(&["x-length = 4", "y-length = 2", "z-unit = um"]),
+            &mut m,
+        )
+        .unwrap();
+        assert_eq!(m.pixel_m, Some((2e-6, 1e-6)));
+        assert_eq!(m.heights[0], 2e-6);
+    }
 }

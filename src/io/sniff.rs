@@ -35,6 +35,8 @@ pub fn sniff(head: &[u8]) -> Content {
         Content::SdfText
     } else if starts(b"bISO-1.0") {
         Content::SdfBinary
+    } else if starts(b"\xef\xbf\xbdNUMPY") {
+        Content::Foreign("a .npy file corrupted by a text conversion (its first byte, 0x93, became U+FFFD): save the array again with numpy.save, or copy it as binary")
     } else if starts(b"\x89HDF\r\n\x1a\n") {
         Content::Foreign("NetCDF 4 / HDF5: not read here; save it as NetCDF 3 (SurfaceTopography's `to_netcdf(..., format='NETCDF3_64BIT_OFFSET')`) or X3P")
     } else if matches!(head.get(..4), Some([0x88, 0x1b, 0x03, 0x6f..=0x71])) {
@@ -53,6 +55,9 @@ pub fn sniff(head: &[u8]) -> Content {
         )
     } else if starts(b"OPD") || starts(b"\x01\x00OPD") {
         Content::Foreign("a Veeco/Wyko OPD file: not read here; SurfaceTopography reads it")
+    } else if starts(b"\xff\xfe") || starts(b"\xfe\xff") {
+        // A UTF-16 byte-order mark: text as Windows software exports it.
+        Content::Text
     } else if is_text(head) {
         Content::Text
     } else {
@@ -112,6 +117,7 @@ mod tests {
         assert_eq!(sniff(b"aISO-1.0\nManufacID"), Content::SdfText);
         assert_eq!(sniff(b"1 2 3\n4 5 6\n"), Content::Text);
         assert_eq!(sniff(b"\xef\xbb\xbf1 2\n"), Content::Text);
+        assert_eq!(sniff(b"\xff\xfe1\x00 \x002\x00"), Content::Text);
         assert!(
             matches!(sniff(b"\x88\x1b\x03\x6f\0\0\0\0"), Content::Foreign(w) if w.contains("MetroPro"))
         );

@@ -29,9 +29,13 @@ pub enum Shape {
     LineScan,
 }
 
-/// The text of `bytes`: UTF-8 (a leading byte-order mark dropped) or, failing that, Latin-1
-/// when the bytes look like text; a binary file is refused.
+/// The text of `bytes`: UTF-16 after its byte-order mark (as Windows instrument software
+/// exports CSV), UTF-8 (a leading byte-order mark dropped) or, failing that, Latin-1 when
+/// the bytes look like text; a binary file is refused.
 pub fn decode(bytes: &[u8]) -> Result<String, String> {
+    if let Some(text) = utf16(bytes) {
+        return text;
+    }
     let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     if looks_binary(bytes) {
         return Err(
@@ -43,6 +47,36 @@ pub fn decode(bytes: &[u8]) -> Result<String, String> {
         // Latin-1 (`µm` as 0xB5), as older instrument software writes it.
         Err(_) => bytes.iter().map(|&b| b as char).collect(),
     })
+}
+
+/// The text of `bytes` if they start with a UTF-16 byte-order mark (little- or big-endian).
+fn utf16(bytes: &[u8]) -> Option<Result<String, String>> {
+    let (rest, little) = if let Some(rest) = bytes.strip_prefix(b"\xff\xfe") {
+        (rest, true)
+    } else {
+        (bytes.strip_prefix(b"\xfe\xff")?, false)
+    };
+    let units: Vec<u16> = rest
+        .chunks_exact(2)
+        .map(|c| {
+            if little {
+                u16::from_le_bytes([c[0], c[1]])
+            } else {
+                u16::from_be_bytes([c[0], c[1]])
+            }
+        })
+        .collect();
+    Some(
+        String::from_utf16(&units)
+            .map_err(|_| "starts as UTF-16 text but is not valid UTF-16".to_string())
+            .and_then(|text| {
+                if looks_binary(text.as_bytes()) {
+                    Err("starts as UTF-16 text but holds binary data".into())
+                } else {
+                    Ok(text)
+                }
+            }),
+    )
 }
 
 /// NUL bytes, or more than 5 % of control characters in the first 64 KiB: not text.
@@ -175,8 +209,9 @@ pub fn table(text: &str) -> Result<Table, String> {
 pub const GRID_TOLERANCE_PX: f64 = 0.01;
 
 /// What a table is. Three columns whose first two take few values, about one grid node per
-/// row, are an x-y-z list (whose grid [`super::xyz`] then checks); one row, one column or two columns are a profile;
-/// anything else with at least two rows and three columns is a matrix.
+/// row, are an x-y-z list (whose grid [`super::xyz`] then checks); one row, one column, two
+/// columns, or three whose first only increases (an index or x) are a profile; anything else
+/// with at least two rows and three columns is a matrix.
 pub fn classify(t: &Table) -> Shape {
     if t.rows == 1 || t.cols <= 2 {
         return Shape::LineScan;
@@ -194,6 +229,11 @@ pub fn classify(t: &Table) -> Shape {
         if nx >= 2 && ny >= 2 && nx.saturating_mul(ny) <= 2 * t.rows {
             return Shape::Xyz;
         }
+        // A first column that only increases (an index, or x) and no grid: a profile
+        // written with an index column (`index, x, z`, as Windows CSV exports are).
+        if (1..t.rows).all(|r| t.values[r * 3] > t.values[(r - 1) * 3]) {
+            return Shape::LineScan;
+        }
     }
     Shape::Matrix
 }
@@ -203,7 +243,10 @@ pub fn describe_line_scan(t: &Table) -> String {
     match (t.rows, t.cols) {
         (1, c) => format!("a line scan: one row of {c} heights"),
         (r, 1) => format!("a line scan: one column of {r} heights"),
-        (r, _) => format!("a line scan (x, z): {r} points of two columns"),
+        (r, 2) => format!("a line scan (x, z): {r} points of two columns"),
+        (r, _) => format!(
+            "a line scan (an increasing first column, an index or x, then two): {r} points of three columns"
+        ),
     }
 }
 
@@ -240,6 +283,15 @@ mod tests {
         let t = table(&decode(b"\xef\xbb\xbfh=650\nx y\n1 2 3\n4 5 6\n").unwrap()).unwrap();
         assert_eq!(t.header, ["h=650", "x y"]);
         assert_eq!(t.values, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        let wide: Vec<u8> = "x in \u{b5}m,y\r\n1,2\r\n"
+            .encode_utf16()
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        let t = table(&decode(&[b"\xff\xfe".as_slice(), &wide].concat()).unwrap()).unwrap();
+        assert_eq!(
+            (t.header.as_slice(), t.rows, t.cols),
+            (["x in µm,y".to_string()].as_slice(), 1, 2)
+        );
         let latin = decode(b"# Value units: \xb5m\n1 2 3\n").unwrap();
         assert!(latin.contains("µm"));
         assert!(decode(b"\x88\x1b\x03\x6f\0\0binary").is_err());
@@ -255,7 +307,11 @@ mod tests {
         assert_eq!(shape("0 1\n1 2\n2 3\n"), Shape::LineScan);
         assert_eq!(shape("1\n2\n3\n"), Shape::LineScan);
         assert_eq!(shape("1 2 3 4 5\n"), Shape::LineScan);
-        // Three columns that are no grid: a narrow matrix.
+        // Three columns that are no grid: a narrow matrix, unless the first only increases.
         assert_eq!(shape("1 2 3\n4 5 6\n7 8 9\n1 5 9\n"), Shape::Matrix);
+        assert_eq!(
+            shape("0 -9.9 1.4\n1 -9.8 1.5\n2 -9.7 1.3\n3 -9.6 1.2\n4 -9.5 1.1\n"),
+            Shape::LineScan
+        );
     }
 }

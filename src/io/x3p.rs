@@ -17,8 +17,13 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
     let file = std::fs::File::open(path).map_err(|e| format!("cannot be opened ({e})"))?;
     let mut zip = zip::ZipArchive::new(file)
         .map_err(|e| format!("is not a readable zip archive, so not an X3P file ({e})"))?;
+    // main.xml at the root, as ISO 5436-2 lays the archive out, or in the one folder that
+    // holds everything (as x3ptools and other writers zip a directory); the links of
+    // main.xml are relative to it.
+    let folder = main_folder(&zip)?;
+    let at = |link: &str| format!("{folder}{}", link.trim());
     // main.xml is text of a few KiB; 64 MiB is far beyond any index a writer makes.
-    let xml = member(&mut zip, "main.xml", 64 << 20)?;
+    let xml = member(&mut zip, &at("main.xml"), 64 << 20)?;
     let xml = String::from_utf8(xml).map_err(|_| "main.xml is not UTF-8 text".to_string())?;
     let doc = roxmltree::Document::parse(&xml)
         .map_err(|e| format!("main.xml is not well-formed XML ({e})"))?;
@@ -32,7 +37,10 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
     }
     let axis = |name: &str| -> Result<Axis, String> {
         let base = ["Record1", "Axes", name];
-        let get = |field: &str| optional(root, &[base[0], base[1], base[2], field]);
+        // An empty element (`<Offset/>`, as x3ptools writes it) states nothing.
+        let get = |field: &str| {
+            optional(root, &[base[0], base[1], base[2], field]).filter(|s| !s.trim().is_empty())
+        };
         Ok(Axis {
             kind: text(root, &[base[0], base[1], base[2], "AxisType"])?,
             data_type: get("DataType").unwrap_or_default(),
@@ -90,7 +98,7 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
     )?;
     let data = member(
         &mut zip,
-        link.trim(),
+        &at(&link),
         rows as u64 * cols as u64 * width as u64,
     )?;
     check_md5(
@@ -103,7 +111,7 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
     let (scale, shift) = (cz.increment.unwrap_or(1.0), cz.offset.unwrap_or(0.0));
     let mut heights: Vec<f64> = raw.into_iter().map(|v| v * scale + shift).collect();
     if let Some(valid_link) = optional(root, &["Record3", "DataLink", "ValidPointsLink"]) {
-        let bits = member(&mut zip, valid_link.trim(), count.div_ceil(8) as u64 + 64)?;
+        let bits = member(&mut zip, &at(&valid_link), count.div_ceil(8) as u64 + 64)?;
         check_md5(
             &bits,
             optional(root, &["Record3", "DataLink", "MD5ChecksumValidPoints"]),
@@ -131,6 +139,31 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
         pixel_file_units: None,
         source: Source::X3p,
     })
+}
+
+/// The folder of the archive's `main.xml` (`""` at the root, else `name/`): the root's, or
+/// that of the only `main.xml` outside macOS's `__MACOSX/` resource forks.
+fn main_folder(zip: &zip::ZipArchive<std::fs::File>) -> Result<String, String> {
+    let indices: Vec<String> = zip
+        .file_names()
+        .filter_map(|n| n.ok().map(|n| n.into_owned()))
+        .filter(|n| !n.starts_with("__MACOSX/"))
+        .filter(|n| n == "main.xml" || n.ends_with("/main.xml"))
+        .collect();
+    if indices.iter().any(|n| n == "main.xml") {
+        return Ok(String::new());
+    }
+    match indices.as_slice() {
+        [one] => Ok(one.trim_end_matches("main.xml").to_string()),
+        [] => Err(
+            "has no member 'main.xml' (an X3P archive holds main.xml and the data it links)".into(),
+        ),
+        many => Err(format!(
+            "holds {} main.xml ({}): several surfaces in one archive; extract the one to read",
+            many.len(),
+            many.join(", ")
+        )),
+    }
 }
 
 struct Axis {

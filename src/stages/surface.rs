@@ -48,7 +48,7 @@ pub struct MeasuredJob {
 
 /// The readers' revision: 2 reads by content (an x-y-z list or decimal commas in a .txt),
 /// refuses maps flat once their form is removed and fills of more than half a map.
-pub const MEASURED_READER: u32 = 2;
+pub const MEASURED_READER: u32 = 3;
 
 /// The name a measured file is copied under: `topography.<ext>` (the readers go by the
 /// extension).

@@ -98,5 +98,55 @@ def plastic():
               f"pressure relative L2 {l2:.2e}")
 
 
+def rectangular():
+    """A real map with rectangular pixels, solved as measured: SurfaceTopography's
+    x3p-2.x3p (pixels of 0.128 × 0.315 µm), not resampled, against ContactMechanics'
+    free-boundary half-space on the same heights at the same forces: contact areas within
+    1e-3, pressures within 1e-5 relative L2. Its 256 × 256 corner, written back as X3P with
+    the file's pixels, keeps ContactMechanics' share of `make test` near a minute (the whole
+    650 × 650 map takes it 13 minutes; docs/VALIDATION.md gives that run's numbers)."""
+    from SurfaceTopography import read_topography
+    whole = read_topography(os.path.join(
+        os.path.dirname(os.path.abspath(__file__)), "instrument", "x3p-2.x3p"))
+    (nx, ny), (sx, sy) = whole.nb_grid_pts, whole.physical_sizes
+    corner = whole.heights()[:256, :256]
+    path = os.path.join(WORK, "x3p-2-corner.x3p")
+    Topography(corner, (sx * 256 / nx, sy * 256 / ny), unit=whole.unit,
+               periodic=False).to_x3p(path)
+    out = os.path.join(WORK, "rectangular")
+    loads = [0.05, 0.2, 0.5]
+    run = subprocess.run(
+        [BIN, "wear", "--input", path, "--form", "none", "--e-star", "100GPa",
+         "--loads", ",".join(map(str, loads)), "--a-star", "1um2", "--tolerance", "1e-10",
+         "--pressure-maps", "-o", out], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    table = pd.read_parquet(os.path.join(out, "loads.parquet"))
+    ours = np.load(os.path.join(out, "pressure.npy"))
+    t = read_topography(path)
+    (nx, ny), (sx, sy) = t.nb_grid_pts, t.physical_sizes
+    dx, dy = sx / nx, sy / ny
+    assert abs(dy / dx - 2.466) < 0.01, f"pixels {dx} × {dy} m: not the rectangular ones"
+    sub = FreeFFTElasticHalfSpace((nx, ny), E_STAR, physical_sizes=(sx, sy))
+    system = make_system(surface=Topography(t.heights(), (sx, sy)), substrate=sub)
+    for i, force in enumerate(table["force_n"]):
+        # pentol is absolute, in the heights' unit (m): 1e-16 m is 1e-9 of the rms height.
+        res = system.minimize_proxy(external_force=force, pentol=1e-16, maxiter=20000)
+        assert res.success, f"ContactMechanics did not converge at load {i}"
+        theirs = (res.jac / sub.area_per_pt).T  # [y, x]
+        mine = ours[i]
+        area_theirs = (theirs > 0).sum() * dx * dy * 1e12
+        area_mine = table["real_contact_area_um2"][i]
+        rel = abs(area_mine / area_theirs - 1)
+        differ = int(((mine > 0) ^ (theirs > 0)).sum())
+        l2 = np.sqrt(np.sum((mine - theirs) ** 2) / np.sum(theirs**2))
+        print(f"x3p-2.x3p's corner (pixels {dx * 1e6:.3f} × {dy * 1e6:.3f} µm), W/W0 = {loads[i]}: "
+              f"{force:.4g} N, contact area {area_mine:.5g} µm² against {area_theirs:.5g} "
+              f"(relative {rel:.1e}), {differ} nodes differ, pressure relative L2 {l2:.1e}")
+        assert rel <= 1e-3, f"contact areas differ by {rel:.2e}"
+        assert l2 <= 1e-5, f"pressures differ by {l2:.2e} (relative L2)"
+        assert abs(mine.sum() * dx * dy / force - 1) < 1e-9
+
+
 main()
 plastic()
+rectangular()

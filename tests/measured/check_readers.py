@@ -255,3 +255,91 @@ def sdf_and_gsf():
 
 psd_against_surface_topography()
 sdf_and_gsf()
+
+
+INSTRUMENT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "instrument")
+
+
+def x3p_in_numpy(path):
+    """An X3P archive read in numpy, independently of both readers: main.xml at the root or
+    in the archive's one folder, heights `raw · Increment + Offset` of CZ (as
+    SurfaceTopography scales them), [y, x] (rows along y); the pixel size in metres."""
+    import xml.etree.ElementTree as ET
+    with zipfile.ZipFile(path) as z:
+        main = [n for n in z.namelist()
+                if n.split("/")[-1] == "main.xml" and not n.startswith("__MACOSX")]
+        assert len(main) == 1, f"{path}: main.xml members {main}"
+        folder = main[0][: -len("main.xml")]
+        root = ET.fromstring(z.read(main[0]))
+
+        def get(*names):
+            node = root
+            for name in names:
+                node = next(c for c in node if c.tag.split("}")[-1] == name)
+            return node.text
+
+        dtype = {"I": "<u2", "L": "<u4", "F": "<f4", "D": "<f8"}[get("Record1", "Axes", "CZ", "DataType")]
+        nx, ny = int(get("Record3", "MatrixDimension", "SizeX")), int(get("Record3", "MatrixDimension", "SizeY"))
+        inc = float(get("Record1", "Axes", "CZ", "Increment") or 1)
+        off = float(get("Record1", "Axes", "CZ", "Offset") or 0)
+        raw = np.frombuffer(z.read(folder + get("Record3", "DataLink", "PointDataLink")), dtype, nx * ny)
+        pixel = (float(get("Record1", "Axes", "CX", "Increment")), float(get("Record1", "Axes", "CY", "Increment")))
+    return raw.astype(float).reshape(ny, nx) * inc + off, pixel
+
+
+def instruments():
+    """Files nobody on this project wrote (instrument/SOURCES.md): every map read as
+    SurfaceTopography reads it; where SurfaceTopography refuses a valid file, as numpy reads
+    it; and every file that is not a map refused with exit 2, saying what it is."""
+    at = lambda name: os.path.join(INSTRUMENT, name)  # noqa: E731
+    for name in ["x3p-2.x3p", "sdf-1.sdf", "nc-1.nc", "matrix-3.txt", "matrix-4.txt",
+                 "matrix-6.txt", "txt_example.txt", "gwyddion-export-english.txt",
+                 "gwyddion-export-german.txt"]:
+        compare(at(name))
+    for name in ["xyz-1.txt", "xyz-2.txt", "xyz-1-different-order.txt"]:
+        compare(at(name), "--height-unit", "um", unit="um")
+    # Files that state no units, given them (the pixel size in the heights' unit).
+    compare(at("matrix-5.txt"), "--height-unit", "nm", "--pixel-size", "2000",
+            physical_sizes=(10 * 2000, 10 * 2000), unit="nm")
+    compare(at("example-2d.npy"), "--height-unit", "um", "--pixel-size", "1",
+            rows_first=True, physical_sizes=(2, 2), unit="µm")
+    # X3P archives SurfaceTopography refuses (an en dash in Revision; main.xml in a folder,
+    # as x3ptools writes it): read, and equal to numpy's reading of the same members.
+    for name in ["pyramid.x3p", "testing.x3p", "csafe-logo.x3p", "sample-land.x3p"]:
+        try:
+            read_topography(at(name))
+            refused = None
+        except Exception as e:  # noqa: BLE001
+            refused = type(e).__name__
+        assert refused, f"{name}: SurfaceTopography now reads it; compare with it instead"
+        theirs, pixel = x3p_in_numpy(at(name))
+        mine, report = ours(at(name))
+        assert mine.shape == theirs.shape, f"{name}: shape {mine.shape} against {theirs.shape}"
+        assert np.array_equal(np.isnan(mine), np.isnan(theirs)), f"{name}: missing points"
+        ok = ~np.isnan(theirs)
+        assert np.array_equal(mine[ok], theirs[ok]), f"{name}: heights differ"
+        got = (report["pixel_size_x_m"], report["pixel_size_y_m"])
+        assert np.allclose(got, pixel, rtol=1e-12), f"{name}: pixel {got} against {pixel}"
+        print(f"{name}: {mine.shape[0]} × {mine.shape[1]}, as numpy reads it "
+              f"(SurfaceTopography refuses it: {refused})")
+    refusals = [
+        ("csv-1.csv", "a line scan (x, z): 8 points"),
+        ("csv-2.csv", "a line scan (an increasing first column"),
+        ("csv-3.csv", "a line scan (x, z): 8 points"),
+        ("dektak-1.csv", "a line scan (x, z): 9600 points"),
+        ("single_column.txt", "one column of 9 heights"),
+        ("xy-1.txt", "a line scan (x, z): 132 points"),
+        ("nonuniform.asc", "a line scan (x, z): 134 points"),
+        ("nonsense_txt_file.txt", "no heights"),
+        ("metropro-1.head.dat", "Zygo MetroPro (.dat): not read here; SurfaceTopography reads it"),
+        ("wrongnpyfile.npy", "corrupted by a text conversion"),
+    ]
+    for name, said in refusals:
+        path = at(name)
+        run = subprocess.run([BIN, "topography", "--input", path], capture_output=True, text=True)
+        assert run.returncode == 2, f"{name}: exit {run.returncode}, not 2: {run.stderr}"
+        assert path in run.stderr and said in run.stderr, f"{name}: {run.stderr!r}"
+        print(f"{name}: exit 2: {run.stderr.strip().splitlines()[-1][len(path) + 9:][:110]}")
+
+
+instruments()
