@@ -139,6 +139,24 @@ fn rectangular_pixels_give_the_hertz_circle() {
     );
 }
 
+/// A load far beyond full contact: the far nodes of the square stay out of contact (they
+/// are sunk by the deflection of the largest load, not only by the height range, which a
+/// smooth map under W/W0 = 50 presses through), and the window is in full contact.
+#[test]
+fn far_beyond_full_contact_the_embedding_holds() {
+    for dy in [DX, 2.466 * DX] {
+        let map = sphere_on(40, 50, dy, (20, 25));
+        let cfg = SolverConfig {
+            tolerance: 1e-10,
+            ..SolverConfig::default()
+        };
+        let (_, results) = sweep_window(&map, E_STAR, &[0.5, 50.0], &cfg, None, |_, _, _| Ok(()))
+            .unwrap_or_else(|e| panic!("pixels {DX} × {dy} m: {e}"));
+        assert_eq!(results[1].n_contact_px, 40 * 50, "full contact");
+        assert!(results[0].n_contact_px < 40 * 50);
+    }
+}
+
 /// Heights that are not numbers are refused by name.
 #[test]
 fn window_refuses_what_it_cannot_solve() {

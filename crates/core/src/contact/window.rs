@@ -75,7 +75,8 @@ pub fn sweep_window(
     check_map(map, e_star)?;
     let slope = map.rms_slope();
     check_rms_slope(slope)?;
-    let (side, mut square, tolerance_scale) = embed(map);
+    let largest = loads.iter().copied().fold(0.0, f64::max);
+    let (side, mut square, tolerance_scale) = embed(map, largest * slope);
     // The contact problem is linear in the heights: solved on heights scaled by an exact
     // power of two that brings the rms slope near 1 (bit for bit the same contact set,
     // pressures scaled back exactly), so that heights in any unit from 1e-150 to 1e150
@@ -172,7 +173,14 @@ pub fn sweep_window(
 /// The map in the corner of the square of even side `s` nodes (lengths divided by `s·Δx`),
 /// the rest held far below; and the ratio of the window's height deviation to the
 /// square's, which scales the tolerance.
-fn embed(map: &Topography) -> (usize, Vec<f64>, f64) {
+///
+/// "Far" is twice the window's height range below its lowest point, or, when the largest
+/// mean pressure `pressure` (in units of E*) presses deeper, three times the deflection
+/// scale `p̄·ℓ/E*` of the square's longer side ℓ (a uniform pressure on a square of side ℓ
+/// sinks its centre by 1.12 p̄ℓ/E*): the rigid approach exceeds the height range by at most
+/// the largest deflection, so no far node can touch even in full contact. Below that load
+/// the heights are those of a range-only depth, bit for bit.
+fn embed(map: &Topography, pressure: f64) -> (usize, Vec<f64>, f64) {
     let (rows, cols) = (map.rows, map.cols);
     let side = rows.max(cols).max(2).next_multiple_of(2);
     let to_unit = 1.0 / (side as f64 * map.dx);
@@ -182,7 +190,13 @@ fn embed(map: &Topography) -> (usize, Vec<f64>, f64) {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
             (a.min(h), b.max(h))
         });
-    let far = (lo - 2.0 * (hi - lo).max(f64::MIN_POSITIVE)) * to_unit;
+    let range = (hi - lo).max(f64::MIN_POSITIVE);
+    let sink = 3.0 * pressure * (map.dy / map.dx).max(1.0);
+    let far = if 2.0 * range * to_unit >= sink {
+        (lo - 2.0 * range) * to_unit
+    } else {
+        lo * to_unit - sink
+    };
     let mut square = vec![far; side * side];
     for r in 0..rows {
         for c in 0..cols {
