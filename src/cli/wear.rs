@@ -26,10 +26,12 @@ pub struct WearArgs {
     /// `7e10Pa`, `500MPa`.
     #[arg(long)]
     pub e_star: String,
-    /// The loads W/W0 (comma separated, ascending), W0 = E*·rms slope·A with A the map's
-    /// area; each is also written in newtons.
+    /// The loads, comma separated, ascending: dimensionless W/W0 (`0.01,0.1`), with W0 =
+    /// E*·rms slope·A and A the map's area; or forces (`0.5N,2N`; mN, uN, µN, kN); or mean
+    /// nominal pressures on the map (`10MPa`; Pa, kPa, MPa, GPa). Each load is written as
+    /// W/W0, in newtons and in pascals.
     #[arg(long, value_delimiter = ',', required = true)]
-    pub loads: Vec<f64>,
+    pub loads: Vec<String>,
     /// The critical junction area A* with its unit (`2um2`, `1.5e-12m2`, `3000nm2`), or
     /// give --d-star.
     #[arg(long, conflicts_with = "d_star")]
@@ -93,6 +95,85 @@ fn quantity(
 }
 
 const PRESSURE: &[(&str, f64)] = &[("Pa", 1.0), ("kPa", 1e3), ("MPa", 1e6), ("GPa", 1e9)];
+const FORCE: &[(&str, f64)] = &[
+    ("N", 1.0),
+    ("kN", 1e3),
+    ("mN", 1e-3),
+    ("uN", 1e-6),
+    ("µN", 1e-6),
+];
+
+/// A load as given: dimensionless, a force, or a mean nominal pressure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Load {
+    Ratio(f64),
+    Newtons(f64),
+    Pascals(f64),
+}
+
+/// The load `text` (the `index`-th of --loads, from 1): a bare number is W/W0; a unit
+/// makes it a force or a pressure.
+fn load(index: usize, text: &str) -> Result<Load, InputError> {
+    let option = format!("--loads (value {index})");
+    if let Ok(w) = text.trim().parse::<f64>() {
+        return Ok(Load::Ratio(w));
+    }
+    let unit = text.trim().trim_start_matches(|c: char| {
+        c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-' | ' ')
+    });
+    if FORCE.iter().any(|(n, _)| *n == unit) {
+        quantity(&option, text, FORCE, "a force").map(Load::Newtons)
+    } else if PRESSURE.iter().any(|(n, _)| *n == unit) {
+        quantity(&option, text, PRESSURE, "a pressure").map(Load::Pascals)
+    } else {
+        Err(InputError(format!(
+            "{option} {text:?}: a load is W/W0 (a bare number, 0.05), a force (0.5N; N, kN, mN, uN) or a mean nominal pressure (10MPa; Pa, kPa, MPa, GPa)"
+        )))
+    }
+}
+
+/// The loads as W/W0 on a map of rms slope `slope` and area `area_m2` under `e_star_pa`
+/// (W0 = E*·slope·A, so W/W0 = F/W0 = p/(E*·slope)), checked in range and ascending.
+fn loads_over_w0(
+    loads: &[Load],
+    e_star_pa: f64,
+    slope: f64,
+    area_m2: f64,
+) -> Result<Vec<f64>, InputError> {
+    let w0 = e_star_pa * slope * area_m2;
+    let ratios: Vec<f64> = loads
+        .iter()
+        .map(|l| match *l {
+            Load::Ratio(w) => w,
+            Load::Newtons(f) => f / w0,
+            Load::Pascals(p) => p / (e_star_pa * slope),
+        })
+        .collect();
+    let show = wearcoef::ranges::show;
+    for (i, (&w, l)) in ratios.iter().zip(loads).enumerate() {
+        let given = match *l {
+            Load::Ratio(_) => String::new(),
+            Load::Newtons(f) => format!(" ({} N on this map, W0 = {} N)", show(f), show(w0)),
+            Load::Pascals(p) => format!(
+                " ({} Pa on this map, E*·rms slope = {} Pa)",
+                show(p),
+                show(e_star_pa * slope)
+            ),
+        };
+        wearcoef::ranges::W_OVER_W0
+            .check(&format!("--loads (value {}){given}", i + 1), w)
+            .map_err(InputError)?;
+    }
+    if let Some(i) = (1..ratios.len()).find(|&i| ratios[i] <= ratios[i - 1]) {
+        return Err(InputError(format!(
+            "--loads: value {} (W/W0 = {}) is not above value {i} (W/W0 = {}): give the loads ascending",
+            i + 1,
+            show(ratios[i]),
+            show(ratios[i - 1])
+        )));
+    }
+    Ok(ratios)
+}
 const LENGTH: &[(&str, f64)] = &[
     ("m", 1.0),
     ("mm", 1e-3),
@@ -200,8 +281,9 @@ struct Tables {
     rows: Vec<serde_json::Value>,
 }
 
-/// The physical settings of `wear`, checked: E* (Pa), A* (m²), the hardness (Pa).
-fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>), InputError> {
+/// The physical settings of `wear`, checked: E* (Pa), A* (m²), the hardness (Pa), the
+/// loads as given.
+fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>, Vec<Load>), InputError> {
     let in_range =
         |r: &wearcoef::ranges::Range, option: &str, v: f64| r.check(option, v).map_err(InputError);
     let e_star = quantity("--e-star", &args.e_star, PRESSURE, "a modulus")?;
@@ -226,18 +308,26 @@ fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>), InputError> {
     if let Some(h) = hardness_pa {
         in_range(&wearcoef::ranges::HARDNESS_PA, "--hardness", h)?;
     }
-    for (i, &w) in args.loads.iter().enumerate() {
-        in_range(
-            &wearcoef::ranges::W_OVER_W0,
-            &format!("--loads (value {})", i + 1),
-            w,
-        )?;
+    let loads = args
+        .loads
+        .iter()
+        .enumerate()
+        .map(|(i, t)| load(i + 1, t))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (i, l) in loads.iter().enumerate() {
+        if let Load::Ratio(w) = *l {
+            in_range(
+                &wearcoef::ranges::W_OVER_W0,
+                &format!("--loads (value {})", i + 1),
+                w,
+            )?;
+        }
     }
     in_range(&wearcoef::ranges::TOLERANCE, "--tolerance", args.tolerance)?;
     wearcoef::ranges::RESAMPLES
         .check_count("--resamples", args.resamples as u64)
         .map_err(InputError)?;
-    Ok((e_star, a_star_m2, hardness_pa))
+    Ok((e_star, a_star_m2, hardness_pa, loads))
 }
 
 /// Refuse, before any work, a map whose solve needs more memory than the machine has.
@@ -264,7 +354,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         )
         .into());
     }
-    let (e_star, a_star_m2, hardness_pa) = settings(&args)?;
+    let (e_star, a_star_m2, hardness_pa, given_loads) = settings(&args)?;
     check_output_dir(&args.out)?;
     let Prepared {
         map,
@@ -273,7 +363,13 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     } = prepare(&args.prepare)?;
     check_wear_memory(&map)?;
     let slope = map.rms_slope();
-    check_loads_below_hardness(&args.loads, hardness_pa, e_star, slope)?;
+    let loads = loads_over_w0(
+        &given_loads,
+        e_star,
+        slope,
+        (map.rows * map.cols) as f64 * map.dx * map.dy,
+    )?;
+    check_loads_below_hardness(&loads, hardness_pa, e_star, slope)?;
     // Everything is written into a staging directory, moved onto --out when complete.
     let staged = wearcoef::io::atomic::StagedDir::new(&args.out)?;
     let dir = staged.path().to_path_buf();
@@ -285,7 +381,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         tolerance: args.tolerance,
         ..SolverConfig::default()
     };
-    let bar = indicatif::ProgressBar::new(args.loads.len() as u64).with_style(
+    let bar = indicatif::ProgressBar::new(loads.len() as u64).with_style(
         indicatif::ProgressStyle::with_template("contact {bar:30} {pos}/{len} loads, {elapsed}")
             .expect("a valid template"),
     );
@@ -294,11 +390,11 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     let mut pressures = match args.pressure_maps {
         true => Some(NpyStream::create(
             &dir.join("pressure.npy"),
-            &[args.loads.len(), rows, cols],
+            &[loads.len(), rows, cols],
         )?),
         false => None,
     };
-    let (layout, _) = sweep_window(&map, e_star, &args.loads, &cfg, hardness, |i, p, r| {
+    let (layout, _) = sweep_window(&map, e_star, &loads, &cfg, hardness, |i, p, r| {
         if let Some(stream) = pressures.as_mut() {
             stream.push(p).map_err(|e| {
                 wearcoef::io::cannot_write(&args.out.join("pressure.npy"), &e.to_string())
@@ -350,14 +446,17 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
     if let Some(stream) = pressures {
         stream.finish()?;
     }
-    let drawn = write_run(&dir, tables, &report, &psd, pixel_m2, args.loads.len())?;
+    let drawn = write_run(&dir, tables, &report, &psd, pixel_m2, loads.len())?;
     staged.commit()?;
     if !drawn {
         return Ok(ExitCode::FAILURE);
     }
     out!(
-        "{} loads on a {rows} × {cols} map written to {} (index.html, loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
-        args.loads.len(),
+        "{} on a {rows} × {cols} map written to {} (index.html, loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
+        match loads.len() {
+            1 => "1 load".to_string(),
+            n => format!("{n} loads"),
+        },
         args.out.display()
     )?;
     Ok(ExitCode::SUCCESS)

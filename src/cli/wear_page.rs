@@ -69,8 +69,8 @@ fn spectrum(p: &Page) -> LinePlot {
     let fit = &p.report["psd_fit"];
     if let (Some(h), Some(ll), Some(ls)) = (
         fit["hurst"].as_f64(),
-        fit["lambda_l_m"].as_f64(),
-        fit["lambda_s_m"].as_f64(),
+        fit["run_lambda_long_m"].as_f64(),
+        fit["run_lambda_short_m"].as_f64(),
     ) {
         let tau = std::f64::consts::TAU;
         let (ql, qs) = (tau / ll, tau / ls);

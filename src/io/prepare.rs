@@ -11,7 +11,7 @@ use serde_json::json;
 
 use super::measured::STATE_UNITS;
 use super::{read_measured, IoError};
-use crate::psd::{fit_self_affine, log_edges, radial_psd, PsdBin};
+use crate::psd::{log_edges, radial_psd, resolve, PsdBin};
 use crate::topography::{Form, Topography};
 
 /// A length unit of a measured map.
@@ -112,27 +112,28 @@ pub struct Prepared {
 /// area unbiased (docs/SIZES.md); below it a warning is given and recorded.
 const MIN_LAMBDA_S_PX: f64 = 8.0;
 
-/// The PSD of a complete map, its self-affine fit and the warnings it calls for.
+/// The PSD of a complete map, what it resolves ([`resolve`]: H, λ_l and λ_s only where the
+/// spectrum shows them) and the warnings it calls for: a resolved λ_s under
+/// [`MIN_LAMBDA_S_PX`] pixels, or a self-affine power law that runs to the pixel (the
+/// roughness continues below it). A spectrum that shows no self-affine range warns of
+/// nothing: what it does not resolve is recorded with the reason, and printed as a note.
 fn spectrum(map: &Topography) -> (Vec<PsdBin>, serde_json::Value, Vec<String>) {
     let psd = radial_psd(map, &log_edges(map, 10));
-    let fit = fit_self_affine(&psd);
+    let r = resolve(&psd);
+    let pixel = map.dx.max(map.dy);
     let mut warnings = Vec::new();
-    match fit {
-        Some(f) if f.lambda_s_m / map.dx.max(map.dy) < MIN_LAMBDA_S_PX => warnings.push(format!(
-            "the fitted λ_s = {:.3e} m is {:.1} pixels: below {MIN_LAMBDA_S_PX} the discretised contact area is biased (docs/SIZES.md); measure at a finer pixel",
-            f.lambda_s_m,
-            f.lambda_s_m / map.dx.max(map.dy)
+    match (r.hurst, r.lambda_s_m) {
+        (Some(_), Some(ls)) if ls / pixel < MIN_LAMBDA_S_PX => warnings.push(format!(
+            "the spectrum rolls off at λ_s = {ls:.3e} m, {:.1} pixels: below {MIN_LAMBDA_S_PX} the discretised contact area is biased (docs/SIZES.md); measure at a finer pixel",
+            ls / pixel
         )),
-        None => warnings.push(
-            "the PSD has no self-affine range of 5 bins (within a factor 2 of a power law): H, λ_l and λ_s are not fitted".into(),
-        ),
+        (Some(h), None) => warnings.push(format!(
+            "the spectrum is self-affine (H = {h:.2}) down to the pixel: the roughness continues below it, and contact areas depend on the pixel size (docs/SIZES.md); the trust band's coarsened map shows by how much"
+        )),
         _ => {}
     }
-    let fit = fit.map_or(serde_json::Value::Null, |f| {
-        json!({"hurst": f.hurst, "lambda_l_m": f.lambda_l_m, "lambda_s_m": f.lambda_s_m,
-               "lambda_s_px": f.lambda_s_m / map.dx.max(map.dy),
-               "max_log10_residual": f.max_log10_residual, "bins": f.bins})
-    });
+    let mut fit = serde_json::to_value(&r).expect("plain numbers and strings");
+    fit["lambda_s_px"] = json!(r.lambda_s_m.map(|ls| ls / pixel));
     (psd, fit, warnings)
 }
 
@@ -425,6 +426,11 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
     warnings.extend(fill_warning);
     for w in &warnings {
         crate::note!("warning: {name}: {w}");
+    }
+    if let Some(reasons) = fit["not_resolved"].as_array() {
+        for why in reasons.iter().filter_map(|w| w.as_str()) {
+            crate::note!("note: {name}: not resolved: {why}");
+        }
     }
     let report = json!({
         "input": name, "format": read.source,

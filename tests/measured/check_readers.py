@@ -322,6 +322,21 @@ def instruments():
         assert np.allclose(got, pixel, rtol=1e-12), f"{name}: pixel {got} against {pixel}"
         print(f"{name}: {mine.shape[0]} × {mine.shape[1]}, as numpy reads it "
               f"(SurfaceTopography refuses it: {refused})")
+    # What their spectra resolve, said honestly: the confocal map's straightest power law is
+    # steeper than any self-affine surface's (H > 1), so nothing is fitted and no pixel warning
+    # is given; the AFM map is self-affine down to its pixel (H resolved, λ_s not), which is
+    # warned of.
+    for name, hurst, lambda_s, warned in [("x3p-2.x3p", False, False, False),
+                                         ("matrix-3.txt", True, False, True)]:
+        run = subprocess.run([BIN, "topography", "--input", at(name), "--json"],
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        fit = json.loads(run.stdout)["psd_fit"]
+        assert (fit["hurst"] is not None, fit["lambda_s_m"] is not None) == (hurst, lambda_s), fit
+        assert fit["not_resolved"], fit
+        assert ("down to the pixel" in run.stderr) == warned, run.stderr
+        assert "measure at a finer pixel" not in run.stderr, run.stderr
+        print(f"{name}: PSD run H = {fit['run_hurst']:.2f}; not resolved: {fit['not_resolved'][0][:60]}…")
     refusals = [
         ("csv-1.csv", "a line scan (x, z): 8 points"),
         ("csv-2.csv", "a line scan (an increasing first column"),

@@ -137,6 +137,12 @@ pub struct SelfAffineFit {
 /// least squares; the widest found first from the low-q end on ties. None if no run of
 /// `MIN_BINS` bins is straight.
 pub fn fit_self_affine(bins: &[PsdBin]) -> Option<SelfAffineFit> {
+    fit_run(bins).map(|(fit, _, _)| fit)
+}
+
+/// [`fit_self_affine`], with where its run starts among the bins of positive power and how
+/// many such bins there are.
+fn fit_run(bins: &[PsdBin]) -> Option<(SelfAffineFit, usize, usize)> {
     const MIN_BINS: usize = 5;
     let pts: Vec<(f64, f64)> = bins
         .iter()
@@ -164,17 +170,95 @@ pub fn fit_self_affine(bins: &[PsdBin]) -> Option<SelfAffineFit> {
             let (slope, worst) = line(run);
             if worst <= 2f64.log10() && slope < -2.0 {
                 let tau = std::f64::consts::TAU;
-                return Some(SelfAffineFit {
+                let fit = SelfAffineFit {
                     hurst: -slope / 2.0 - 1.0,
                     lambda_l_m: tau / 10f64.powf(run[0].0),
                     lambda_s_m: tau / 10f64.powf(run[width - 1].0),
                     max_log10_residual: worst,
                     bins: width,
-                });
+                };
+                return Some((fit, start, pts.len()));
             }
         }
     }
     None
+}
+
+/// What a measured spectrum resolves. The straightest power-law run of the PSD
+/// ([`fit_self_affine`]) is a self-affine range only if its H lies in (0, 1); its ends are
+/// λ_l and λ_s only where the spectrum rolls off beyond them: a run that reaches the last
+/// bin (the pixel) shows no λ_s, one that starts at the first (the map) no λ_l. What is not
+/// resolved is None, with the reason in `not_resolved`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Resolved {
+    /// The straightest run's wavelengths, longest and shortest (m), when there is a run.
+    pub run_lambda_long_m: Option<f64>,
+    pub run_lambda_short_m: Option<f64>,
+    /// The run's bins and its largest |log10 C − fit|.
+    pub bins: usize,
+    pub max_log10_residual: Option<f64>,
+    /// The run's exponent read as H = −slope/2 − 1, whether or not it is in (0, 1).
+    pub run_hurst: Option<f64>,
+    pub hurst: Option<f64>,
+    pub lambda_l_m: Option<f64>,
+    pub lambda_s_m: Option<f64>,
+    pub not_resolved: Vec<String>,
+}
+
+/// What `bins` resolve (see [`Resolved`]).
+pub fn resolve(bins: &[PsdBin]) -> Resolved {
+    let Some((fit, start, total)) = fit_run(bins) else {
+        return Resolved {
+            run_lambda_long_m: None,
+            run_lambda_short_m: None,
+            bins: 0,
+            max_log10_residual: None,
+            run_hurst: None,
+            hurst: None,
+            lambda_l_m: None,
+            lambda_s_m: None,
+            not_resolved: vec![
+                "H, λ_l and λ_s: no run of 5 bins of the PSD follows a power law within a factor 2"
+                    .into(),
+            ],
+        };
+    };
+    let mut r = Resolved {
+        run_lambda_long_m: Some(fit.lambda_l_m),
+        run_lambda_short_m: Some(fit.lambda_s_m),
+        bins: fit.bins,
+        max_log10_residual: Some(fit.max_log10_residual),
+        run_hurst: Some(fit.hurst),
+        hurst: None,
+        lambda_l_m: None,
+        lambda_s_m: None,
+        not_resolved: Vec::new(),
+    };
+    if !(fit.hurst > 0.0 && fit.hurst < 1.0) {
+        r.not_resolved.push(format!(
+            "H, λ_l and λ_s: the straightest run of the PSD ({} bins) falls as q^{:.2}, H = {:.2}, outside (0, 1): not a self-affine range (an instrument's smoothing or an unremoved form steepens a spectrum)",
+            fit.bins,
+            -2.0 * (1.0 + fit.hurst),
+            fit.hurst
+        ));
+        return r;
+    }
+    r.hurst = Some(fit.hurst);
+    if start == 0 {
+        r.not_resolved.push(
+            "λ_l: the power law starts at the map's longest wavelength; no roll-off shows within the map".into(),
+        );
+    } else {
+        r.lambda_l_m = Some(fit.lambda_l_m);
+    }
+    if start + fit.bins == total {
+        r.not_resolved.push(
+            "λ_s: the power law runs to the pixel; no roll-off shows above it, so the roughness may continue below the pixel".into(),
+        );
+    } else {
+        r.lambda_s_m = Some(fit.lambda_s_m);
+    }
+    r
 }
 
 #[cfg(test)]
@@ -240,6 +324,33 @@ mod tests {
             .collect();
         let fit = fit_self_affine(&bins).unwrap();
         assert!((fit.hurst - hurst).abs() < 1e-9, "{fit:?}");
+        let r = resolve(&bins);
+        assert_eq!(
+            (r.hurst, r.lambda_l_m, r.lambda_s_m),
+            (Some(fit.hurst), Some(fit.lambda_l_m), Some(fit.lambda_s_m)),
+            "{r:?}"
+        );
+        assert!(r.not_resolved.is_empty(), "{r:?}");
+        // Cut at the roll-off: the power law runs to the last bin, λ_s is not resolved.
+        let cut: Vec<PsdBin> = bins.iter().filter(|b| b.q_mean <= qs).cloned().collect();
+        let r = resolve(&cut);
+        assert_eq!((r.hurst, r.lambda_s_m), (Some(fit.hurst), None), "{r:?}");
+        assert!(r.lambda_l_m.is_some() && r.not_resolved[0].starts_with("λ_s"));
+        // The same run twice as steep: H = 2.4, not a self-affine range.
+        let steep: Vec<PsdBin> = bins
+            .iter()
+            .map(|b| PsdBin {
+                c: b.c * b.c,
+                ..b.clone()
+            })
+            .collect();
+        let r = resolve(&steep);
+        assert_eq!(
+            (r.hurst, r.lambda_l_m, r.lambda_s_m),
+            (None, None, None),
+            "{r:?}"
+        );
+        assert!(r.run_hurst.unwrap() > 1.0 && r.not_resolved[0].contains("outside (0, 1)"));
         let tau = std::f64::consts::TAU;
         assert!(
             (fit.lambda_l_m * ql / tau).log10().abs() <= 0.1 + 1e-12,

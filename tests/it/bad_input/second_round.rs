@@ -499,6 +499,81 @@ fn measured_inputs_are_read_and_solved_right() {
     );
 }
 
+/// Loads given as forces or as mean nominal pressures are the same loads as W/W0: the forces
+/// and pressures of a W/W0 run, given back with their units, give W/W0 to 1e-12 and the same
+/// contact; loads out of order or of an unknown unit are refused before any work.
+#[test]
+fn loads_as_forces_and_pressures() {
+    use crate::f64s as f64_column;
+    let dir = tempfile::tempdir().unwrap();
+    write_measured_inputs(dir.path());
+    run_ok(
+        dir.path(),
+        &format!("wear {WEAR} --input rough.npy --loads 0.01,0.1 -o ratio"),
+    );
+    let reference = loads_of(&dir.path().join("ratio"));
+    let (forces, pressures) = (
+        f64_column(&reference, "force_n"),
+        f64_column(&reference, "mean_pressure_pa"),
+    );
+    let as_given = |values: &[f64], unit: &str| {
+        values
+            .iter()
+            .map(|v| format!("{v:e}{unit}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    for (name, loads, column, values) in [
+        ("force", as_given(&forces, "N"), "force_n", &forces),
+        (
+            "pressure",
+            as_given(&pressures, "Pa"),
+            "mean_pressure_pa",
+            &pressures,
+        ),
+    ] {
+        run_ok(
+            dir.path(),
+            &format!("wear {WEAR} --input rough.npy --loads {loads} -o {name}"),
+        );
+        let got = loads_of(&dir.path().join(name));
+        for (a, b) in f64_column(&got, "w_over_w0").iter().zip([0.01, 0.1]) {
+            assert!((a / b - 1.0).abs() < 1e-12, "{name}: W/W0 {a} against {b}");
+        }
+        for (a, b) in f64_column(&got, column).iter().zip(values.iter()) {
+            assert!(
+                (a / b - 1.0).abs() < 1e-12,
+                "{name}: {column} {a} against {b}"
+            );
+        }
+        assert_eq!(
+            f64_column(&got, "area_fraction"),
+            f64_column(&reference, "area_fraction"),
+            "{name}"
+        );
+    }
+    for (loads, said) in [
+        ("0.1,0.01", "give the loads ascending"),
+        ("5kg", "a force (0.5N; N, kN, mN, uN)"),
+        ("1e9N", "N on this map, W0 = "),
+    ] {
+        let out = bin()
+            .current_dir(dir.path())
+            .args(
+                format!("wear {WEAR} --input rough.npy --loads {loads} -o bad").split_whitespace(),
+            )
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{loads}: {err}");
+        assert!(err.contains(said), "{loads}: {err}");
+        assert!(
+            !dir.path().join("bad").exists(),
+            "{loads}: output left behind"
+        );
+    }
+}
+
 /// Two `wear` runs into one new directory: one lands whole, the other fails and leaves it
 /// as the first wrote it (never a mixture, never both exit 0).
 #[test]
