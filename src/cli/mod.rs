@@ -24,6 +24,7 @@ pub mod store;
 pub mod submit;
 pub mod tools;
 pub mod topography;
+mod trust;
 pub mod wear;
 mod wear_page;
 

@@ -46,6 +46,14 @@ pub struct WearArgs {
     /// The solver's relative tolerance.
     #[arg(long, default_value_t = 1e-8)]
     pub tolerance: f64,
+    /// The trust band's factors on d* (comma separated, low then high): K and 𝒦 are also
+    /// given at A* for d* times each (`k_archard_d_star_low`, `…_high`).
+    #[arg(long, value_delimiter = ',', default_value = "0.5,2")]
+    pub d_star_factors: Vec<f64>,
+    /// Skip the trust band's solves (the map coarsened ×2, its halves and quarters, about
+    /// 2.3 times the run's own solving); its edge and d* columns are still written.
+    #[arg(long)]
+    pub no_trust_band: bool,
     /// Bootstrap resamples of α̂'s interval.
     #[arg(long, default_value_t = 200)]
     pub resamples: usize,
@@ -324,6 +332,15 @@ fn settings(args: &WearArgs) -> Result<(f64, f64, Option<f64>, Vec<Load>), Input
         }
     }
     in_range(&wearcoef::ranges::TOLERANCE, "--tolerance", args.tolerance)?;
+    match args.d_star_factors[..] {
+        [low, high] if low > 0.0 && low < high && high.is_finite() => {}
+        _ => {
+            return Err(InputError(format!(
+                "--d-star-factors {:?}: two factors on d*, low then high, both > 0 (0.5,2 halves and doubles it)",
+                args.d_star_factors
+            )))
+        }
+    }
     wearcoef::ranges::RESAMPLES
         .check_count("--resamples", args.resamples as u64)
         .map_err(InputError)?;
@@ -381,6 +398,10 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         tolerance: args.tolerance,
         ..SolverConfig::default()
     };
+    let area_scales = (
+        args.d_star_factors[0].powi(2),
+        args.d_star_factors[1].powi(2),
+    );
     let bar = indicatif::ProgressBar::new(loads.len() as u64).with_style(
         indicatif::ProgressStyle::with_template("contact {bar:30} {pos}/{len} loads, {elapsed}")
             .expect("a valid template"),
@@ -409,7 +430,8 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         tables.clusters.push(i, &labelling);
         let m = wear_at(&areas, a_star_px);
         let fit = super::fit::fit_row(Some(i as u32), r.w_over_w0, &areas, 0, args.resamples, 0);
-        tables.rows.push(json!({
+        let band = super::trust::from_labelling(&labelling, a_star_px, area_scales);
+        let mut row = json!({
             "w_over_w0": r.w_over_w0,
             "force_n": r.w_over_w0 * e_star * slope * area_m2,
             "mean_pressure_pa": r.mean_pressure,
@@ -429,11 +451,45 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
             "n_saturated_px": r.n_saturated_px,
             "iterations": r.report.iterations,
             "solver_error": r.report.error,
-        }));
+        });
+        for (k, v) in band.as_object().expect("an object") {
+            row[k] = v.clone();
+        }
+        tables.rows.push(row);
         bar.inc(1);
         Ok(())
     })?;
     bar.finish_and_clear();
+    let band_notes = if args.no_trust_band {
+        vec!["not solved (--no-trust-band): pixel ×2, halves and quarters are null".to_string()]
+    } else {
+        let bar = indicatif::ProgressBar::new(7).with_style(
+            indicatif::ProgressStyle::with_template(
+                "trust band {bar:30} {pos}/{len} solves (pixel ×2, halves, quarters), {elapsed}",
+            )
+            .expect("a valid template"),
+        );
+        // As the window states its mean pressure (W/W0·rms slope·E*), bit for bit.
+        let pressures: Vec<f64> = loads.iter().map(|w| w * slope * e_star).collect();
+        let physics = super::trust::Physics {
+            e_star_pa: e_star,
+            hardness_pa,
+            a_star_m2,
+            cfg,
+        };
+        let notes =
+            super::trust::solved_rows(&map, &pressures, &physics, &mut tables.rows, || bar.inc(1));
+        bar.finish_and_clear();
+        for n in &notes {
+            wearcoef::note!("note: trust band: {n}");
+        }
+        notes
+    };
+    report["trust_band"] = json!({
+        "d_star_factors": args.d_star_factors,
+        "variants": "K itself; without edge-cut clusters; at d* times each factor; the map coarsened ×2 (2 × 2 block means); its halves and quarters as windows (smallest and largest K); every load held at the same mean nominal pressure",
+        "notes": band_notes,
+    });
     report["contact"] = json!({
         "half_space": "free boundary (zero-padded), the map's outside never in contact",
         "e_star_pa": e_star, "hardness_pa": hardness_pa, "hardness_w_over_w0": hardness,
@@ -536,7 +592,7 @@ fn write_outputs(
 ) -> anyhow::Result<()> {
     let n = t.rows.len();
     let mut columns = vec![col("load_index", (0..n as u32).collect::<Vec<_>>())];
-    for name in LOAD_COLUMNS {
+    for name in LOAD_COLUMNS.into_iter().chain(super::trust::BAND_COLUMNS) {
         if COUNT_COLUMNS.contains(&name) {
             let values: Vec<Option<u64>> = t.rows.iter().map(|r| r[name].as_u64()).collect();
             columns.push(col(name, values));
@@ -555,9 +611,10 @@ fn write_outputs(
     let mut clusters = t.clusters.frame(true)?;
     clusters.with_column(col("area_um2", area_um2))?;
     let mut csv_text = csv::Writer::from_writer(Vec::new());
-    csv_text.write_record(std::iter::once("load_index").chain(LOAD_COLUMNS))?;
+    let all = || LOAD_COLUMNS.into_iter().chain(super::trust::BAND_COLUMNS);
+    csv_text.write_record(std::iter::once("load_index").chain(all()))?;
     for (i, r) in t.rows.iter().enumerate() {
-        let cells = LOAD_COLUMNS.iter().map(|name| match &r[*name] {
+        let cells = all().map(|name| match &r[name] {
             serde_json::Value::Number(v) => v.to_string(),
             _ => String::new(),
         });

@@ -142,7 +142,11 @@ pub fn write(p: &Page, dir: &Path) -> anyhow::Result<()> {
         ("real_contact_area_um2", "A_c (µm²)"),
         ("n_clusters", "clusters"),
         ("k_archard", "K"),
+        ("k_archard_band_low", "K band: low"),
+        ("k_archard_band_high", "high"),
         ("k_upscaled", "𝒦"),
+        ("k_upscaled_band_low", "𝒦 band: low"),
+        ("k_upscaled_band_high", "high"),
         ("wear_rate_mm3_per_m", "wear rate (mm³/m)"),
         ("alpha", "α̂"),
     ];
@@ -177,6 +181,12 @@ pub fn write(p: &Page, dir: &Path) -> anyhow::Result<()> {
          <body><h1>Wear coefficients of {input}</h1>\n{warnings}\
          <p><img src=\"wear.png\" alt=\"K and 𝒦 against the force, the PSD, the cluster-area CCDF\" width=\"1920\"></p>\n\
          <table><tr>{head}</tr>\n{body}</table>\n\
+         <p>The band of K and 𝒦 is their range over what the map cannot tell: without the clusters \
+         cut by its edge, at d* times each of the factors of <code>--d-star-factors</code>, on the \
+         map coarsened ×2, and on its halves and quarters solved alone, at the same mean pressure \
+         (loads.parquet has every variant: <code>k_archard_no_edge</code>, \
+         <code>…_d_star_low/_high</code>, <code>…_pixel_x2</code>, \
+         <code>…_halves_min/_max</code>, <code>…_quarters_min/_max</code>).</p>\n\
          <p>Tables: loads.parquet, loads.csv, clusters.parquet, psd.parquet. What was done:</p>\n\
          <pre>{prep}</pre>\n</body></html>\n",
         input = escape(p.report["input"].as_str().unwrap_or("")),

@@ -1,7 +1,9 @@
 """The output of examples/measured_surface.py (a 1000 × 750 X3P in µm with a tilt and 40
 missing points, written by SurfaceTopography, through `wearcoef wear`) checked with pandas:
 the preparation it states, and every number of the loads table recomputed from the cluster
-table and the stated constants. Usage: python check_wear.py EXAMPLE_OUT"""
+table and the stated constants; the trust band recomputed (its edge and d* columns from the
+cluster table, its halves by `wear` on numpy's cuts of the prepared map at the same
+pressures). Usage: python check_wear.py EXAMPLE_OUT WEARCOEF_BIN"""
 import json
 import os
 import sys
@@ -48,6 +50,54 @@ for i, row in loads.iterrows():
     assert row["n_clusters_touching_edge"] == a["touches_edge"].sum()
     assert row["solver_error"] <= c["tolerance"]
     assert row["alpha_ci95_low"] <= row["alpha"] <= row["alpha_ci95_high"]
+# The trust band. Edge and d*: from the cluster table.
+lo, hi = prep["trust_band"]["d_star_factors"]
+assert (lo, hi) == (0.5, 2.0) and prep["trust_band"]["notes"] == [], prep["trust_band"]
+for i, row in loads.iterrows():
+    a = clusters[clusters["load_index"] == i]
+    inner = a[~a["touches_edge"]]
+    for name, areas, a_star in [("no_edge", inner["area_px"], c["a_star_px"]),
+                                ("d_star_low", a["area_px"], c["a_star_px"] * lo**2),
+                                ("d_star_high", a["area_px"], c["a_star_px"] * hi**2)]:
+        assert np.isclose(row[f"k_archard_{name}"], (areas > a_star).mean(), rtol=1e-12), name
+        assert np.isclose(row[f"k_upscaled_{name}"], areas[areas > a_star].sum() / areas.sum(),
+                          rtol=1e-12), name
+    for kind in ["k_archard", "k_upscaled"]:
+        variants = [row[kind]] + [row[f"{kind}_{v}"] for v in [
+            "no_edge", "d_star_low", "d_star_high", "pixel_x2", "halves_min", "halves_max",
+            "quarters_min", "quarters_max"]]
+        assert row[f"{kind}_band_low"] == min(variants) and row[f"{kind}_band_high"] == max(variants)
+        assert row[f"{kind}_halves_min"] <= row[f"{kind}_halves_max"]
+# Halves: the prepared map cut by numpy across its longer side, each solved alone by `wear`
+# with the same mean pressures given in Pa: their smallest and largest K are the band's.
+import subprocess
+import tempfile
+BIN = sys.argv[2]
+with tempfile.TemporaryDirectory() as tmp:
+    prepared = os.path.join(tmp, "prepared.npy")
+    subprocess.run([BIN, "topography", "--input", os.path.join(sys.argv[1], "demonstration.x3p"),
+                    "--form", "plane", "--fill", "harmonic", "-o", prepared],
+                   check=True, capture_output=True)
+    h = np.load(prepared)
+    half = h.shape[1] // 2
+    pressures = ",".join(f"{p!r}Pa" for p in loads["mean_pressure_pa"])
+    ks = []
+    for j, cut in enumerate([h[:, :half], h[:, half:2 * half]]):
+        np.save(os.path.join(tmp, f"half{j}.npy"), np.ascontiguousarray(cut))
+        run = subprocess.run(
+            [BIN, "wear", "--input", os.path.join(tmp, f"half{j}.npy"), "--height-unit", "m",
+             "--pixel-size", repr(prep["pixel_size_x_m"]), "--form", "none",
+             "--fill", "none", "--e-star", "100GPa", "--loads", pressures, "--d-star", "5um",
+             "--no-trust-band", "-o", os.path.join(tmp, f"half{j}")],
+            capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        ks.append(pd.read_parquet(os.path.join(tmp, f"half{j}", "loads.parquet")))
+    for kind in ["k_archard", "k_upscaled"]:
+        both = np.array([k[kind] for k in ks])
+        assert np.allclose(both.min(axis=0), loads[f"{kind}_halves_min"], rtol=1e-12), kind
+        assert np.allclose(both.max(axis=0), loads[f"{kind}_halves_max"], rtol=1e-12), kind
+print(f"trust band: K from {loads['k_archard_band_low'].min():.3f} to "
+      f"{loads['k_archard_band_high'].max():.3f} over the loads; edge, d* and halves recomputed")
 # The page: index.html shows wear.png (which decodes) and every load's row.
 from PIL import Image
 html = open(os.path.join(out, "index.html"), encoding="utf-8").read()

@@ -30,4 +30,4 @@ trap 'rm -rf "$work"' EXIT
 # The worked example as a user runs it, then its numbers recomputed.
 (cd "$work" && MPLBACKEND=Agg "$venv/bin/python" "$repo/examples/measured_surface.py" \
     --wearcoef "$bin" --out "$work/example")
-"$venv/bin/python" "$repo/tests/measured/check_wear.py" "$work/example"
+"$venv/bin/python" "$repo/tests/measured/check_wear.py" "$work/example" "$bin"
