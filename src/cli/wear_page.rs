@@ -30,13 +30,28 @@ fn coefficients(p: &Page) -> LinePlot {
             .filter_map(|r| Some((r["force_n"].as_f64()?, r[key].as_f64()?)))
             .collect()
     };
+    // The trust band (edge, d*, pixel, map size) shaded around each, where it was solved.
+    let band = |kind: &str| -> Vec<(f64, f64, f64)> {
+        p.rows
+            .iter()
+            .filter_map(|r| {
+                Some((
+                    r["force_n"].as_f64()?,
+                    r[format!("{kind}_band_low")].as_f64()?,
+                    r[format!("{kind}_band_high")].as_f64()?,
+                ))
+            })
+            .collect()
+    };
     plot.series.push(Series {
         marker: Some(Marker::Circle),
-        ..Series::line("K (eq. 5)", at("k_archard"), 0)
+        band: band("k_archard"),
+        ..Series::line("K (eq. 5), shaded: its trust band", at("k_archard"), 0)
     });
     plot.series.push(Series {
         marker: Some(Marker::Square),
-        ..Series::line("𝒦 (eq. 7)", at("k_upscaled"), 1)
+        band: band("k_upscaled"),
+        ..Series::line("𝒦 (eq. 7), shaded: its trust band", at("k_upscaled"), 1)
     });
     plot.y_bounds = Some((0.0, 1.0));
     plot.when_empty = Some("no load has a cluster: K and 𝒦 are undefined".into());
@@ -116,9 +131,18 @@ fn ccdf(p: &Page) -> LinePlot {
             .map(|(k, &v)| (v, (n - k as f64 - 1.0) / n))
             .collect();
         let w = r["w_over_w0"].as_f64().unwrap_or(f64::NAN);
+        let force = r["force_n"].as_f64().unwrap_or(f64::NAN);
         plot.series.push(Series {
             tint: 0.6 * i as f64 / p.areas_um2.len().max(1) as f64,
-            ..Series::line(format!("W/W_0 = {w}"), points, 0)
+            ..Series::line(
+                format!(
+                    "W = {} N (W/W_0 = {})",
+                    wearcoef::ranges::show(force),
+                    wearcoef::ranges::show(w)
+                ),
+                points,
+                0,
+            )
         });
     }
     plot
@@ -132,6 +156,8 @@ pub fn write(p: &Page, dir: &Path) -> anyhow::Result<()> {
     };
     panels.write(dir, "wear")?;
     let cell = |v: &serde_json::Value| match v.as_f64() {
+        // Counts as integers (149, not 149.0000).
+        Some(_) if v.is_u64() => v.to_string(),
         Some(x) if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e5) => format!("{x:.4e}"),
         Some(x) => format!("{x:.4}"),
         None => "–".into(),
