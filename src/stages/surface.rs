@@ -47,7 +47,9 @@ pub struct MeasuredJob {
 }
 
 /// The readers' revision: 2 reads by content (an x-y-z list or decimal commas in a .txt),
-/// refuses maps flat once their form is removed and fills of more than half a map.
+/// refuses maps flat once their form is removed and fills of more than half a map; 3 reads
+/// X3P members in a folder, SurfaceTopography's text header keys and UTF-16 text, solves
+/// rectangular pixels, and records only the PSD's resolved H, λ_l and λ_s.
 pub const MEASURED_READER: u32 = 3;
 
 /// The name a measured file is copied under: `topography.<ext>` (the readers go by the
