@@ -208,6 +208,49 @@ pub fn solved_rows(
     notes
 }
 
+/// The band's solves at the loads `w_over_w0` (held as the mean pressures W/W0·rms
+/// slope·E*, as the window states them, bit for bit) with a progress bar, added to `rows`;
+/// none unless `solve` (`--no-trust-band`). Returns the record of the band for
+/// preparation.json, with the factors on d* its edge and d* columns used.
+pub fn band(
+    map: &Topography,
+    w_over_w0: &[f64],
+    slope: f64,
+    physics: Physics,
+    d_star_factors: &[f64],
+    solve: bool,
+    rows: &mut [Value],
+) -> Value {
+    let notes = match solve {
+        false => {
+            vec!["not solved (--no-trust-band): pixel ×2, halves and quarters are null".to_string()]
+        }
+        true => {
+            let bar = indicatif::ProgressBar::new(7).with_style(
+                indicatif::ProgressStyle::with_template(
+                    "trust band {bar:30} {pos}/{len} solves (pixel ×2, halves, quarters), {elapsed}",
+                )
+                .expect("a valid template"),
+            );
+            let pressures: Vec<f64> = w_over_w0
+                .iter()
+                .map(|w| w * slope * physics.e_star_pa)
+                .collect();
+            let notes = solved_rows(map, &pressures, &physics, rows, || bar.inc(1));
+            bar.finish_and_clear();
+            for n in &notes {
+                wearcoef::note!("note: trust band: {n}");
+            }
+            notes
+        }
+    };
+    json!({
+        "d_star_factors": d_star_factors,
+        "variants": "K itself; without edge-cut clusters; at d* times each factor; the map coarsened ×2 (2 × 2 block means); its halves and quarters as windows (smallest and largest K); every load held at the same mean nominal pressure",
+        "notes": notes,
+    })
+}
+
 /// The loads table's columns of the band, in order.
 pub const BAND_COLUMNS: [&str; 20] = [
     "k_archard_band_low",

@@ -460,36 +460,20 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         Ok(())
     })?;
     bar.finish_and_clear();
-    let band_notes = if args.no_trust_band {
-        vec!["not solved (--no-trust-band): pixel ×2, halves and quarters are null".to_string()]
-    } else {
-        let bar = indicatif::ProgressBar::new(7).with_style(
-            indicatif::ProgressStyle::with_template(
-                "trust band {bar:30} {pos}/{len} solves (pixel ×2, halves, quarters), {elapsed}",
-            )
-            .expect("a valid template"),
-        );
-        // As the window states its mean pressure (W/W0·rms slope·E*), bit for bit.
-        let pressures: Vec<f64> = loads.iter().map(|w| w * slope * e_star).collect();
-        let physics = super::trust::Physics {
+    report["trust_band"] = super::trust::band(
+        &map,
+        &loads,
+        slope,
+        super::trust::Physics {
             e_star_pa: e_star,
             hardness_pa,
             a_star_m2,
             cfg,
-        };
-        let notes =
-            super::trust::solved_rows(&map, &pressures, &physics, &mut tables.rows, || bar.inc(1));
-        bar.finish_and_clear();
-        for n in &notes {
-            wearcoef::note!("note: trust band: {n}");
-        }
-        notes
-    };
-    report["trust_band"] = json!({
-        "d_star_factors": args.d_star_factors,
-        "variants": "K itself; without edge-cut clusters; at d* times each factor; the map coarsened ×2 (2 × 2 block means); its halves and quarters as windows (smallest and largest K); every load held at the same mean nominal pressure",
-        "notes": band_notes,
-    });
+        },
+        &args.d_star_factors,
+        !args.no_trust_band,
+        &mut tables.rows,
+    );
     report["contact"] = json!({
         "half_space": "free boundary (zero-padded), the map's outside never in contact",
         "e_star_pa": e_star, "hardness_pa": hardness_pa, "hardness_w_over_w0": hardness,

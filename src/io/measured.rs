@@ -73,18 +73,26 @@ pub fn length_unit_m(unit: &str) -> Option<f64> {
 ///
 /// A size without its own unit takes the heights' unit, as SurfaceTopography does.
 pub(super) fn text_header(header: &[String], map: &mut MeasuredMap) -> Result<(), String> {
-    #[derive(Default)]
-    struct Found {
-        nx: Option<usize>,
-        ny: Option<usize>,
-        size_x: Option<(f64, Option<String>)>,
-        size_y: Option<(f64, Option<String>)>,
-        pixel: Option<(f64, Option<String>)>,
-        xunit: Option<String>,
-        yunit: Option<String>,
-        zunit: Option<String>,
-        zfac: Option<f64>,
-    }
+    let f = header_keys(header)?;
+    apply_header(&f, map)
+}
+
+/// What a text header states, as read.
+#[derive(Default)]
+struct Found {
+    nx: Option<usize>,
+    ny: Option<usize>,
+    size_x: Option<(f64, Option<String>)>,
+    size_y: Option<(f64, Option<String>)>,
+    pixel: Option<(f64, Option<String>)>,
+    xunit: Option<String>,
+    yunit: Option<String>,
+    zunit: Option<String>,
+    zfac: Option<f64>,
+}
+
+/// The keys of [`text_header`] read from the header lines.
+fn header_keys(header: &[String]) -> Result<Found, String> {
     let mut f = Found::default();
     // A number at the start of `v`, and what follows it (a unit, or nothing).
     let number_and_rest = |v: &str| -> Option<(f64, Option<String>)> {
@@ -178,6 +186,11 @@ pub(super) fn text_header(header: &[String], map: &mut MeasuredMap) -> Result<()
             }
         }
     }
+    Ok(f)
+}
+
+/// The counts checked, the heights scaled and the pixel size set from what a header states.
+fn apply_header(f: &Found, map: &mut MeasuredMap) -> Result<(), String> {
     for (stated, read, what) in [
         (f.ny, map.rows, "lines (h)"),
         (f.nx, map.cols, "columns (w)"),

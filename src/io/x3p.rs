@@ -111,24 +111,8 @@ pub fn read(path: &Path) -> Result<MeasuredMap, String> {
     let (scale, shift) = (cz.increment.unwrap_or(1.0), cz.offset.unwrap_or(0.0));
     let mut heights: Vec<f64> = raw.into_iter().map(|v| v * scale + shift).collect();
     if let Some(valid_link) = optional(root, &["Record3", "DataLink", "ValidPointsLink"]) {
-        let bits = member(&mut zip, &at(&valid_link), count.div_ceil(8) as u64 + 64)?;
-        check_md5(
-            &bits,
-            optional(root, &["Record3", "DataLink", "MD5ChecksumValidPoints"]),
-            valid_link.trim(),
-        )?;
-        if bits.len() < count.div_ceil(8) {
-            return Err(format!(
-                "{} holds {} bytes: too few for the validity bits of {count} points",
-                valid_link.trim(),
-                bits.len()
-            ));
-        }
-        for (i, h) in heights.iter_mut().enumerate() {
-            if bits[i / 8] >> (i % 8) & 1 == 0 {
-                *h = f64::NAN;
-            }
-        }
+        let stated = optional(root, &["Record3", "DataLink", "MD5ChecksumValidPoints"]);
+        mark_invalid(&mut zip, &at(&valid_link), stated, &mut heights)?;
     }
     Ok(MeasuredMap {
         rows,
@@ -164,6 +148,30 @@ fn main_folder(zip: &zip::ZipArchive<std::fs::File>) -> Result<String, String> {
             many.join(", ")
         )),
     }
+}
+
+/// NaN at every point the validity bits `link` (least significant bit first) mark invalid.
+fn mark_invalid(
+    zip: &mut zip::ZipArchive<std::fs::File>,
+    link: &str,
+    stated_md5: Option<String>,
+    heights: &mut [f64],
+) -> Result<(), String> {
+    let count = heights.len();
+    let bits = member(zip, link, count.div_ceil(8) as u64 + 64)?;
+    check_md5(&bits, stated_md5, link)?;
+    if bits.len() < count.div_ceil(8) {
+        return Err(format!(
+            "{link} holds {} bytes: too few for the validity bits of {count} points",
+            bits.len()
+        ));
+    }
+    for (i, h) in heights.iter_mut().enumerate() {
+        if bits[i / 8] >> (i % 8) & 1 == 0 {
+            *h = f64::NAN;
+        }
+    }
+    Ok(())
 }
 
 struct Axis {
