@@ -379,14 +379,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         psd,
     } = prepare(&args.prepare)?;
     check_wear_memory(&map)?;
-    let slope = map.rms_slope();
-    let loads = loads_over_w0(
-        &given_loads,
-        e_star,
-        slope,
-        (map.rows * map.cols) as f64 * map.dx * map.dy,
-    )?;
-    check_loads_below_hardness(&loads, hardness_pa, e_star, slope)?;
+    let (slope, loads) = map_loads(&map, &given_loads, e_star, hardness_pa)?;
     // Everything is written into a staging directory, moved onto --out when complete.
     let staged = wearcoef::io::atomic::StagedDir::new(&args.out)?;
     let dir = staged.path().to_path_buf();
@@ -402,10 +395,7 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         args.d_star_factors[0].powi(2),
         args.d_star_factors[1].powi(2),
     );
-    let bar = indicatif::ProgressBar::new(loads.len() as u64).with_style(
-        indicatif::ProgressStyle::with_template("contact {bar:30} {pos}/{len} loads, {elapsed}")
-            .expect("a valid template"),
-    );
+    let bar = load_bar(loads.len());
     let mut tables = Tables::default();
     let (rows, cols) = (map.rows, map.cols);
     let mut pressures = match args.pressure_maps {
@@ -483,23 +473,49 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
         "clusters": "8-connected, no wrap-around; touches_edge marks clusters cut by the map's border",
         "program": wearcoef::store::table::program(),
     });
-    if let Some(stream) = pressures {
-        stream.finish()?;
-    }
+    pressures.map(NpyStream::finish).transpose()?;
     let drawn = write_run(&dir, tables, &report, &psd, pixel_m2, loads.len())?;
     staged.commit()?;
     if !drawn {
         return Ok(ExitCode::FAILURE);
     }
+    say_written(loads.len(), rows, cols, &args.out)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The map's rms slope and the loads as W/W0 on it, checked below the hardness.
+fn map_loads(
+    map: &wearcoef::topography::Topography,
+    given: &[Load],
+    e_star: f64,
+    hardness_pa: Option<f64>,
+) -> Result<(f64, Vec<f64>), InputError> {
+    let slope = map.rms_slope();
+    let area_m2 = (map.rows * map.cols) as f64 * map.dx * map.dy;
+    let loads = loads_over_w0(given, e_star, slope, area_m2)?;
+    check_loads_below_hardness(&loads, hardness_pa, e_star, slope)?;
+    Ok((slope, loads))
+}
+
+/// The contact sweep's progress bar over `loads` loads.
+fn load_bar(loads: usize) -> indicatif::ProgressBar {
+    indicatif::ProgressBar::new(loads as u64).with_style(
+        indicatif::ProgressStyle::with_template("contact {bar:30} {pos}/{len} loads, {elapsed}")
+            .expect("a valid template"),
+    )
+}
+
+/// The line that says what was written where.
+fn say_written(loads: usize, rows: usize, cols: usize, out: &Path) -> anyhow::Result<()> {
     out!(
         "{} on a {rows} × {cols} map written to {} (index.html, loads.parquet, loads.csv, clusters.parquet, psd.parquet, preparation.json)",
-        match loads.len() {
+        match loads {
             1 => "1 load".to_string(),
             n => format!("{n} loads"),
         },
-        args.out.display()
+        out.display()
     )?;
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }
 
 /// The tables, then the page, into the staging directory `dir`. The tables are kept
