@@ -11,7 +11,7 @@
 //! clusters (docs/CONVENTIONS.md says why).
 
 use serde_json::{json, Value};
-use wearcoef::clusters::{self, Boundary, Connectivity, Labelling};
+use wearcoef::clusters::{self, Boundary, Connectivity};
 use wearcoef::contact::solver::SolverConfig;
 use wearcoef::contact::window::sweep_window;
 use wearcoef::statistics::{wear_at, WearAt};
@@ -26,19 +26,23 @@ pub struct Physics {
 }
 
 /// K and 𝒦 with the edge-cut clusters left out, and at A* scaled by `a_star_scales`, from
-/// one load's labelling (`a_star_px` the run's A* in pixels).
-pub fn from_labelling(l: &Labelling, a_star_px: f64, a_star_scales: (f64, f64)) -> Value {
-    let areas: Vec<u64> = l.clusters.iter().map(|c| c.area_px).collect();
-    let cut = l.touching_border();
+/// one load's cluster areas and whether each touches the border (`a_star_px` the run's A*
+/// in pixels).
+pub fn edge_and_d_star(
+    areas: &[u64],
+    cut: &[bool],
+    a_star_px: f64,
+    a_star_scales: (f64, f64),
+) -> Value {
     let inner: Vec<u64> = areas
         .iter()
-        .zip(&cut)
+        .zip(cut)
         .filter(|(_, &c)| !c)
         .map(|(&a, _)| a)
         .collect();
     let no_edge = (!inner.is_empty()).then(|| wear_at(&inner, a_star_px));
-    let low = wear_at(&areas, a_star_px * a_star_scales.0);
-    let high = wear_at(&areas, a_star_px * a_star_scales.1);
+    let low = wear_at(areas, a_star_px * a_star_scales.0);
+    let high = wear_at(areas, a_star_px * a_star_scales.1);
     json!({
         "k_archard_no_edge": no_edge.as_ref().map(|m| m.k_archard),
         "k_upscaled_no_edge": no_edge.as_ref().map(|m| m.k_upscaled),

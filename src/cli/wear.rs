@@ -66,6 +66,16 @@ pub struct WearArgs {
     pub out: PathBuf,
 }
 
+/// `text` split into its number and its unit (both trimmed): the unit starts at the first
+/// character that cannot be part of a number.
+fn number_and_unit(text: &str) -> (&str, &str) {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-')))
+        .unwrap_or(t.len());
+    (t[..split].trim(), t[split..].trim())
+}
+
 /// A value with a unit: `number` then one of `units` (name, factor to SI), spaces allowed.
 fn quantity(
     option: &str,
@@ -73,11 +83,7 @@ fn quantity(
     units: &[(&str, f64)],
     what: &str,
 ) -> Result<f64, InputError> {
-    let t = text.trim();
-    let split = t
-        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-')))
-        .unwrap_or(t.len());
-    let (number, unit) = (t[..split].trim(), t[split..].trim());
+    let (number, unit) = number_and_unit(text);
     let names: Vec<&str> = units.iter().map(|(n, _)| *n).collect();
     let shown: String = text.chars().take(40).collect();
     let ellipsis = if text.chars().count() > 40 { "…" } else { "" };
@@ -126,9 +132,7 @@ fn load(index: usize, text: &str) -> Result<Load, InputError> {
     if let Ok(w) = text.trim().parse::<f64>() {
         return Ok(Load::Ratio(w));
     }
-    let unit = text.trim().trim_start_matches(|c: char| {
-        c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-' | ' ')
-    });
+    let (_, unit) = number_and_unit(text);
     if FORCE.iter().any(|(n, _)| *n == unit) {
         quantity(&option, text, FORCE, "a force").map(Load::Newtons)
     } else if PRESSURE.iter().any(|(n, _)| *n == unit) {
@@ -416,11 +420,12 @@ pub fn wear(args: WearArgs) -> anyhow::Result<ExitCode> {
             clusters::label_with(&contact, rows, cols, Connectivity::Eight, Boundary::Open)
                 .map_err(|e| e.to_string())?;
         let areas: Vec<u64> = labelling.clusters.iter().map(|c| c.area_px).collect();
-        let touching = labelling.touching_border().iter().filter(|&&t| t).count();
+        let cut = labelling.touching_border();
+        let touching = cut.iter().filter(|&&t| t).count();
         tables.clusters.push(i, &labelling);
         let m = wear_at(&areas, a_star_px);
         let fit = super::fit::fit_row(Some(i as u32), r.w_over_w0, &areas, 0, args.resamples, 0);
-        let band = super::trust::from_labelling(&labelling, a_star_px, area_scales);
+        let band = super::trust::edge_and_d_star(&areas, &cut, a_star_px, area_scales);
         let mut row = json!({
             "w_over_w0": r.w_over_w0,
             "force_n": r.w_over_w0 * e_star * slope * area_m2,

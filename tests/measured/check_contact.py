@@ -31,19 +31,25 @@ def surface():
     return h * 0.2 / np.sqrt(np.mean(np.diff(h, axis=0) ** 2) / DX**2 * 2)
 
 
+def wear(path, out, loads, *extra):
+    """`wearcoef wear` on `path` at the loads `loads` (W/W0) with the pressure maps, as every
+    check here runs it: the loads table and the pressures (loads, rows = y, cols = x), Pa."""
+    run = subprocess.run(
+        [BIN, "wear", "--input", path, "--form", "none", "--e-star", "100GPa",
+         "--loads", ",".join(map(str, loads)), "--a-star", "1um2", "--tolerance", "1e-10",
+         "--pressure-maps", *extra, "-o", out], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    return (pd.read_parquet(os.path.join(out, "loads.parquet")),
+            np.load(os.path.join(out, "pressure.npy")))
+
+
 def main():
     print(f"ContactMechanics {cm.__version__}")
     h = surface()
     path = os.path.join(WORK, "map.x3p")
     Topography(h, (NX * DX, NY * DX), unit="m", periodic=False).to_x3p(path)
     out = os.path.join(WORK, "out")
-    run = subprocess.run(
-        [BIN, "wear", "--input", path, "--form", "none", "--e-star", "100GPa",
-         "--loads", ",".join(map(str, LOADS)), "--a-star", "1um2", "--tolerance", "1e-10",
-         "--pressure-maps", "-o", out], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    loads = pd.read_parquet(os.path.join(out, "loads.parquet"))
-    ours = np.load(os.path.join(out, "pressure.npy"))  # (loads, rows = y, cols = x), Pa
+    loads, ours = wear(path, out, LOADS)
     sub = FreeFFTElasticHalfSpace((NX, NY), E_STAR, physical_sizes=(NX * DX, NY * DX))
     system = make_system(surface=Topography(h, (NX * DX, NY * DX)), substrate=sub)
     for i, force in enumerate(loads["force_n"]):
@@ -70,13 +76,7 @@ def plastic():
     path = os.path.join(WORK, "map.x3p")
     out = os.path.join(WORK, "plastic")
     hardness = 4e9
-    run = subprocess.run(
-        [BIN, "wear", "--input", path, "--form", "none", "--e-star", "100GPa",
-         "--loads", "0.02,0.05", "--a-star", "1um2", "--tolerance", "1e-10",
-         "--hardness", "4GPa", "--pressure-maps", "-o", out], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    loads = pd.read_parquet(os.path.join(out, "loads.parquet"))
-    ours = np.load(os.path.join(out, "pressure.npy"))
+    loads, ours = wear(path, out, [0.02, 0.05], "--hardness", "4GPa")
     for i, force in enumerate(loads["force_n"]):
         sub = FreeFFTElasticHalfSpace((NX, NY), E_STAR, physical_sizes=(NX * DX, NY * DX))
         system = make_plastic_system(
@@ -115,13 +115,7 @@ def rectangular():
                periodic=False).to_x3p(path)
     out = os.path.join(WORK, "rectangular")
     loads = [0.05, 0.2, 0.5]
-    run = subprocess.run(
-        [BIN, "wear", "--input", path, "--form", "none", "--e-star", "100GPa",
-         "--loads", ",".join(map(str, loads)), "--a-star", "1um2", "--tolerance", "1e-10",
-         "--pressure-maps", "-o", out], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    table = pd.read_parquet(os.path.join(out, "loads.parquet"))
-    ours = np.load(os.path.join(out, "pressure.npy"))
+    table, ours = wear(path, out, loads)
     t = read_topography(path)
     (nx, ny), (sx, sy) = t.nb_grid_pts, t.physical_sizes
     dx, dy = sx / nx, sy / ny

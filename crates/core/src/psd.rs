@@ -189,7 +189,7 @@ fn fit_run(bins: &[PsdBin]) -> Option<(SelfAffineFit, usize, usize)> {
 /// λ_l and λ_s only where the spectrum rolls off beyond them: a run that reaches the last
 /// bin (the pixel) shows no λ_s, one that starts at the first (the map) no λ_l. What is not
 /// resolved is None, with the reason in `not_resolved`.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Resolved {
     /// The straightest run's wavelengths, longest and shortest (m), when there is a run.
     pub run_lambda_long_m: Option<f64>,
@@ -209,18 +209,11 @@ pub struct Resolved {
 pub fn resolve(bins: &[PsdBin]) -> Resolved {
     let Some((fit, start, total)) = fit_run(bins) else {
         return Resolved {
-            run_lambda_long_m: None,
-            run_lambda_short_m: None,
-            bins: 0,
-            max_log10_residual: None,
-            run_hurst: None,
-            hurst: None,
-            lambda_l_m: None,
-            lambda_s_m: None,
             not_resolved: vec![
                 "H, λ_l and λ_s: no run of 5 bins of the PSD follows a power law within a factor 2"
                     .into(),
             ],
+            ..Resolved::default()
         };
     };
     let mut r = Resolved {
@@ -229,10 +222,7 @@ pub fn resolve(bins: &[PsdBin]) -> Resolved {
         bins: fit.bins,
         max_log10_residual: Some(fit.max_log10_residual),
         run_hurst: Some(fit.hurst),
-        hurst: None,
-        lambda_l_m: None,
-        lambda_s_m: None,
-        not_resolved: Vec::new(),
+        ..Resolved::default()
     };
     if !(fit.hurst > 0.0 && fit.hurst < 1.0) {
         r.not_resolved.push(format!(
