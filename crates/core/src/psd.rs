@@ -327,13 +327,7 @@ mod tests {
         assert_eq!((r.hurst, r.lambda_s_m), (Some(fit.hurst), None), "{r:?}");
         assert!(r.lambda_l_m.is_some() && r.not_resolved[0].starts_with("λ_s"));
         // The same run twice as steep: H = 2.4, not a self-affine range.
-        let steep: Vec<PsdBin> = bins
-            .iter()
-            .map(|b| PsdBin {
-                c: b.c * b.c,
-                ..b.clone()
-            })
-            .collect();
+        let steep: Vec<PsdBin> = bins.iter().map(|b| PsdBin { c: b.c * b.c, ..*b }).collect();
         let r = resolve(&steep);
         assert_eq!(
             (r.hurst, r.lambda_l_m, r.lambda_s_m),
