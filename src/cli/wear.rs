@@ -50,8 +50,8 @@ pub struct WearArgs {
     /// given at A* for d* times each (`k_archard_d_star_low`, `…_high`).
     #[arg(long, value_delimiter = ',', default_value = "0.5,2")]
     pub d_star_factors: Vec<f64>,
-    /// Skip the trust band's solves (the map coarsened ×2, its halves and quarters, about
-    /// 2.3 times the run's own solving); its edge and d* columns are still written.
+    /// Skip the trust band's solves (the map coarsened ×2, its two halves and four quarters:
+    /// 2.25 times the map's nodes in all); its edge and d* columns are still written.
     #[arg(long)]
     pub no_trust_band: bool,
     /// Bootstrap resamples of α̂'s interval.

@@ -90,6 +90,12 @@ pub struct Preparation {
     #[arg(long, value_enum, default_value = "none")]
     #[serde(default = "no_fill")]
     pub fill: FillArg,
+    /// Resample a map of rectangular pixels onto square ones of its finer pixel size, by
+    /// linear interpolation along the coarser axis (after the form and the fill). Never
+    /// needed: rectangular pixels are solved as measured. `wear` and `topography` only.
+    #[arg(long)]
+    #[serde(skip)]
+    pub resample: bool,
 }
 
 fn plane() -> FormArg {
@@ -357,14 +363,36 @@ pub fn check_for_contact(
     check_not_flat(&heights, &map.heights, &form_name)
 }
 
-/// Read `input`, scale it to metres, remove the form and fill (or refuse) missing points.
+/// Read `input`, scale it to metres, remove the form and fill (or refuse) missing points;
+/// its warnings and what the spectrum does not resolve are printed, naming `input`.
 pub fn prepare(input: &Path, p: &Preparation) -> anyhow::Result<Prepared> {
-    prepare_as(input, &input.display().to_string(), p)
+    let prepared = prepare_quietly(input, &input.display().to_string(), p)?;
+    announce(&input.display().to_string(), &prepared.report);
+    Ok(prepared)
 }
 
-/// [`prepare`], naming the map `name` in its warnings and record (a copy read from a
-/// temporary place is named by what it is).
-pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<Prepared> {
+/// Print the warnings of a preparation's record and what its spectrum does not resolve,
+/// naming the map `name` (the pipeline names a measured file by its path in
+/// pipeline.yaml, which its stage does not see).
+pub fn announce(name: &str, report: &serde_json::Value) {
+    for w in report["warnings"].as_array().into_iter().flatten() {
+        if let Some(w) = w.as_str() {
+            crate::note!("warning: {name}: {w}");
+        }
+    }
+    for why in report["psd_fit"]["not_resolved"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|w| w.as_str())
+    {
+        crate::note!("note: {name}: not resolved: {why}");
+    }
+}
+
+/// [`prepare`] without printing, naming the map `name` in its record (a copy read from a
+/// temporary place is named by what it is; see [`announce`]).
+pub fn prepare_quietly(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<Prepared> {
     let bad = |why: String| IoError::File {
         path: input.display().to_string(),
         message: why,
@@ -389,7 +417,9 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
         FormArg::Plane => Some(Form::Plane),
         FormArg::Curvature => Some(Form::Curvature),
     };
-    let aspect_warning = check_pixel_aspect(dx, dy).map_err(bad)?;
+    let aspect_warning = check_pixel_aspect(dx, dy)
+        .map_err(bad)?
+        .filter(|_| !p.resample);
     let mut fill_warning = None;
     if p.fill == FillArg::Harmonic {
         fill_warning = check_filled_share(missing, rows * cols).map_err(bad)?;
@@ -406,6 +436,18 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
         FillArg::Keep => 0,
         _ => map.fill_harmonic().map_err(|e| bad(e.to_string()))?,
     };
+    let measured_shape = (rows, cols, dx, dy);
+    if p.resample {
+        map = map.resampled_square();
+    }
+    let (rows, cols, dx, dy) = (map.rows, map.cols, map.dx, map.dy);
+    let resampled = p.resample.then(|| {
+        json!({
+            "rows": measured_shape.0, "cols": measured_shape.1,
+            "pixel_size_x_m": measured_shape.2, "pixel_size_y_m": measured_shape.3,
+            "method": "linear along the coarser axis",
+        })
+    });
     let present: Vec<f64> = map
         .heights
         .iter()
@@ -424,15 +466,7 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
     };
     warnings.extend(aspect_warning);
     warnings.extend(fill_warning);
-    for w in &warnings {
-        crate::note!("warning: {name}: {w}");
-    }
-    if let Some(reasons) = fit["not_resolved"].as_array() {
-        for why in reasons.iter().filter_map(|w| w.as_str()) {
-            crate::note!("note: {name}: not resolved: {why}");
-        }
-    }
-    let report = json!({
+    let mut report = json!({
         "input": name, "format": read.source,
         "rows": rows, "cols": cols,
         "pixel_size_x_m": dx, "pixel_size_y_m": dy, "pixel_size_from": pixel_from,
@@ -448,5 +482,8 @@ pub fn prepare_as(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<P
         "rms_height_m": rms_height, "rms_slope": rms_slope,
         "psd_fit": fit, "warnings": warnings,
     });
+    if let Some(from) = resampled {
+        report["resampled_from"] = from;
+    }
     Ok(Prepared { map, report, psd })
 }

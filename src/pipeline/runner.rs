@@ -568,6 +568,9 @@ fn build(
             return Err(failed(store, inst, &e, cause, keys, start));
         }
     };
+    if let Some(src) = &inst.source {
+        crate::io::prepare::announce(&src.path.display().to_string(), &results);
+    }
     crate::store::table::stamp(
         entry.path(),
         &crate::store::table::TableOrigin {

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
-use crate::io::prepare::{prepare_as, FillArg, Preparation};
+use crate::io::prepare::{prepare_quietly, FillArg, Preparation};
 use crate::spectral::Fft2;
 use crate::store::table::{col, write};
 use crate::surface::{self, SurfaceParams};
@@ -111,8 +111,10 @@ fn measured(job: &MeasuredJob, dir: &Path) -> anyhow::Result<Value> {
         job.preparation.fill != FillArg::Keep,
         "fill keep: contact needs every height; choose fill harmonic or none"
     );
+    // Quiet: the runner prints the record's warnings naming the file by its path, which
+    // the job (keyed by content) does not hold.
     let name = format!("measured file of SHA-256 {}…", &job.sha256[..12]);
-    let prepared = prepare_as(&path, &name, &job.preparation)?;
+    let prepared = prepare_quietly(&path, &name, &job.preparation)?;
     let map = &prepared.map;
     anyhow::ensure!(
         (map.rows, map.cols) == (job.rows, job.cols),

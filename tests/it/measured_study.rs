@@ -224,10 +224,38 @@ fn measured_files_are_keyed_by_content() {
     );
 }
 
+/// A measured file's warnings name it by its path, not by the hash its stage is keyed by:
+/// a map with 10 % of its points missing, filled, warns so when run.
+#[test]
+fn measured_warnings_name_the_file_by_its_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_map(d, "holes.npy", 4);
+    let mut map: Array2<f64> = ndarray_npy::read_npy(d.join("holes.npy")).unwrap();
+    map.slice_mut(s![20..40, 30..90]).fill(f64::NAN);
+    ndarray_npy::write_npy(d.join("holes.npy"), &map).unwrap();
+    let text = pipeline("holes.npy", "", "fig45\n    study: rough")
+        .replace("pixel_size: 0.5}", "pixel_size: 0.5, fill: harmonic}");
+    std::fs::write(d.join("pipeline.yaml"), text).unwrap();
+    let out = run_m(d);
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{e}");
+    let path = std::path::absolute(d.join("holes.npy")).unwrap();
+    assert!(
+        e.contains(&format!(
+            "warning: {}: 1200 of 12000 points",
+            path.display()
+        )),
+        "{e}"
+    );
+    assert!(!e.contains("SHA-256"), "{e}");
+}
+
 /// A measured study refuses a generated study's fields, a figure other than fig2 or fig45,
-/// an empty list, a missing file, and a file that needs a unit, a pixel size or a fill rule
-/// its preparation does not give, each naming the field to set, before any work; nothing
-/// is written.
+/// an empty list, a missing file, a file that needs a unit, a pixel size or a fill rule
+/// its preparation does not give, and `resample` (rectangular pixels are solved as
+/// measured; only `wear` resamples, when asked), each naming the field, before any work;
+/// nothing is written.
 #[test]
 fn measured_study_errors_name_the_field() {
     let dir = tempfile::tempdir().unwrap();
@@ -274,6 +302,11 @@ fn measured_study_errors_name_the_field() {
         (
             pipeline("holes.npy", "", "fig45\n    study: rough"),
             "3 of 12000 points are missing: set studies.rough.measured.preparation.fill",
+        ),
+        (
+            pipeline("a.npy", "", "fig45\n    study: rough")
+                .replace("pixel_size: 0.5}", "pixel_size: 0.5, resample: true}"),
+            "unknown field `resample`",
         ),
     ] {
         std::fs::write(d.join("pipeline.yaml"), &text).unwrap();

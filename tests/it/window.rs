@@ -139,6 +139,65 @@ fn rectangular_pixels_give_the_hertz_circle() {
     );
 }
 
+/// `wear --resample` puts a map of 1 × 2.466 µm pixels on square 1 µm ones (its 81 rows
+/// over 80 × 2.466 µm become 198) and records what it was; the sphere's contact area under
+/// Hertz's force is then πa² within the rectangular test's 4 %, the linear interpolation's
+/// height error (Δy²/8R = 0.8 nm) being 5000 times smaller than the interference a²/R.
+#[test]
+fn resampled_on_request_the_sphere_keeps_its_hertz_area() {
+    let dy = 2.466 * DX;
+    let a = 60.0 * DX;
+    let load = 4.0 * a.powi(3) * E_STAR / (3.0 * R_CURV);
+    let map = sphere_on(81, 161, dy, (40, 80));
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let heights = ndarray::Array2::from_shape_vec((map.rows, map.cols), map.heights).unwrap();
+    ndarray_npy::write_npy(d.join("sphere.npy"), &heights).unwrap();
+    let out = super::run_in(
+        d,
+        &[
+            "wear",
+            "--input",
+            "sphere.npy",
+            "--height-unit",
+            "m",
+            "--pixel-size",
+            "1e-6",
+            "--pixel-size-y",
+            "2.466e-6",
+            "--form",
+            "none",
+            "--resample",
+            "--e-star",
+            "1e11Pa",
+            "--d-star",
+            "10um",
+            "--loads",
+            &format!("{load}N"),
+            "--no-trust-band",
+            "-o",
+            "out",
+        ],
+    );
+    assert!(out.status.success(), "{out:?}");
+    let prep: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("out/preparation.json")).unwrap()).unwrap();
+    assert_eq!(
+        (prep["rows"].as_u64(), prep["cols"].as_u64()),
+        (Some(198), Some(161))
+    );
+    assert_eq!(prep["pixel_size_y_m"], prep["pixel_size_x_m"]);
+    assert_eq!(prep["resampled_from"]["rows"], 81);
+    assert_eq!(prep["resampled_from"]["pixel_size_y_m"], 2.466e-6);
+    let loads = super::table(&d.join("out/loads.parquet"));
+    let area_um2 = super::f64s(&loads, "real_contact_area_um2")[0];
+    let hertz_um2 = PI * a * a * 1e12;
+    assert!(
+        (area_um2 / hertz_um2 - 1.0).abs() <= 0.04,
+        "{area_um2} µm² vs {hertz_um2}"
+    );
+}
+
 /// A load far beyond full contact: the far nodes of the square stay out of contact (they
 /// are sunk by the deflection of the largest load, not only by the height range, which a
 /// smooth map under W/W0 = 50 presses through), and the window is in full contact.

@@ -240,6 +240,74 @@ impl Topography {
         })
     }
 
+    /// The map on square pixels of the finer of `dx`, `dy`: heights linearly interpolated
+    /// along the coarser axis at that spacing over the same extent (its first and last
+    /// rows or columns kept), so that `(n − 1)·Δ_coarse / Δ_fine + 1` points, rounded down,
+    /// replace its `n`. The finer axis is untouched; a square map is returned as it is.
+    /// A missing neighbour makes the interpolated height missing.
+    pub fn resampled_square(&self) -> Topography {
+        let along_rows = self.dy > self.dx;
+        let (coarse, fine, n) = if along_rows {
+            (self.dy, self.dx, self.rows)
+        } else {
+            (self.dx, self.dy, self.cols)
+        };
+        if coarse == fine || n < 2 {
+            return self.clone();
+        }
+        let ratio = coarse / fine;
+        // The rounding guard keeps an exact multiple's last point.
+        let m = ((n - 1) as f64 * ratio * (1.0 + 1e-12)).floor() as usize + 1;
+        let at = |k: usize| -> (usize, f64) {
+            // A point on a measured row keeps it (the ratio of two decimal sizes is rarely
+            // exact in binary).
+            let t = k as f64 / ratio;
+            let t = if (t - t.round()).abs() < 1e-9 {
+                t.round()
+            } else {
+                t
+            };
+            let i = (t.floor() as usize).min(n - 1);
+            (i, t - i as f64)
+        };
+        let value = |a: f64, b: f64, w: f64| if w == 0.0 { a } else { (1.0 - w) * a + w * b };
+        let (rows, cols) = if along_rows {
+            (m, self.cols)
+        } else {
+            (self.rows, m)
+        };
+        let mut heights = Vec::with_capacity(rows * cols);
+        for row in 0..rows {
+            for col in 0..cols {
+                let h = if along_rows {
+                    let (i, w) = at(row);
+                    let next = (i + 1).min(n - 1);
+                    value(
+                        self.heights[i * self.cols + col],
+                        self.heights[next * self.cols + col],
+                        w,
+                    )
+                } else {
+                    let (i, w) = at(col);
+                    let next = (i + 1).min(n - 1);
+                    value(
+                        self.heights[row * self.cols + i],
+                        self.heights[row * self.cols + next],
+                        w,
+                    )
+                };
+                heights.push(h);
+            }
+        }
+        Topography {
+            rows,
+            cols,
+            dx: fine,
+            dy: fine,
+            heights,
+        }
+    }
+
     /// The rms slope `√⟨(∂h/∂x)² + (∂h/∂y)²⟩` by forward differences over the pairs of
     /// present neighbours (no wrap-around: the map is not periodic). Dimensionless.
     pub fn rms_slope(&self) -> f64 {
@@ -310,6 +378,45 @@ fn solve_symmetric(a: &mut [f64], b: &mut [f64], n: usize) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Resampling onto square pixels keeps the extent and the finer axis, reproduces a
+    /// field linear along the coarser axis to rounding (linear interpolation is exact on
+    /// it), keeps the measured rows where the grids meet, and leaves a square map alone.
+    #[test]
+    fn resampling_to_square_pixels_is_exact_on_a_linear_field() {
+        let (rows, cols, dx, dy) = (7, 5, 0.5e-6, 1.25e-6);
+        let f = |x: f64, y: f64| 3.0e-7 + 0.02 * x - 0.05 * y + 0.01 * (x * 1e7).sin() * 1e-7;
+        let heights = (0..rows * cols)
+            .map(|i| f((i % cols) as f64 * dx, (i / cols) as f64 * dy))
+            .collect();
+        let map = Topography::new(rows, cols, dx, dy, heights).unwrap();
+        let square = map.resampled_square();
+        // (7 − 1) × 2.5 + 1 = 16 rows over the same 7.5 µm.
+        assert_eq!(
+            (square.rows, square.cols, square.dx, square.dy),
+            (16, 5, dx, dx)
+        );
+        for row in 0..square.rows {
+            for col in 0..cols {
+                let want = f(col as f64 * dx, row as f64 * dx);
+                let got = square.heights[row * cols + col];
+                // Linear in y: exact up to a few ulps of the 3e-7 m offset.
+                assert!((got - want).abs() < 1e-20, "{row} {col}: {got} {want}");
+            }
+        }
+        // Rows 0, 5, 10, 15 of the square map are rows 0, 2, 4, 6 of the measured one.
+        for (new, old) in [(0, 0), (5, 2), (10, 4), (15, 6)] {
+            assert_eq!(
+                square.heights[new * cols..(new + 1) * cols],
+                map.heights[old * cols..(old + 1) * cols]
+            );
+        }
+        let transposed = Topography::new(cols, rows, dy, dx, vec![1.0; 35]).unwrap();
+        let t = transposed.resampled_square();
+        assert_eq!((t.rows, t.cols, t.dx, t.dy), (5, 16, dx, dx));
+        let already = Topography::new(3, 4, dx, dx, (0..12).map(f64::from).collect()).unwrap();
+        assert_eq!(already.resampled_square(), already);
+    }
 
     /// A field with a known form added to a zero-mean pattern orthogonal to it is returned
     /// to that pattern, the form's coefficients recovered; missing points are left out of
