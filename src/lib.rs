@@ -8,13 +8,15 @@
 //! same module names); this crate is the application around it:
 //! In layers, each importing only its own and lower ones (checked by `tests/it/layout.rs`):
 //! 1. [`io`] (`.npy` fields, measured files, atomic writes), [`machine`], [`format`] (numbers
-//!    for readers), [`ranges`] (the accepted range of every number a user types);
+//!    for readers), [`ranges`] (the accepted range of every number a user types), [`units`]
+//!    (quantities typed with their unit), [`tail`] (a load's areas fitted, as JSON rows);
 //! 2. [`store`]: content keys, the artifact store, Parquet tables, a stage's inputs;
 //!    [`config`]: `pipeline.yaml` (studies, profiles, figures);
 //! 3. [`stages`]: the stage contract and one module per stage; [`figures`]: drawing the
 //!    paper's figures from stored tables (the figures stage's work);
 //! 4. [`pipeline`]: the registry, plan and cost model, executor, catalog, gallery, report,
-//!    Slurm.
+//!    Slurm; [`wear`]: one measured map to its wear coefficients and trust band (the
+//!    command line's `wear` and the Python package's).
 
 pub use wearcoef_core::{
     analytic, clusters, contact, grid, pages, powerlaw, psd, resample, spectral, statistics,
@@ -40,3 +42,6 @@ pub mod pipeline;
 pub mod ranges;
 pub mod stages;
 pub mod store;
+pub mod tail;
+pub mod units;
+pub mod wear;

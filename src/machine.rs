@@ -52,3 +52,16 @@ pub fn peak_rss_bytes() -> Option<u64> {
 pub fn reset_peak_rss() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
+
+/// Refuse work whose estimated peak memory (`bytes`) exceeds this machine's, before
+/// allocating it; `what` names the work and `fix` what to do.
+pub fn check_memory(what: &str, bytes: u64, fix: &str) -> Result<(), crate::ranges::InputError> {
+    match memory_bytes() {
+        Some(total) if bytes > total => Err(crate::ranges::InputError(format!(
+            "{what} needs about {:.1} GiB, more than this machine's {:.1} GiB; {fix}",
+            bytes as f64 / (1u64 << 30) as f64,
+            total as f64 / (1u64 << 30) as f64
+        ))),
+        _ => Ok(()),
+    }
+}

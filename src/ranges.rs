@@ -3,6 +3,12 @@
 //! pipeline.yaml, are checked here against a range with its unit and the reason for its
 //! bounds. docs/CONVENTIONS.md lists the same table (a test keeps the two equal).
 
+/// An error that means "your input is wrong": the command exits with status 2, and the
+/// Python package raises `ValueError`.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct InputError(pub String);
+
 /// A closed range `[lo, hi]` of one quantity.
 #[derive(Debug, Clone, Copy)]
 pub struct Range {

@@ -24,9 +24,7 @@ pub mod store;
 pub mod submit;
 pub mod tools;
 pub mod topography;
-mod trust;
 pub mod wear;
-mod wear_page;
 
 #[derive(clap::Args, Clone)]
 pub struct StoreArgs {
@@ -38,10 +36,8 @@ pub struct StoreArgs {
     pub data: PathBuf,
 }
 
-/// An error that means "your input is wrong" (exit 2).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct InputError(pub String);
+pub use wearcoef::machine::check_memory;
+pub use wearcoef::ranges::InputError;
 
 pub fn load(path: &Path) -> anyhow::Result<Pipeline> {
     Ok(Pipeline::load(path)?)
@@ -271,16 +267,4 @@ pub fn check_threads(what: &str, at_once: usize, threads: usize) -> Result<(), I
         )));
     }
     Ok(())
-}
-
-/// Refuse work whose estimated peak memory exceeds this machine's, before allocating it.
-pub fn check_memory(what: &str, bytes: u64, fix: &str) -> Result<(), InputError> {
-    match wearcoef::pipeline::cost::machine_memory_bytes() {
-        Some(total) if bytes > total => Err(InputError(format!(
-            "{what} needs about {:.1} GiB, more than this machine's {:.1} GiB; {fix}",
-            bytes as f64 / (1u64 << 30) as f64,
-            total as f64 / (1u64 << 30) as f64
-        ))),
-        _ => Ok(()),
-    }
 }

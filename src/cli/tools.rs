@@ -6,6 +6,8 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 use serde_json::json;
 
+use wearcoef::store::cluster_table::ClusterRows;
+
 use super::{check_memory, check_outputs, write_atomically, InputError};
 use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
@@ -161,76 +163,18 @@ pub struct ClustersArgs {
     pub open: bool,
 }
 
-/// One row per cluster of every map, as `clusters --out` and `wear` write them.
-#[derive(Default)]
-pub(crate) struct ClusterRows {
-    load_index: Vec<u32>,
-    cluster_id: Vec<u32>,
-    area_px: Vec<u64>,
-    perimeter_px: Vec<u64>,
-    extent_x_px: Vec<u32>,
-    extent_y_px: Vec<u32>,
-    wraps_x: Vec<bool>,
-    wraps_y: Vec<bool>,
-    percolating: Vec<bool>,
-    touches_edge: Vec<bool>,
-}
-
-impl ClusterRows {
-    pub(crate) fn push(&mut self, map: usize, labelling: &clusters::Labelling) {
-        self.touches_edge.extend(labelling.touching_border());
-        for (k, c) in labelling.clusters.iter().enumerate() {
-            self.load_index.push(map as u32);
-            self.cluster_id.push(k as u32 + 1);
-            self.area_px.push(c.area_px);
-            self.perimeter_px.push(c.perimeter_px);
-            self.extent_x_px.push(c.extent_x_px);
-            self.extent_y_px.push(c.extent_y_px);
-            self.wraps_x.push(c.wraps_x);
-            self.wraps_y.push(c.wraps_y);
-            self.percolating.push(c.percolating());
-        }
-    }
-
-    /// The clusters' areas in pixels, in row order.
-    pub(crate) fn areas(&self) -> &[u64] {
-        &self.area_px
-    }
-
-    /// The maps' indices, in row order.
-    pub(crate) fn maps(&self) -> &[u32] {
-        &self.load_index
-    }
-
-    /// The table; `touches_edge` (a pixel on the map's border) only for `open` maps.
-    pub(crate) fn frame(self, open: bool) -> anyhow::Result<polars::prelude::DataFrame> {
-        use wearcoef::store::table::col;
-        let rows = self.area_px.len();
-        let mut columns = vec![
-            col("load_index", self.load_index),
-            col("cluster_id", self.cluster_id),
-            col("area_px", self.area_px),
-            col("perimeter_px", self.perimeter_px),
-            col("extent_x_px", self.extent_x_px),
-            col("extent_y_px", self.extent_y_px),
-            col("wraps_x", self.wraps_x),
-            col("wraps_y", self.wraps_y),
-            col("percolating", self.percolating),
-        ];
-        if open {
-            columns.push(col("touches_edge", self.touches_edge));
-        }
-        Ok(polars::prelude::DataFrame::new(rows, columns)?)
-    }
-
-    fn write(self, path: &std::path::Path, open: bool) -> anyhow::Result<()> {
-        use polars::prelude::ParquetWriter;
-        let mut df = self.frame(open)?;
-        write_atomically(path, |tmp| {
-            ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
-            Ok(())
-        })
-    }
+/// The cluster table written (atomically) to `path`.
+fn write_cluster_table(
+    table: ClusterRows,
+    path: &std::path::Path,
+    open: bool,
+) -> anyhow::Result<()> {
+    use polars::prelude::ParquetWriter;
+    let mut df = table.frame(open)?;
+    write_atomically(path, |tmp| {
+        ParquetWriter::new(std::fs::File::create(tmp)?).finish(&mut df)?;
+        Ok(())
+    })
 }
 
 pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
@@ -322,7 +266,7 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
         out!("{}", serde_json::to_string(&doc)?)?;
     }
     if let Some(path) = &out {
-        table.write(path, open)?;
+        write_cluster_table(table, path, open)?;
     }
     Ok(ExitCode::SUCCESS)
 }

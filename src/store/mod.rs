@@ -24,6 +24,7 @@ use serde_json::Value;
 
 use hash::sha256_file;
 
+pub mod cluster_table;
 mod fresh;
 pub mod hash;
 pub mod inputs;

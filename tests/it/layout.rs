@@ -423,10 +423,10 @@ fn the_application_modules_import_only_their_layer_and_lower_ones() {
             "analytic" | "clusters" | "contact" | "grid" | "pages" | "powerlaw" | "psd"
             | "resample" | "spectral" | "statistics" | "surface" | "topography" => 0,
             // `note!`, the crate's stderr macro, belongs to the lowest layer.
-            "io" | "machine" | "format" | "ranges" | "note" => 1,
+            "io" | "machine" | "format" | "ranges" | "units" | "tail" | "note" => 1,
             "store" | "config" => 2,
             "stages" | "figures" => 3,
-            "pipeline" => 4,
+            "pipeline" | "wear" => 4,
             _ => return None,
         })
     };

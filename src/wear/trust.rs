@@ -10,12 +10,12 @@
 //! The band is the range of all of these with K itself. The default K keeps the edge-cut
 //! clusters (docs/CONVENTIONS.md says why).
 
+use crate::clusters::{self, Boundary, Connectivity};
+use crate::contact::solver::SolverConfig;
+use crate::contact::window::sweep_window;
+use crate::statistics::{wear_at, WearAt};
+use crate::topography::Topography;
 use serde_json::{json, Value};
-use wearcoef::clusters::{self, Boundary, Connectivity};
-use wearcoef::contact::solver::SolverConfig;
-use wearcoef::contact::window::sweep_window;
-use wearcoef::statistics::{wear_at, WearAt};
-use wearcoef::topography::Topography;
 
 /// The band's settings: the physics of the run they vary.
 pub struct Physics {
@@ -243,7 +243,7 @@ pub fn band(
             let notes = solved_rows(map, &pressures, &physics, rows, || bar.inc(1));
             bar.finish_and_clear();
             for n in &notes {
-                wearcoef::note!("note: trust band: {n}");
+                crate::note!("note: trust band: {n}");
             }
             notes
         }

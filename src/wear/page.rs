@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use wearcoef::figures::plot::{Dash, Layout, LinePlot, Marker, Panels, Series, YAxis};
-use wearcoef::psd::PsdBin;
+use crate::figures::plot::{Dash, Layout, LinePlot, Marker, Panels, Series, YAxis};
+use crate::psd::PsdBin;
 
 /// What the page shows, gathered from the run.
 pub struct Page<'a> {
@@ -137,8 +137,8 @@ fn ccdf(p: &Page) -> LinePlot {
             ..Series::line(
                 format!(
                     "W = {} N (W/W_0 = {})",
-                    wearcoef::ranges::show(force),
-                    wearcoef::ranges::show(w)
+                    crate::ranges::show(force),
+                    crate::ranges::show(w)
                 ),
                 points,
                 0,
