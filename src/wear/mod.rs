@@ -66,23 +66,6 @@ pub struct WearOptions {
     pub resamples: usize,
 }
 
-impl WearOptions {
-    /// The options with their command-line defaults, for the loads and E* given.
-    pub fn new(e_star: &str, loads: &[&str]) -> WearOptions {
-        WearOptions {
-            e_star: e_star.to_string(),
-            loads: loads.iter().map(|l| l.to_string()).collect(),
-            a_star: None,
-            d_star: None,
-            hardness: None,
-            tolerance: 1e-8,
-            d_star_factors: vec![0.5, 2.0],
-            no_trust_band: false,
-            resamples: 200,
-        }
-    }
-}
-
 /// The physical settings of a run, checked and in SI units.
 #[derive(Debug, Clone)]
 pub struct Settings {
@@ -102,17 +85,11 @@ pub struct Settings {
 impl Settings {
     /// The options checked, each error naming its option.
     pub fn new(args: &WearOptions) -> Result<Settings, InputError> {
-        settings(args)
-    }
-}
-
-fn settings(args: &WearOptions) -> Result<Settings, InputError> {
-    let in_range =
-        |r: &crate::ranges::Range, option: &str, v: f64| r.check(option, v).map_err(InputError);
-    let e_star = quantity("--e-star", &args.e_star, PRESSURE, "a modulus")?;
-    in_range(&crate::ranges::E_STAR_PA, "--e-star", e_star)?;
-    let a_star_m2 =
-        match (&args.a_star, &args.d_star) {
+        let in_range =
+            |r: &crate::ranges::Range, option: &str, v: f64| r.check(option, v).map_err(InputError);
+        let e_star = quantity("--e-star", &args.e_star, PRESSURE, "a modulus")?;
+        in_range(&crate::ranges::E_STAR_PA, "--e-star", e_star)?;
+        let a_star_m2 = match (&args.a_star, &args.d_star) {
             (Some(a), _) => quantity("--a-star", a, AREA, "an area")?,
             (None, Some(d)) => {
                 let d = quantity("--d-star", d, LENGTH, "a length")?;
@@ -123,31 +100,31 @@ fn settings(args: &WearOptions) -> Result<Settings, InputError> {
                     .into(),
             )),
         };
-    let hardness_pa = args
-        .hardness
-        .as_deref()
-        .map(|h| quantity("--hardness", h, PRESSURE, "a hardness"))
-        .transpose()?;
-    if let Some(h) = hardness_pa {
-        in_range(&crate::ranges::HARDNESS_PA, "--hardness", h)?;
-    }
-    let loads = args
-        .loads
-        .iter()
-        .enumerate()
-        .map(|(i, t)| load(i + 1, t))
-        .collect::<Result<Vec<_>, _>>()?;
-    for (i, l) in loads.iter().enumerate() {
-        if let Load::Ratio(w) = *l {
-            in_range(
-                &crate::ranges::W_OVER_W0,
-                &format!("--loads (value {})", i + 1),
-                w,
-            )?;
+        let hardness_pa = args
+            .hardness
+            .as_deref()
+            .map(|h| quantity("--hardness", h, PRESSURE, "a hardness"))
+            .transpose()?;
+        if let Some(h) = hardness_pa {
+            in_range(&crate::ranges::HARDNESS_PA, "--hardness", h)?;
         }
-    }
-    in_range(&crate::ranges::TOLERANCE, "--tolerance", args.tolerance)?;
-    match args.d_star_factors[..] {
+        let loads = args
+            .loads
+            .iter()
+            .enumerate()
+            .map(|(i, t)| load(i + 1, t))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (i, l) in loads.iter().enumerate() {
+            if let Load::Ratio(w) = *l {
+                in_range(
+                    &crate::ranges::W_OVER_W0,
+                    &format!("--loads (value {})", i + 1),
+                    w,
+                )?;
+            }
+        }
+        in_range(&crate::ranges::TOLERANCE, "--tolerance", args.tolerance)?;
+        match args.d_star_factors[..] {
         [low, high] if low > 0.0 && low < high && high.is_finite() => {}
         _ => {
             return Err(InputError(format!(
@@ -156,19 +133,20 @@ fn settings(args: &WearOptions) -> Result<Settings, InputError> {
             )))
         }
     }
-    crate::ranges::RESAMPLES
-        .check_count("--resamples", args.resamples as u64)
-        .map_err(InputError)?;
-    Ok(Settings {
-        e_star_pa: e_star,
-        a_star_m2,
-        hardness_pa,
-        loads,
-        tolerance: args.tolerance,
-        d_star_factors: [args.d_star_factors[0], args.d_star_factors[1]],
-        trust_band: !args.no_trust_band,
-        resamples: args.resamples,
-    })
+        crate::ranges::RESAMPLES
+            .check_count("--resamples", args.resamples as u64)
+            .map_err(InputError)?;
+        Ok(Settings {
+            e_star_pa: e_star,
+            a_star_m2,
+            hardness_pa,
+            loads,
+            tolerance: args.tolerance,
+            d_star_factors: [args.d_star_factors[0], args.d_star_factors[1]],
+            trust_band: !args.no_trust_band,
+            resamples: args.resamples,
+        })
+    }
 }
 
 /// A load as given: dimensionless, a force, or a mean nominal pressure.
