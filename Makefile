@@ -7,7 +7,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-measured test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
+.PHONY: figures build test test-client test-measured test-python test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -22,6 +22,7 @@ test:
 	cargo test --locked --release --test it -- --ignored
 	$(MAKE) test-client
 	$(MAKE) test-measured
+	$(MAKE) test-python
 	$(MAKE) test-report
 	$(MAKE) test-slurm
 
@@ -33,6 +34,12 @@ test-client: build
 # powerlaw (PyPI, venv installed if missing): readers, preparation, the non-periodic solve.
 test-measured: build
 	bash tests/measured/run.sh
+
+# The Python package: crates/python built into a wheel by pip (maturin), installed in a fresh
+# venv and checked against the binary bit for bit; then beside SurfaceTopography on real
+# instrument files, and the worked example (examples/python_wear.py).
+test-python: build
+	bash tests/python/run.sh
 
 # The committed report figures/default/index.html in headless Chromium (installed if missing):
 # every image decodes; a copy with a truncated image must fail.

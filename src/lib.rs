@@ -11,7 +11,8 @@
 //!    for readers), [`ranges`] (the accepted range of every number a user types), [`units`]
 //!    (quantities typed with their unit), [`tail`] (a load's areas fitted, as JSON rows);
 //! 2. [`store`]: content keys, the artifact store, Parquet tables, a stage's inputs;
-//!    [`config`]: `pipeline.yaml` (studies, profiles, figures);
+//!    [`config`]: `pipeline.yaml` (studies, profiles, figures); [`solve`]: the periodic
+//!    solve's options, checks and sweep;
 //! 3. [`stages`]: the stage contract and one module per stage; [`figures`]: drawing the
 //!    paper's figures from stored tables (the figures stage's work);
 //! 4. [`pipeline`]: the registry, plan and cost model, executor, catalog, gallery, report,
@@ -40,6 +41,7 @@ pub mod io;
 pub mod machine;
 pub mod pipeline;
 pub mod ranges;
+pub mod solve;
 pub mod stages;
 pub mod store;
 pub mod tail;

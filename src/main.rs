@@ -9,10 +9,6 @@ use clap::{Parser, Subcommand};
 mod cli;
 
 use cli::InputError;
-use wearcoef::config::ConfigError;
-use wearcoef::contact::sweep::SweepError;
-use wearcoef::pipeline::UsageError;
-use wearcoef::surface::SurfaceError;
 
 #[derive(Parser)]
 #[command(
@@ -114,19 +110,7 @@ fn main() -> ExitCode {
                 return ExitCode::SUCCESS;
             }
             wearcoef::note!("error: {e:#}");
-            let is_input = e.chain().any(|c| {
-                c.downcast_ref::<ConfigError>().is_some()
-                    || c.downcast_ref::<SurfaceError>().is_some()
-                    || c.downcast_ref::<InputError>().is_some()
-                    || c.downcast_ref::<UsageError>().is_some()
-                    || c.downcast_ref::<wearcoef::io::IoError>().is_some()
-                    || matches!(
-                        c.downcast_ref::<SweepError>(),
-                        Some(SweepError::Input(_))
-                            | Some(SweepError::BadLoad { .. })
-                            | Some(SweepError::DegenerateSurface { .. })
-                    )
-            });
+            let is_input = wearcoef::pipeline::is_input_error(&e);
             ExitCode::from(if is_input { 2 } else { 1 })
         }
     }

@@ -6,13 +6,12 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 use serde_json::json;
 
+use wearcoef::solve::SolveOptions;
 use wearcoef::store::cluster_table::ClusterRows;
 
 use super::{check_memory, check_outputs, write_atomically, InputError};
 use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
-use wearcoef::contact::solver::SolverConfig;
-use wearcoef::contact::sweep::{sweep_heights_with_hardness, MAX_W_OVER_W0};
 use wearcoef::grid::Grid;
 use wearcoef::spectral::Fft2;
 use wearcoef::surface::{self, Method, SurfaceParams};
@@ -26,56 +25,8 @@ pub struct SolveArgs {
     /// (W0 = E*·spectral rms slope·L²).
     #[arg(long, value_delimiter = ',', required = true)]
     pub loads: Vec<f64>,
-    /// Tolerance on the complementarity error (docs/CONVENTIONS.md).
-    #[arg(long, default_value_t = 1e-8)]
-    pub tol: f64,
-    /// Iteration cap per load.
-    #[arg(long, default_value_t = 5000)]
-    pub max_iter: usize,
-    /// Effective modulus E* (pressures are written in its unit).
-    #[arg(long, default_value_t = 1.0)]
-    pub e_star: f64,
-    /// Perfectly plastic interface: the pressure saturates at the hardness 𝓗, given in
-    /// units of E*·rms slope like the loads (so p̄/𝓗 = (W/W0)/hardness; every load must be
-    /// ≤ it). Absent (or inf): elastic contact. Not with --plain-cg.
-    #[arg(long)]
-    pub hardness: Option<f64>,
-    /// Use the plain Polonsky–Keer conjugate gradient instead of the default preconditioned
-    /// one (same solution; more iterations on large grids, one convolution each).
-    #[arg(long)]
-    pub plain_cg: bool,
-    /// Precondition with `P K⁻¹ P` alone, without the default's extension off the free set
-    /// by the smoothed gradient and its near term (the same solution in 1.6–1.8 times the
-    /// iterations on rough surfaces; docs/BENCHMARKS.md).
-    #[arg(long, conflicts_with = "plain_cg")]
-    pub no_extension: bool,
-    /// Deflate the preconditioner by the loads of blocks of this many nodes per side once
-    /// the contact set has settled and covers at least 2 % of the box (a multiple of 16,
-    /// used on large boxes, see --large-box, that it divides into at least 2 blocks per
-    /// side; 0: never; docs/BENCHMARKS.md).
-    #[arg(long, default_value_t = 1024, conflicts_with_all = ["plain_cg", "no_extension"])]
-    pub coarse_block: usize,
-    /// On large boxes, let a node off the contact set join the free set only where it
-    /// interpenetrates by more than this times the current error times the heights'
-    /// standard deviation (in [0, 1]; 0: every interpenetrating node joins, as on smaller
-    /// boxes; docs/BENCHMARKS.md).
-    #[arg(long, default_value_t = 0.1, conflicts_with_all = ["plain_cg", "no_extension"])]
-    pub entry_margin: f64,
-    /// The smallest grid side, in nodes, that counts as a large box: the extension's far
-    /// term, the block deflation and the entry margin are used from it on (the same
-    /// solution either way; docs/BENCHMARKS.md).
-    #[arg(long, default_value_t = 4096, conflicts_with_all = ["plain_cg", "no_extension"])]
-    pub large_box: usize,
-    /// Restore the load after each projection by rescaling every pressure instead of the
-    /// default's uniform offset of the contact pressures (the same solution in about 1.1
-    /// times the iterations; docs/BENCHMARKS.md).
-    #[arg(long, conflicts_with = "plain_cg")]
-    pub scale_to_load: bool,
-    /// Start each load from the last solution scaled to it, instead of the default's
-    /// extrapolation from the last two (the same solution in about 1.1 times the
-    /// iterations; docs/BENCHMARKS.md).
-    #[arg(long)]
-    pub scale_start: bool,
+    #[command(flatten)]
+    pub options: SolveOptions,
     /// Pressure output: (n, n) float64 for one load, (loads, n, n) for several.
     #[arg(long)]
     pub pressure_out: Option<PathBuf>,
@@ -380,35 +331,20 @@ pub fn solve(args: SolveArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
-    let extension = check_solve_args(&args)?;
+    // The options first, each error naming its flag, then the surface.
+    args.options.config(&args.loads)?;
     let (n, heights) = read_checked_surface(&args)?;
-    let cfg = SolverConfig {
-        tolerance: args.tol,
-        max_iterations: args.max_iter,
-        preconditioned: !args.plain_cg,
-        extension: (!args.no_extension).then_some(extension),
-        offset_to_load: !args.scale_to_load,
-        extrapolate_start: !args.scale_start,
-        ..SolverConfig::default()
-    };
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
     let mut pressures = Vec::new();
     let mut contacts = Vec::new();
-    let (_, results) = sweep_heights_with_hardness(
-        &heights,
-        n,
-        args.e_star,
-        &args.loads,
-        &cfg,
-        args.hardness,
-        |_, pressure, _| {
+    let results =
+        wearcoef::solve::sweep(&heights, n, &args.loads, &args.options, |_, pressure| {
             if keep_fields {
                 pressures.extend_from_slice(pressure);
                 contacts.extend(pressure.iter().map(|&p| u8::from(p > 0.0)));
             }
             Ok(())
-        },
-    )?;
+        })?;
     let shape: Vec<usize> = if args.loads.len() == 1 {
         vec![n, n]
     } else {
@@ -432,96 +368,12 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     }
     wearcoef::io::atomic::write_all_atomically(files)?;
     if args.json {
-        out!("{}", serde_json::to_string(&json_rows(&results))?)?;
+        out!(
+            "{}",
+            serde_json::to_string(&wearcoef::solve::json_rows(&results))?
+        )?;
     }
     Ok(())
-}
-
-/// `solve`'s numeric flags checked one by one (each error names its flag); the extension they
-/// ask for.
-fn check_solve_args(args: &SolveArgs) -> anyhow::Result<wearcoef::contact::solver::Extension> {
-    if let Some((i, w)) = args
-        .loads
-        .iter()
-        .enumerate()
-        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
-    {
-        return Err(InputError(format!(
-            "--loads: load {} is {w}; loads W/W0 must be finite and ≥ 0",
-            i + 1
-        ))
-        .into());
-    }
-    if let Some((i, w)) = args
-        .loads
-        .iter()
-        .enumerate()
-        .find(|(_, w)| **w > MAX_W_OVER_W0)
-    {
-        return Err(InputError(format!(
-            "--loads: load {} is {w:e}; W/W0 must be ≤ {MAX_W_OVER_W0} (contact is complete well before W/W0 = 10; larger loads only lose digits to rounding)",
-            i + 1
-        ))
-        .into());
-    }
-    if let Some(h) = args.hardness {
-        if h.is_nan() || h <= 0.0 {
-            return Err(InputError(format!(
-                "--hardness {h} must be > 0 (in units of E*·rms slope, as the loads; omit it, or give inf, for elastic contact)"
-            ))
-            .into());
-        }
-        if args.plain_cg && h.is_finite() {
-            return Err(InputError(
-                "--plain-cg with --hardness: the plain iteration stalls under a pressure ceiling on rough surfaces (512², hardness 1 and 0.5, docs/VALIDATION.md); drop --plain-cg for the default preconditioned iteration".into(),
-            )
-            .into());
-        }
-        if let Some((i, w)) = args.loads.iter().enumerate().find(|(_, w)| **w > h) {
-            return Err(InputError(format!(
-                "--loads: load {} is {w}, above --hardness {h}: a pressure capped at the hardness cannot carry a mean above it",
-                i + 1
-            ))
-            .into());
-        }
-    }
-    if !(args.e_star.is_finite() && args.e_star > 0.0) {
-        return Err(InputError(format!("--e-star {} must be finite and > 0", args.e_star)).into());
-    }
-    if !(args.tol.is_finite() && args.tol > 0.0 && args.tol < 1.0) {
-        return Err(InputError(format!(
-            "--tol {}: the tolerance must lie in (0, 1), as in pipeline.yaml (1e-8 is the default)",
-            args.tol
-        ))
-        .into());
-    }
-    if args.max_iter == 0 {
-        return Err(InputError("--max-iter 0: at least one iteration is needed".into()).into());
-    }
-    // Each flag checked on the default with that flag alone changed, so the error names it.
-    use wearcoef::contact::solver::Extension;
-    let block = Extension {
-        coarse_block: args.coarse_block,
-        ..Default::default()
-    };
-    block
-        .check()
-        .map_err(|e| InputError(format!("--coarse-block {}: {e}", args.coarse_block)))?;
-    let margin = Extension {
-        entry_margin: args.entry_margin,
-        ..Default::default()
-    };
-    margin.check().map_err(|e| {
-        InputError(format!(
-            "--entry-margin {}: {e} (0.1 is the default, 0 turns it off)",
-            args.entry_margin
-        ))
-    })?;
-    Ok(Extension {
-        coarse_block: args.coarse_block,
-        large_box: args.large_box,
-        ..margin
-    })
 }
 
 /// The outputs checked, then the surface: its header against the memory a sweep of it needs,
@@ -567,47 +419,7 @@ fn read_checked_surface(args: &SolveArgs) -> anyhow::Result<(usize, Vec<f64>)> {
         )?;
     }
     let (n, heights) = wearcoef::io::read_square_f64(&args.surface)?;
-    if n < 2 || n % 2 != 0 {
-        return Err(InputError(format!(
-            "{}: the grid side must be even and ≥ 2, got {n}",
-            args.surface.display()
-        ))
-        .into());
-    }
+    wearcoef::solve::check_heights(&args.surface.display().to_string(), n, &heights)?;
     Grid::unit(n)?;
-    if let Some((i, v)) = heights.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(InputError(format!(
-            "{}: height at row {}, column {} is {v}; heights must be finite",
-            args.surface.display(),
-            i / n,
-            i % n
-        ))
-        .into());
-    }
     Ok((n, heights))
-}
-
-/// One JSON object per load of a `solve`.
-fn json_rows(results: &[wearcoef::contact::sweep::LoadResult]) -> Vec<serde_json::Value> {
-    results
-        .iter()
-        .map(|r| {
-            let mut row = json!({
-                "w_over_w0": r.w_over_w0,
-                "mean_pressure": r.mean_pressure,
-                "area_fraction": r.area_fraction,
-                "n_contact_px": r.n_contact_px,
-                "iterations": r.report.iterations,
-                "convolutions": r.report.convolutions,
-                "error": r.report.error,
-                "converged": r.report.converged(),
-                "seconds": r.seconds,
-                "peak_rss_bytes": wearcoef::machine::peak_rss_bytes(),
-            });
-            if let Some(saturated) = r.n_saturated_px {
-                row["n_saturated_px"] = json!(saturated);
-            }
-            row
-        })
-        .collect()
 }

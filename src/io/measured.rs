@@ -13,6 +13,8 @@ pub enum Source {
     Gsf,
     Sdf,
     Xyz,
+    /// An array given to the Python package, in metres with its pixel size.
+    Array,
 }
 
 /// A map as read from its file.

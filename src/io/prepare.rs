@@ -9,7 +9,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::measured::STATE_UNITS;
+use super::measured::{MeasuredMap, STATE_UNITS};
 use super::{read_measured, IoError};
 use crate::psd::{log_edges, radial_psd, resolve, PsdBin};
 use crate::topography::{Form, Topography};
@@ -393,11 +393,22 @@ pub fn announce(name: &str, report: &serde_json::Value) {
 /// [`prepare`] without printing, naming the map `name` in its record (a copy read from a
 /// temporary place is named by what it is; see [`announce`]).
 pub fn prepare_quietly(input: &Path, name: &str, p: &Preparation) -> anyhow::Result<Prepared> {
+    let read = read_measured(input)?;
+    prepare_map(read, &input.display().to_string(), name, p)
+}
+
+/// [`prepare_quietly`] of a map already read (or given as an array by the Python package):
+/// `input` names it in errors, `name` in its record.
+pub fn prepare_map(
+    read: MeasuredMap,
+    input: &str,
+    name: &str,
+    p: &Preparation,
+) -> anyhow::Result<Prepared> {
     let bad = |why: String| IoError::File {
-        path: input.display().to_string(),
+        path: input.to_string(),
         message: why,
     };
-    let read = read_measured(input)?;
     let (scale, height_unit_from) = height_scale(p, read.height_unit_m, &bad)?;
     let ((dx, dy), pixel_from) = pixel_size(p, &read, &bad)?;
     let (rows, cols) = (read.rows, read.cols);

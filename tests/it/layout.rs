@@ -424,7 +424,7 @@ fn the_application_modules_import_only_their_layer_and_lower_ones() {
             | "resample" | "spectral" | "statistics" | "surface" | "topography" => 0,
             // `note!`, the crate's stderr macro, belongs to the lowest layer.
             "io" | "machine" | "format" | "ranges" | "units" | "tail" | "note" => 1,
-            "store" | "config" => 2,
+            "store" | "config" | "solve" => 2,
             "stages" | "figures" => 3,
             "pipeline" | "wear" => 4,
             _ => return None,

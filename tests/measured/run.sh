@@ -9,17 +9,7 @@ repo=$(cd "$(dirname "$0")/../.." && pwd)
 : "${CARGO_TARGET_DIR:=/var/tmp/wearcoef-target}"
 bin="${WEARCOEF_BIN:-$CARGO_TARGET_DIR/release/wearcoef}"
 venv="${MEASURED_VENV:-$CARGO_TARGET_DIR/measured-venv}"
-if ! "$venv/bin/python" -c "import SurfaceTopography, ContactMechanics, gsffile, pandas, powerlaw; assert powerlaw.__version__ == '2.0.0'" 2>/dev/null; then
-    echo "creating the peers' venv in $venv (SurfaceTopography, ContactMechanics, gsffile, powerlaw from PyPI)"
-    rm -rf "$venv"
-    python3 -m venv "$venv"
-    "$venv/bin/pip" install --quiet --disable-pip-version-check \
-        "SurfaceTopography==1.27.1" "ContactMechanics==1.8.3" "gsffile" "pandas>=2.2" "pyarrow>=16" \
-        "matplotlib>=3.8" "powerlaw==2.0.0" || {
-        echo "error: could not install SurfaceTopography and ContactMechanics (needs PyPI access)" >&2
-        exit 1
-    }
-fi
+bash "$repo/tests/measured/venv.sh" "$venv"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$venv/bin/python" -W ignore "$repo/tests/measured/check_readers.py" "$bin" "$work/readers"

@@ -1,0 +1,217 @@
+"""The Python package in a fresh venv against the binary on the same inputs: both are faces
+of one library, so every table and array must agree bit for bit.
+
+Usage: check_package.py WEARCOEF_BIN WORK_DIR
+"""
+
+import json
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pandas as pd
+
+import wearcoef
+
+BIN, WORK = sys.argv[1], sys.argv[2]
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+X3P = os.path.join(REPO, "tests", "measured", "instrument", "x3p-2.x3p")
+os.makedirs(WORK, exist_ok=True)
+
+
+def run(*args):
+    out = subprocess.run([BIN, *args], capture_output=True, text=True)
+    assert out.returncode == 0, f"{args}: exit {out.returncode}: {out.stderr}"
+    return out
+
+
+def same_frame(mine, theirs, what):
+    """Equal columns, dtypes and values, floats compared by their bits (NaN = NaN)."""
+    assert list(mine.columns) == list(theirs.columns), f"{what}: columns {list(mine.columns)} against {list(theirs.columns)}"
+    assert len(mine) == len(theirs), f"{what}: {len(mine)} rows against {len(theirs)}"
+    for c in mine.columns:
+        a, b = mine[c].to_numpy(), theirs[c].to_numpy()
+        if a.dtype.kind == "f" or b.dtype.kind == "f":
+            a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+            assert np.array_equal(a.view(np.uint64), b.view(np.uint64)), f"{what}.{c}: values differ"
+        else:
+            assert np.array_equal(a, b), f"{what}.{c}: values differ"
+
+
+def version():
+    commit = subprocess.run(["git", "-C", REPO, "rev-parse", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    assert wearcoef.__version__ == "0.1.0", wearcoef.__version__
+    assert wearcoef.__commit__ == commit, f"built from {wearcoef.__commit__}, the clone is at {commit}"
+    print(f"wearcoef {wearcoef.__version__} ({wearcoef.__commit__[:12]})")
+
+
+def solve():
+    """`solve` equals `wearcoef solve` on a generated surface at three loads."""
+    surface = os.path.join(WORK, "surface.npy")
+    run("surface", "--n", "128", "--lambda-l-px", "32", "--lambda-s-px", "4", "--hurst", "0.8",
+        "--seed", "5", "-o", surface)
+    loads = [0.02, 0.1, 0.4]
+    pressure = os.path.join(WORK, "pressure.npy")
+    out = run("solve", "--surface", surface, "--loads", ",".join(map(repr, loads)),
+              "--pressure-out", pressure, "--json")
+    theirs = np.load(pressure)
+    solved = wearcoef.solve(np.load(surface), loads)
+    assert solved.pressure.shape == theirs.shape == (3, 128, 128)
+    assert np.array_equal(solved.pressure, theirs), "pressures differ from wearcoef solve's"
+    rows = pd.DataFrame(json.loads(out.stdout))
+    for c in ["w_over_w0", "mean_pressure", "area_fraction", "n_contact_px", "iterations", "error"]:
+        assert np.array_equal(solved.summary[c].to_numpy(), rows[c].to_numpy()), c
+    one = wearcoef.solve(np.load(surface), 0.1)
+    assert np.array_equal(one.pressure, theirs[1]) and one.contact.shape == (128, 128)
+    print(f"solve: 3 loads on 128², pressures equal to wearcoef solve's bit for bit "
+          f"(area fractions {', '.join(f'{a:.4f}' for a in solved.summary['area_fraction'])})")
+
+
+def wear():
+    """`wear` on an array equals `wearcoef wear` on the instrument file it was read from."""
+    heights_file = os.path.join(WORK, "x3p-2.npy")
+    read = json.loads(run("topography", "--input", X3P, "--form", "none", "--fill", "keep",
+                          "-o", heights_file, "--json").stdout)
+    heights = np.load(heights_file)
+    pixel = (read["pixel_size_x_m"], read["pixel_size_y_m"])
+    options = dict(e_star="100GPa", loads=["1N", "5N"], d_star="1um", resamples=40)
+    out = os.path.join(WORK, "wear-cli")
+    run("wear", "--input", X3P, "--e-star", "100GPa", "--loads", "1N,5N", "--d-star", "1um",
+        "--resamples", "40", "-o", out)
+    mine = wearcoef.wear(heights, pixel_size=pixel, unit="m", progress=False, **options)
+    for name, table in [("loads", mine.loads), ("clusters", mine.clusters), ("psd", mine.psd)]:
+        same_frame(table, pd.read_parquet(os.path.join(out, f"{name}.parquet")), name)
+    theirs = json.load(open(os.path.join(out, "preparation.json")))
+    for key in ["rows", "cols", "pixel_size_x_m", "pixel_size_y_m", "form_coefficients_m",
+                "rms_height_m", "rms_slope", "psd_fit", "trust_band"]:
+        assert mine.preparation[key] == theirs[key], key
+    # In pascals and metres as numbers, the same run.
+    again = wearcoef.wear(heights, pixel_size=pixel, unit="m", e_star=100e9,
+                          loads=["1N", "5N"], d_star=1e-6, resamples=40, progress=False,
+                          trust_band=False, pressure_maps=True)
+    same_frame(again.loads[["force_n", "k_archard", "k_upscaled"]],
+               mine.loads[["force_n", "k_archard", "k_upscaled"]], "loads in SI numbers")
+    assert again.pressure.shape == (2, 650, 650)
+    carried = again.pressure.sum(axis=(1, 2)) * pixel[0] * pixel[1]
+    assert np.allclose(carried, [1.0, 5.0], rtol=1e-9), carried
+    # The same array in micrometres: the pixel and heights scaled, the same contact.
+    um = wearcoef.wear(heights / 1e-6, pixel_size=(pixel[0] / 1e-6, pixel[1] / 1e-6), unit="um",
+                       progress=False, trust_band=False, **options)
+    assert np.allclose(um.loads["k_archard"], mine.loads["k_archard"], rtol=0, atol=0.02)
+    k = mine.loads["k_archard"].round(3).tolist()
+    print(f"wear: x3p-2 at 1 N and 5 N, K = {k}: tables equal to wearcoef wear's bit for bit")
+
+
+def errors():
+    """The command line's messages, as ValueError; nothing else raised for bad input."""
+    h = np.random.default_rng(1).normal(size=(64, 64)) * 1e-6
+    cases = [
+        (dict(e_star="100GPascal", loads=[0.1], d_star="1um"), "--e-star"),
+        (dict(e_star=1e11, loads=["5N", "1N"], d_star="1um"), "give the loads ascending"),
+        (dict(e_star=1e11, loads=[0.1]), "d_star"),
+        (dict(e_star=1e11, loads=[0.1], d_star="1um", hardness="1kPa"), "hardness"),
+    ]
+    for kwargs, says in cases:
+        try:
+            wearcoef.wear(h, pixel_size=1e-6, unit="m", progress=False, **kwargs)
+        except ValueError as e:
+            assert says in str(e), f"{kwargs}: {e}"
+        else:
+            raise AssertionError(f"{kwargs}: accepted")
+    holes = h.copy()
+    holes[3, 3] = np.nan
+    try:
+        wearcoef.wear(holes, pixel_size=1e-6, unit="m", e_star=1e11, loads=[0.1], d_star=1e-6,
+                      progress=False)
+    except ValueError as e:
+        assert "fill" in str(e), e
+    else:
+        raise AssertionError("a missing point accepted without a fill")
+    for bad, says in [(np.zeros((3, 3)), "even"), (np.full((4, 4), np.nan), "finite")]:
+        try:
+            wearcoef.solve(bad, [0.1])
+        except ValueError as e:
+            assert says in str(e), e
+        else:
+            raise AssertionError(f"solve accepted {bad}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        holes = h.copy()
+        holes[:10, :] = np.nan
+        wearcoef.wear(holes, pixel_size=1e-6, unit="m", e_star=1e11, loads=[0.1], d_star=1e-6,
+                      fill="harmonic", progress=False, trust_band=False)
+    assert any("missing and filled" in str(w.message) for w in caught), [str(w.message) for w in caught]
+    print(f"errors: {len(cases) + 3} bad inputs raise ValueError with the command line's message; warnings are Python warnings")
+
+
+def fit():
+    """`fit` equals `wearcoef fit --json` on the same areas."""
+    areas = np.random.default_rng(3).zipf(1.8, size=400)
+    areas = areas[areas < 5000]
+    table = os.path.join(WORK, "areas.parquet")
+    pd.DataFrame({"area_px": areas.astype(np.uint64)}).to_parquet(table)
+    theirs = json.loads(run("fit", "--areas", table, "--json", "--resamples", "60").stdout)
+    theirs = theirs[0] if isinstance(theirs, list) else theirs
+    mine = wearcoef.fit(areas, resamples=60)
+    for key in ["alpha", "bootstrap_ci95_low", "bootstrap_ci95_high", "x_min_px", "gof_p"]:
+        assert mine[key] == theirs[key], f"{key}: {mine[key]} against {theirs[key]}"
+    assert mine["plateau"]["alpha"] == theirs["plateau"]["alpha"]
+    print(f"fit: α = {mine['alpha']:.4f} [{mine['bootstrap_ci95_low']:.4f}, "
+          f"{mine['bootstrap_ci95_high']:.4f}] on {len(areas)} areas, as wearcoef fit --json")
+
+
+def model():
+    """`model` equals `wearcoef model --json`."""
+    for alpha, a_s, a_m, a_star in [(1.5, 2.0, 1e4, 8.0), (1.2, 1.0, float("inf"), 30.0)]:
+        out = json.loads(run("model", "--alpha", repr(alpha), "--a-s", repr(a_s), "--a-m",
+                             repr(a_m), "--a-star", repr(a_star), "--json").stdout)
+        mine = wearcoef.model(alpha, a_s, a_m, a_star)
+        assert mine == out, f"{mine} against {out}"
+    many = wearcoef.model(1.5, 2.0, 1e4, [8.0, 100.0])
+    assert many["K"][0] == wearcoef.model(1.5, 2.0, 1e4, 8.0)["K"] and many["K"][1] < many["K"][0]
+    try:
+        wearcoef.model(1.5, 2.0, 1.0, 8.0)
+    except ValueError as e:
+        assert "A_m" in str(e) or "a_m" in str(e), e
+    else:
+        raise AssertionError("a cut-off below the plateau accepted")
+    print("model: K and 𝒦 equal to wearcoef model --json")
+
+
+def store():
+    """`open_store` on the quick profile: the README's selections in two lines."""
+    work = os.path.join(WORK, "store")
+    os.makedirs(work)
+    subprocess.run(["cp", os.path.join(REPO, "pipeline.yaml"), work], check=True)
+    done = subprocess.run([BIN, "run", "--profile", "quick", "--jobs", "2"], cwd=work,
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    cat = wearcoef.open_store(os.path.join(work, "data"), "quick")
+    surface = cat[(cat.stage == "surface") & (cat.realization == 0) & (cat.file == "heights.npy")]
+    one = surface[surface.study == surface.study.iloc[0]]
+    heights = one.load()
+    assert isinstance(one, wearcoef.Catalog) and heights.ndim == 2, type(one)
+    assert np.array_equal(heights, np.load(os.path.join(work, "data", one["path"].iloc[0])))
+    stats = cat[(cat.stage == "statistics") & (cat.file == "alpha.parquet")]
+    alpha = stats[stats.study == stats.study.iloc[0]].load()
+    assert "alpha" in alpha.columns and len(alpha) > 0
+    try:
+        cat[cat.stage == "surface"].load()
+    except ValueError as e:
+        assert "rows selected" in str(e), e
+    else:
+        raise AssertionError("several rows loaded as one")
+    print(f"open_store: {len(cat)} catalog rows of the quick profile; a surface "
+          f"{heights.shape[0]}² and an α table of {len(alpha)} rows loaded by selection")
+
+
+version()
+model()
+store()
+solve()
+wear()
+errors()
+fit()
