@@ -78,7 +78,7 @@ def a_format_only_surfacetopography_reads():
     heights = np.ma.filled(np.ma.asarray(t.heights(), dtype=float), np.nan).T * 1e-3
     npy = os.path.join(WORK, "sur-2.npy")
     np.save(npy, heights)
-    dx, dy = (s / n * 1e-3 for s, n in zip(t.physical_sizes, t.nb_grid_pts))
+    dx, dy = (float(s) / n * 1e-3 for s, n in zip(t.physical_sizes, t.nb_grid_pts))
     out = os.path.join(WORK, "sur-2")
     run("wear", "--input", npy, "--height-unit", "m", "--pixel-size", repr(dx),
         "--pixel-size-y", repr(dy), "--pixel-unit", "m", "--fill", "harmonic",
