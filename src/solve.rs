@@ -5,8 +5,10 @@
 use serde_json::json;
 
 use crate::contact::solver::{Extension, SolverConfig};
-use crate::contact::sweep::{sweep_heights_with_hardness, LoadResult, MAX_W_OVER_W0};
+use crate::contact::sweep::{sweep_heights_solved, LoadResult, Solved, MAX_W_OVER_W0};
+use crate::contact::window::sweep_window_solved;
 use crate::ranges::InputError;
+use crate::topography::Topography;
 
 /// The solver's options of a periodic solve (the command line's flags, the Python
 /// package's keywords).
@@ -123,27 +125,67 @@ pub fn check_heights(name: &str, n: usize, heights: &[f64]) -> Result<(), InputE
     Ok(())
 }
 
-/// The sweep over `loads` of the checked heights: `each` receives every load's pressure
-/// field (in units of E*) as it is solved.
+/// The sweep over `loads` of the checked heights, periodic: `each` receives every load's
+/// fields as it is solved (pressure in units of E*, gap in the heights' unit).
 pub fn sweep(
     heights: &[f64],
     n: usize,
     loads: &[f64],
     options: &SolveOptions,
-    each: impl FnMut(usize, &[f64]) -> Result<(), String>,
+    each: impl FnMut(usize, &Solved) -> Result<(), String>,
 ) -> anyhow::Result<Vec<LoadResult>> {
     let cfg = options.config(loads)?;
     let mut each = each;
-    let (_, results) = sweep_heights_with_hardness(
+    let (_, results) = sweep_heights_solved(
         heights,
         n,
         options.e_star,
         loads,
         &cfg,
         options.hardness,
-        |i, pressure, _| each(i, pressure),
+        |i, solved, _| each(i, solved),
     )?;
     Ok(results)
+}
+
+/// The sweep over `loads` of the checked square heights of side `n` as a map that is not
+/// periodic: one box of side 1 (pixels 1/n, in the heights' unit) on the free-boundary
+/// half-space, as `wear` solves a measured map; `W0 = E*·rms slope·L²` with the rms slope
+/// of the map without wrap-around. `each` as for [`sweep`].
+pub fn sweep_free(
+    heights: &[f64],
+    n: usize,
+    loads: &[f64],
+    options: &SolveOptions,
+    each: impl FnMut(usize, &Solved) -> Result<(), String>,
+) -> anyhow::Result<Vec<LoadResult>> {
+    let cfg = options.config(loads)?;
+    let pixel = 1.0 / n as f64;
+    let map = Topography::new(n, n, pixel, pixel, heights.to_vec())?;
+    let mut each = each;
+    let (layout, results) = sweep_window_solved(
+        &map,
+        options.e_star,
+        loads,
+        &cfg,
+        options.hardness,
+        |i, solved, _| each(i, solved),
+    )?;
+    Ok(results
+        .into_iter()
+        .map(|r| LoadResult {
+            w_over_w0: r.w_over_w0,
+            mean_pressure: r.mean_pressure,
+            area_fraction: r.area_fraction,
+            n_contact_px: r.n_contact_px,
+            n_saturated_px: r.n_saturated_px,
+            ceiling: (options.hardness)
+                .filter(|h| h.is_finite())
+                .map(|h| h * options.e_star * layout.rms_slope),
+            report: r.report,
+            seconds: r.seconds,
+        })
+        .collect())
 }
 
 /// `solve`'s numeric flags checked one by one (each error names its flag); the extension they

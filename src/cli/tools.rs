@@ -33,6 +33,16 @@ pub struct SolveArgs {
     /// Contact-map output: uint8 0/1, (n, n) for one load, (loads, n, n) for several.
     #[arg(long)]
     pub contact_out: Option<PathBuf>,
+    /// Gap output, in the heights' unit: (n, n) float64 for one load, (loads, n, n) for
+    /// several; 0 on the contact (under --hardness, minus the plastic displacement on the
+    /// saturated nodes).
+    #[arg(long)]
+    pub gap_out: Option<PathBuf>,
+    /// The heights are one map that is not periodic (a box of side 1, pixels 1/n): solved
+    /// on the free-boundary half-space as `wear` solves a measured map, W0 from the map's
+    /// rms slope without wrap-around.
+    #[arg(long)]
+    pub non_periodic: bool,
     /// Print one JSON object per load, as a JSON array.
     #[arg(long)]
     pub json: bool,
@@ -335,16 +345,25 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
     args.options.config(&args.loads)?;
     let (n, heights) = read_checked_surface(&args)?;
     let keep_fields = args.pressure_out.is_some() || args.contact_out.is_some();
+    let keep_gaps = args.gap_out.is_some();
     let mut pressures = Vec::new();
     let mut contacts = Vec::new();
-    let results =
-        wearcoef::solve::sweep(&heights, n, &args.loads, &args.options, |_, pressure| {
-            if keep_fields {
-                pressures.extend_from_slice(pressure);
-                contacts.extend(pressure.iter().map(|&p| u8::from(p > 0.0)));
-            }
-            Ok(())
-        })?;
+    let mut gaps = Vec::new();
+    let each = |_, solved: &wearcoef::contact::sweep::Solved| {
+        if keep_fields {
+            pressures.extend_from_slice(solved.pressure);
+            contacts.extend(solved.pressure.iter().map(|&p| u8::from(p > 0.0)));
+        }
+        if keep_gaps {
+            gaps.extend(solved.gap());
+        }
+        Ok(())
+    };
+    let results = if args.non_periodic {
+        wearcoef::solve::sweep_free(&heights, n, &args.loads, &args.options, each)?
+    } else {
+        wearcoef::solve::sweep(&heights, n, &args.loads, &args.options, each)?
+    };
     let shape: Vec<usize> = if args.loads.len() == 1 {
         vec![n, n]
     } else {
@@ -364,6 +383,13 @@ fn solve_on_pool(args: SolveArgs) -> anyhow::Result<()> {
         files.push((
             path,
             Box::new(move |tmp| Ok(wearcoef::io::write_u8(tmp, &shape, contacts)?)),
+        ));
+    }
+    if let Some(path) = &args.gap_out {
+        let shape = shape.clone();
+        files.push((
+            path,
+            Box::new(move |tmp| Ok(wearcoef::io::write_f64(tmp, &shape, gaps)?)),
         ));
     }
     wearcoef::io::atomic::write_all_atomically(files)?;
@@ -386,9 +412,12 @@ fn read_checked_surface(args: &SolveArgs) -> anyhow::Result<(usize, Vec<f64>)> {
     if let Some(p) = &args.contact_out {
         outputs.push(("--contact-out", p));
     }
+    if let Some(p) = &args.gap_out {
+        outputs.push(("--gap-out", p));
+    }
     if outputs.is_empty() && !args.json {
         return Err(InputError(
-            "nothing to write: give --pressure-out FILE, --contact-out FILE or --json (a solve that keeps nothing is not run)".into(),
+            "nothing to write: give --pressure-out FILE, --contact-out FILE, --gap-out FILE or --json (a solve that keeps nothing is not run)".into(),
         )
         .into());
     }
@@ -411,11 +440,14 @@ fn read_checked_surface(args: &SolveArgs) -> anyhow::Result<(usize, Vec<f64>)> {
             8 * loads
         } else {
             0
-        } + if args.contact_out.is_some() { loads } else { 0 };
+        } + if args.contact_out.is_some() { loads } else { 0 }
+            + if args.gap_out.is_some() { 8 * loads } else { 0 };
+        // Not periodic: the solver's fields live on the zero-padded square, 4 times the nodes.
+        let solver = if args.non_periodic { 4 * 60 } else { 60 };
         check_memory(
             &format!("a {rows} × {cols} sweep of {loads} loads"),
-            nodes.saturating_mul(60 + fields),
-            "solve a smaller surface, or fewer loads with --pressure-out/--contact-out",
+            nodes.saturating_mul(solver + fields),
+            "solve a smaller surface, or fewer loads with --pressure-out/--contact-out/--gap-out",
         )?;
     }
     let (n, heights) = wearcoef::io::read_square_f64(&args.surface)?;

@@ -165,22 +165,25 @@ fn wear(
     ))
 }
 
-/// The periodic solve of `wearcoef solve` on square heights of side `n` (float64 bytes,
-/// row-major, a periodic box of side 1) at each load W/W0: the pressures (in units of E*,
-/// loads × n × n float64 bytes) and the per-load summary as JSON (`solve --json`'s).
+/// `wearcoef solve`: the contact of square heights (side `n`, float64 little-endian bytes,
+/// row-major, a box of side 1, periodic or not) at each load W/W0: the pressures (in units of
+/// E*) and, when asked, the gaps (in the heights' unit), each loads × n × n float64 bytes,
+/// and the per-load summary as JSON (`solve --json`'s).
 #[pyfunction]
-#[pyo3(signature = (heights, n, loads, tolerance=1e-8, max_iterations=5000, e_star=1.0, hardness=None))]
+#[pyo3(signature = (heights, n, loads, periodic=true, gaps=false, tolerance=1e-8, max_iterations=5000, e_star=1.0, hardness=None))]
 #[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
     heights: &[u8],
     n: usize,
     loads: Vec<f64>,
+    periodic: bool,
+    gaps: bool,
     tolerance: f64,
     max_iterations: usize,
     e_star: f64,
     hardness: Option<f64>,
-) -> PyResult<(Py<PyAny>, String)> {
+) -> PyResult<(Py<PyAny>, Option<Py<PyAny>>, String)> {
     let heights = floats("heights", heights, n.saturating_mul(n))?;
     let options = wearcoef::solve::SolveOptions {
         tol: tolerance,
@@ -193,15 +196,26 @@ fn solve(
         options.config(&loads)?;
         wearcoef::solve::check_heights("heights", n, &heights)?;
         let mut pressures = Vec::with_capacity(loads.len() * n * n);
-        let results = wearcoef::solve::sweep(&heights, n, &loads, &options, |_, p| {
-            pressures.extend_from_slice(p);
+        let mut gap = Vec::new();
+        let each = |_, solved: &wearcoef::contact::sweep::Solved| {
+            pressures.extend_from_slice(solved.pressure);
+            if gaps {
+                gap.extend(solved.gap());
+            }
             Ok(())
-        })?;
+        };
+        let results = if periodic {
+            wearcoef::solve::sweep(&heights, n, &loads, &options, each)?
+        } else {
+            wearcoef::solve::sweep_free(&heights, n, &loads, &options, each)?
+        };
         let rows = wearcoef::solve::json_rows(&results);
-        Ok((to_bytes(&pressures), serde_json::to_string(&rows)?))
+        let gap = gaps.then(|| to_bytes(&gap));
+        Ok((to_bytes(&pressures), gap, serde_json::to_string(&rows)?))
     });
-    let (pressures, rows) = run.map_err(to_python)?;
-    Ok((PyBytes::new(py, &pressures).into_any().unbind(), rows))
+    let (pressures, gap, rows) = run.map_err(to_python)?;
+    let bytes = |b: Vec<u8>| PyBytes::new(py, &b).into_any().unbind();
+    Ok((bytes(pressures), gap.map(bytes), rows))
 }
 
 /// `wearcoef fit --json`'s row for one load's cluster areas (whole pixels ≥ 1): the

@@ -89,6 +89,44 @@ pub fn sweep_heights_with_hardness(
     hardness: Option<f64>,
     mut on_load: impl FnMut(usize, &[f64], &LoadResult) -> Result<(), String>,
 ) -> Result<(f64, Vec<LoadResult>), SweepError> {
+    sweep_heights_solved(heights, n, e_star, loads, cfg, hardness, |i, s, r| {
+        on_load(i, s.pressure, r)
+    })
+}
+
+/// A converged load as a sweep hands it on: its fields row-major, in the caller's units.
+pub struct Solved<'a> {
+    /// Contact pressure, in the unit of E*.
+    pub pressure: &'a [f64],
+    gap: &'a dyn Fn() -> Vec<f64>,
+}
+
+impl<'a> Solved<'a> {
+    /// The fields of a load: its pressure, and its gap computed by `gap` when asked.
+    pub(super) fn new(pressure: &'a [f64], gap: &'a dyn Fn() -> Vec<f64>) -> Solved<'a> {
+        Solved { pressure, gap }
+    }
+
+    /// The gap between the rigid surface and the deformed half-space, `(u − h) − min(u − h)`
+    /// with the minimum over the nodes below the ceiling, in the unit of the heights: 0 on
+    /// the contact, > 0 off it; under a hardness, minus the plastic displacement on the
+    /// saturated nodes (≤ 0). Computed when asked (one pass over the nodes).
+    pub fn gap(&self) -> Vec<f64> {
+        (self.gap)()
+    }
+}
+
+/// [`sweep_heights_with_hardness`] handing on each load as [`Solved`], so that its gap can
+/// be read as well as its pressure (the same bits of pressure).
+pub fn sweep_heights_solved(
+    heights: &[f64],
+    n: usize,
+    e_star: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    hardness: Option<f64>,
+    mut on_load: impl FnMut(usize, &Solved, &LoadResult) -> Result<(), String>,
+) -> Result<(f64, Vec<LoadResult>), SweepError> {
     let hardness = hardness.filter(|h| *h != f64::INFINITY);
     if let Some(h) = hardness {
         if !(h.is_finite() && h > 0.0) {
@@ -148,19 +186,18 @@ pub fn sweep_heights_with_hardness(
     };
     let op = ElasticOperator::new(grid, e_star / to_e);
     let mut pressure = Vec::new();
-    let mut pass_on = |i, solved: &[f64], r: &LoadResult| {
+    let mut pass_on = |i, solved: &[f64], gap: &dyn Fn() -> Vec<f64>, r: &LoadResult| {
         let r = LoadResult {
             mean_pressure: r.mean_pressure * to_p,
             ceiling: r.ceiling.map(|c| c * to_p),
             ..r.clone()
         };
-        if to_p == 1.0 {
-            on_load(i, solved, &r)
-        } else {
+        if to_p != 1.0 {
             pressure.clear();
             pressure.extend(solved.iter().map(|p| p * to_p));
-            on_load(i, &pressure, &r)
         }
+        let field: &[f64] = if to_p == 1.0 { solved } else { &pressure };
+        on_load(i, &Solved::new(field, gap), &r)
     };
     let slope_solved = slope / to_h;
     let mut results = match hardness {
@@ -171,7 +208,7 @@ pub fn sweep_heights_with_hardness(
             loads,
             cfg,
             NonNegative,
-            |i, s, r| pass_on(i, s.pressure(), r),
+            |i, s, r| pass_on(i, s.pressure(), &|| s.gap().map(|g| g * to_h).collect(), r),
         )?,
         Some(h) => {
             // In the solved units: p_max = hardness·E*·slope, E* and slope both scaled.
@@ -183,7 +220,7 @@ pub fn sweep_heights_with_hardness(
                 loads,
                 cfg,
                 ceiling,
-                |i, s, r| pass_on(i, s.pressure(), r),
+                |i, s, r| pass_on(i, s.pressure(), &|| s.gap().map(|g| g * to_h).collect(), r),
             )?
         }
     };

@@ -21,7 +21,7 @@
 
 use super::padded::PaddedOperator;
 use super::solver::{Ceiling, ContactError, NonNegative, SolveReport, SolverConfig};
-use super::sweep::{check_rms_slope, sweep, LoadResult, SweepError};
+use super::sweep::{check_rms_slope, sweep, LoadResult, Solved, SweepError};
 use crate::grid::Grid;
 use crate::topography::Topography;
 
@@ -71,6 +71,21 @@ pub fn sweep_window(
     hardness: Option<f64>,
     mut on_load: impl FnMut(usize, &[f64], &WindowLoad) -> Result<(), String>,
 ) -> Result<(WindowLayout, Vec<WindowLoad>), SweepError> {
+    sweep_window_solved(map, e_star, loads, cfg, hardness, |i, s, r| {
+        on_load(i, s.pressure, r)
+    })
+}
+
+/// [`sweep_window`] handing on each load as [`Solved`]: the window's pressure (unit of
+/// E*) and, when asked, its gap (unit of the map's heights), row-major `rows × cols`.
+pub fn sweep_window_solved(
+    map: &Topography,
+    e_star: f64,
+    loads: &[f64],
+    cfg: &SolverConfig,
+    hardness: Option<f64>,
+    mut on_load: impl FnMut(usize, &Solved, &WindowLoad) -> Result<(), String>,
+) -> Result<(WindowLayout, Vec<WindowLoad>), SweepError> {
     let (rows, cols) = (map.rows, map.cols);
     check_map(map, e_star)?;
     let slope = map.rms_slope();
@@ -103,7 +118,10 @@ pub fn sweep_window(
     let op = PaddedOperator::with_aspect(Grid::unit(side)?, 1.0, map.dy / map.dx);
     let mut window = vec![0.0; rows * cols];
     let to_window_error = cfg.tolerance / square_cfg.tolerance;
-    let mut pass_on = |i: usize, p: &[f64], r: &LoadResult| {
+    // A square's length (its side is 1) in the map's height unit, solved heights unscaled.
+    let to_height = unscale * side as f64 * map.dx;
+    let mut pass_on = |i: usize, square: &Solved, r: &LoadResult| {
+        let p = square.pressure;
         let mut touching = 0usize;
         for (k, &v) in p.iter().enumerate() {
             let (row, col) = (k / side, k % side);
@@ -135,12 +153,18 @@ pub fn sweep_window(
             report,
             seconds: r.seconds,
         };
-        on_load(i, &window, &result)?;
+        let gap = || {
+            let g = square.gap();
+            (0..rows * cols)
+                .map(|k| g[(k / cols) * side + k % cols] * to_height)
+                .collect()
+        };
+        on_load(i, &Solved::new(&window, &gap), &result)?;
         Ok(result)
     };
     let mut out = Vec::with_capacity(loads.len());
-    let mut each = |i: usize, p: &[f64], r: &LoadResult| {
-        out.push(pass_on(i, p, r)?);
+    let mut each = |i: usize, s: &Solved, r: &LoadResult| {
+        out.push(pass_on(i, s, r)?);
         Ok(())
     };
     let solve = |constraint, each: &mut EachLoad| {
@@ -243,7 +267,7 @@ fn check_map(map: &Topography, e_star: f64) -> Result<(), SweepError> {
 }
 
 /// What is done with each converged load: its index, the square's pressure, its result.
-type EachLoad<'a> = dyn FnMut(usize, &[f64], &LoadResult) -> Result<(), String> + 'a;
+type EachLoad<'a> = dyn FnMut(usize, &Solved, &LoadResult) -> Result<(), String> + 'a;
 
 /// The constraint on the pressure: none above zero, or a ceiling.
 enum Bound {
@@ -263,10 +287,10 @@ fn run(
 ) -> Result<(), SweepError> {
     match bound {
         Bound::Elastic => sweep(op, square, slope, loads, cfg, NonNegative, |i, s, r| {
-            each(i, s.pressure(), r)
+            each(i, &Solved::new(s.pressure(), &|| s.gap().collect()), r)
         }),
         Bound::Ceiling(c) => sweep(op, square, slope, loads, cfg, c, |i, s, r| {
-            each(i, s.pressure(), r)
+            each(i, &Solved::new(s.pressure(), &|| s.gap().collect()), r)
         }),
     }
     .map(|_| ())

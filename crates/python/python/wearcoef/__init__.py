@@ -27,7 +27,10 @@ from . import _wearcoef
 __all__ = ["wear", "solve", "fit", "model", "open_store", "Wear", "Solved", "Catalog",
            "__version__", "__commit__"]
 
-_name, __version__, __commit__ = _wearcoef.program()
+# The version names the commit it was built from, as a PEP 440 local label ("0.1.0+g1a2b3c4d5e6f");
+# __commit__ is the whole hash (None when built outside a git clone).
+_name, _release, __commit__ = _wearcoef.program()
+__version__ = _release if __commit__ is None else f"{_release}+g{__commit__[:12]}"
 
 # Metres per unit, as the command line's --height-unit names them and SurfaceTopography's
 # `unit` attribute spells them.
@@ -169,10 +172,14 @@ def wear(topography, *, e_star, loads, d_star=None, a_star=None, hardness=None,
 
 @dataclass
 class Solved:
-    """A periodic solve: pressures and the per-load summary of `wearcoef solve --json`."""
+    """A solve: pressures, gaps and the per-load summary of `wearcoef solve --json`."""
 
     pressure: np.ndarray
     """Contact pressure in units of E*: (n, n) for one load, (loads, n, n) for several."""
+    gap: np.ndarray
+    """Gap between the rigid surface and the deformed half-space, in the heights' unit,
+    shaped as `pressure`: 0 on the contact, > 0 off it; under a hardness, minus the plastic
+    displacement on the saturated nodes."""
     summary: pd.DataFrame
     """Per load: w_over_w0, mean_pressure, area_fraction, n_contact_px, iterations, error…"""
 
@@ -184,31 +191,47 @@ class Solved:
 
 def solve(heights, loads, *, periodic=True, hardness=None, e_star=1.0, tolerance=1e-8,
           max_iterations=5000):
-    """The frictionless contact of rigid periodic heights on an elastic half-space, as
-    `wearcoef solve` computes it (bit for bit): a square array of even side, one period of
-    a box of side 1; loads W/W0 (W0 = E*·spectral rms slope·L²), one number or several,
-    solved in order as one warm-started sweep; hardness in units of E*·rms slope as the
-    loads (pressures capped at it), None elastic. A measured, non-periodic map is `wear`'s.
+    """The frictionless contact of rigid heights on an elastic half-space, as `wearcoef solve`
+    computes it (bit for bit; `--non-periodic` for periodic=False).
+
+    heights: a square array of even side n, a box of side 1 (pixels 1/n, in the heights'
+        unit); periodic=True: one period of a periodic surface; periodic=False: one map on
+        the free-boundary half-space, nothing beyond its edges, as `wear` solves a measured map.
+    loads: W/W0, one number or several, solved in order as one warm-started sweep, with
+        W0 = E*·rms slope·L² (periodic: the spectral rms slope; not periodic: the map's
+        slope without wrap-around), so that the mean pressure is (W/W0)·E*·rms slope.
+    hardness: in units of E*·rms slope as the loads: pressures capped at it. None: elastic.
+    e_star: the effective modulus E*; pressures come out in its unit.
+    tolerance: on the complementarity error (docs/CONVENTIONS.md); max_iterations per load.
+    Returns a `Solved`: pressure and gap arrays, (n, n) for one load, (loads, n, n) for
+    several, and the per-load summary. A load that does not converge raises ValueError.
     """
-    if not periodic:
-        raise ValueError("periodic=False: a measured map's free-boundary contact is wear(topography, ...)")
     h = np.ascontiguousarray(heights, dtype="<f8")
     if h.ndim != 2 or h.shape[0] != h.shape[1]:
         raise ValueError(f"heights: a square 2-D array, not shape {h.shape}")
     single = np.ndim(loads) == 0
     w = [float(loads)] if single else [float(x) for x in loads]
     n = h.shape[0]
-    pressure, rows = _wearcoef.solve(h.tobytes(), n, w, tolerance=float(tolerance),
-                                     max_iterations=int(max_iterations), e_star=float(e_star),
-                                     hardness=None if hardness is None else float(hardness))
-    p = np.frombuffer(pressure, dtype="<f8").reshape(len(w), n, n).copy()
-    return Solved(p[0] if single else p, pd.DataFrame(json.loads(rows)))
+    pressure, gap, rows = _wearcoef.solve(
+        h.tobytes(), n, w, periodic=bool(periodic), gaps=True, tolerance=float(tolerance),
+        max_iterations=int(max_iterations), e_star=float(e_star),
+        hardness=None if hardness is None else float(hardness))
+    p, g = (np.frombuffer(b, dtype="<f8").reshape(len(w), n, n).copy() for b in (pressure, gap))
+    if single:
+        p, g = p[0], g[0]
+    return Solved(p, g, pd.DataFrame(json.loads(rows)))
 
 
 def fit(areas, *, resamples=200, seed=1):
     """α of cluster areas (whole pixels ≥ 1, one load) as `wearcoef fit --json` gives it:
     the truncated power law above x_min with its bootstrap interval, Clauset et al.'s
-    goodness of fit and likelihood-ratio tests, and the plateau + power law. A dict."""
+    goodness of fit and likelihood-ratio tests, and the plateau + power law.
+
+    areas: a 1-D array of cluster areas in pixels (the clusters table's `area_px`).
+    resamples: bootstrap replicates of the interval (and of the KS p-value); seed: theirs.
+    Returns a dict of `fit --json`'s fields: α dimensionless, x_min, A_s and the cut-off in
+    pixels, the tests' normalised log-likelihood ratios R and p-values (docs/CONVENTIONS.md).
+    """
     a = np.asarray(areas)
     if a.ndim != 1 or not (np.issubdtype(a.dtype, np.integer) or np.all(np.mod(a, 1) == 0)):
         raise ValueError("areas: a 1-D array of whole pixels")
