@@ -374,7 +374,15 @@ fn the_workspace_crates_import_their_modules_without_a_circle() {
             continue;
         }
         let (cycles, edges) = import_circles(&src, &[]);
-        assert!(edges > 10, "{}: the scan finds the imports", src.display());
+        // A crate of one file (the Python package's conversions) has no module to import.
+        let mut files = Vec::new();
+        rust_files(&src, &mut files);
+        let files = files.len();
+        assert!(
+            files == 1 || edges > 10,
+            "{}: the scan finds the imports ({edges} edges in {files} files)",
+            src.display()
+        );
         assert!(
             cycles.is_empty(),
             "import circles in {}: {cycles:#?}",
