@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 
 mod cli;
 
-use cli::InputError;
+use cli::checks::InputError;
 
 #[derive(Parser)]
 #[command(

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use serde_json::json;
 use wearcoef::tail::fit_row;
 
-use super::InputError;
+use super::checks::InputError;
 
 #[derive(clap::Args)]
 pub struct FitArgs {

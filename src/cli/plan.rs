@@ -17,7 +17,7 @@ use wearcoef::pipeline::UsageError;
 use wearcoef::store::hash::instance_key;
 use wearcoef::store::Store;
 
-use super::{load, StoreArgs};
+use super::checks::{load, StoreArgs};
 
 /// Totals of a plan, per stage and overall.
 #[derive(Debug, Serialize)]
@@ -108,7 +108,7 @@ pub fn print_plan(
         "instances": plan.instances,
     });
     if let Some(path) = out {
-        super::write_atomically(path, |tmp| {
+        super::checks::write_atomically(path, |tmp| {
             std::fs::write(tmp, serde_json::to_vec_pretty(&doc)?)?;
             Ok(())
         })?;
@@ -166,7 +166,7 @@ fn print_against(
             saved.display()
         ))
     })?;
-    let store = super::store::require_store(data)?;
+    let store = Store::existing(data)?;
     let rows = wearcoef::pipeline::measured::compare(&plan.instances, &store);
     if json_out {
         out!("{}", serde_json::to_string(&rows)?)?;
@@ -340,7 +340,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     }
     let pipeline = load(&store.config)?;
     if let Some(path) = &out {
-        super::check_outputs_of_pipeline(&[("--out", path)], &store.config, &pipeline)?;
+        super::checks::check_outputs_of_pipeline(&[("--out", path)], &store.config, &pipeline)?;
     }
     let origin = store.config.display().to_string();
     let (plan, model) = make_plan(&pipeline, &origin, &store.data, &profile, &targets)?;
@@ -382,7 +382,7 @@ pub fn exec(args: ExecArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let jobs = jobs.unwrap_or_else(wearcoef::machine::cores);
     let at_once = at_once.unwrap_or(jobs);
-    super::check_threads(&format!("--jobs {jobs} --at-once {at_once}"), at_once, jobs)?;
+    super::checks::check_threads(&format!("--jobs {jobs} --at-once {at_once}"), at_once, jobs)?;
     let done = exec_plan(&plan, &data, level, slice, jobs, at_once, quiet)?;
     out!("{done}")?;
     Ok(ExitCode::SUCCESS)

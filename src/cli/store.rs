@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use serde_json::json;
 
-use super::{load, InputError, StoreArgs};
+use super::checks::{load, InputError, StoreArgs};
 use wearcoef::pipeline::runner::{self, RunOptions};
 use wearcoef::pipeline::slurm;
 use wearcoef::store::Store;
@@ -66,9 +66,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         retry_failed,
     } = args;
     let pipeline = load(&store.config)?;
-    super::check_dir("--data", &store.data)?;
-    super::check_dir("--figures", &figures)?;
-    if super::same_dir(&store.data, &figures) {
+    super::checks::check_dir("--data", &store.data)?;
+    super::checks::check_dir("--figures", &figures)?;
+    if super::checks::same_dir(&store.data, &figures) {
         return Err(InputError(format!(
             "--figures {} is the data directory: the gallery and the catalog of a profile would share one directory; give the figures their own (default: figures)",
             figures.display()
@@ -77,7 +77,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     }
     let jobs = jobs.unwrap_or_else(wearcoef::machine::cores);
     // Up to `jobs` instances at once, each on a pool of at most one thread per core.
-    super::check_threads(
+    super::checks::check_threads(
         &format!("--jobs {jobs}"),
         at_once.unwrap_or(jobs),
         jobs.min(wearcoef::machine::cores()),
@@ -152,7 +152,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
         totals,
         instances,
     } = wearcoef::pipeline::status::status(&pipeline, &origin, &Store::new(&store.data), &profile)?;
-    let campaigns = super::submit::campaigns(&store.data, &profile)?;
+    let campaigns = wearcoef::pipeline::campaign::campaigns(&store.data, &profile)?;
     let ids: Vec<String> = campaigns.iter().flat_map(|(_, c)| c.job_ids()).collect();
     let states = if ids.is_empty() {
         Default::default()
@@ -220,7 +220,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-type Campaigns = [(PathBuf, super::submit::Campaign)];
+type Campaigns = [(PathBuf, wearcoef::pipeline::campaign::Campaign)];
 type States = std::collections::BTreeMap<String, slurm::JobStates>;
 
 /// The submitted campaigns of `status --json`: per array chunk its job and task states.
@@ -297,7 +297,7 @@ pub struct VerifyArgs {
 
 pub fn verify(args: VerifyArgs) -> anyhow::Result<ExitCode> {
     let VerifyArgs { data, json } = args;
-    let store = require_store(&data)?;
+    let store = Store::existing(&data)?;
     let (checked, mut problems) = store.verify()?;
     let (rows, catalog_problems) = wearcoef::pipeline::catalog::verify(&store)?;
     problems.extend(catalog_problems);
@@ -344,7 +344,7 @@ pub fn clean(args: CleanArgs) -> anyhow::Result<ExitCode> {
         corrupt,
         dry_run,
     } = args;
-    let store = require_store(&data)?;
+    let store = Store::existing(&data)?;
     let verb = if dry_run { "would remove" } else { "removed" };
     if corrupt {
         let removed = if dry_run {
@@ -443,9 +443,9 @@ pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
     }
     let pipeline = load(&store.config)?;
     if let Some(path) = &output {
-        super::check_outputs_of_pipeline(&[("--output", path)], &store.config, &pipeline)?;
+        super::checks::check_outputs_of_pipeline(&[("--output", path)], &store.config, &pipeline)?;
     }
-    let data = require_store(&store.data)?;
+    let data = Store::existing(&store.data)?;
     let origin = store.config.display().to_string();
     let plan = Plan::build(&pipeline, &origin, &profile, &[])?;
     let studies = pipeline.plan(&profile, &origin)?;
@@ -476,19 +476,6 @@ pub fn catalog(args: CatalogArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The store at `data`, or a usage error when there is none.
-pub fn require_store(data: &std::path::Path) -> anyhow::Result<Store> {
-    if !data.join("cache").is_dir() {
-        return Err(InputError(format!(
-            "--data {}: no store there (no cache/ directory); give the data directory a run \
-             wrote (default: data)",
-            data.display()
-        ))
-        .into());
-    }
-    Ok(Store::new(data))
-}
-
 #[derive(clap::Args)]
 pub struct GcArgs {
     #[command(flatten)]
@@ -510,7 +497,7 @@ pub fn gc(args: GcArgs) -> anyhow::Result<ExitCode> {
         dry_run,
         json,
     } = args;
-    let data = require_store(&store.data)?;
+    let data = Store::existing(&store.data)?;
     let pipeline = load(&store.config)?;
     let origin = store.config.display().to_string();
     // Every profile must plan, or nothing is removed: an entry only an unplannable profile

@@ -11,14 +11,13 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
-use serde::{Deserialize, Serialize};
 
 use wearcoef::config::ClusterConfig;
-use wearcoef::pipeline::campaign::{self, ArraySpec, Chunk, NodeLimits, ScriptContext};
+use wearcoef::pipeline::campaign::{self, Campaign, CampaignArray, ScriptContext, SubmittedChunk};
 use wearcoef::pipeline::slurm;
 use wearcoef::pipeline::UsageError;
 
-use super::{load, StoreArgs};
+use super::checks::{load, StoreArgs};
 
 #[derive(clap::Args)]
 pub struct SubmitArgs {
@@ -58,48 +57,6 @@ pub struct SubmitArgs {
     /// Write the batch scripts and print them; submit nothing.
     #[arg(long)]
     pub dry_run: bool,
-}
-
-/// One submitted chunk of an array.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct SubmittedChunk {
-    pub chunk: Chunk,
-    pub script: String,
-    pub job_id: Option<String>,
-}
-
-/// One array of a campaign.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct CampaignArray {
-    pub spec: ArraySpec,
-    pub plan: String,
-    pub chunks: Vec<SubmittedChunk>,
-}
-
-/// `campaign.json`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Campaign {
-    pub profile: String,
-    pub created: String,
-    pub submitted: bool,
-    pub binary: String,
-    pub data: String,
-    pub cluster: ClusterConfig,
-    pub node: Option<NodeLimits>,
-    pub max_array_size: u32,
-    pub instances: usize,
-    pub core_hours: f64,
-    pub arrays: Vec<CampaignArray>,
-}
-
-impl Campaign {
-    /// Every job id, in submission order.
-    pub fn job_ids(&self) -> Vec<String> {
-        self.arrays
-            .iter()
-            .flat_map(|a| a.chunks.iter().filter_map(|c| c.job_id.clone()))
-            .collect()
-    }
 }
 
 fn cluster_config(base: &ClusterConfig, a: &SubmitArgs) -> ClusterConfig {
@@ -182,7 +139,7 @@ fn checked_cluster(
             ..
         } => {
             let name = field.trim_start_matches("cluster.");
-            anyhow::Error::from(super::InputError(format!(
+            anyhow::Error::from(super::checks::InputError(format!(
                 "--{} {value} (cluster.{name} of {origin}): {allowed}",
                 name.replace('_', "-")
             )))
@@ -388,27 +345,4 @@ fn print_summary(record: &Campaign, dir: &Path) -> std::io::Result<()> {
         )?;
     }
     Ok(())
-}
-
-/// The submitted campaigns of a profile, oldest first.
-pub fn campaigns(data: &Path, profile: &str) -> anyhow::Result<Vec<(PathBuf, Campaign)>> {
-    let base = data.join("campaigns").join(profile);
-    let mut out = Vec::new();
-    let Ok(read) = std::fs::read_dir(&base) else {
-        return Ok(out);
-    };
-    let mut dirs: Vec<PathBuf> = read.filter_map(|e| Some(e.ok()?.path())).collect();
-    dirs.sort();
-    for dir in dirs {
-        let path = dir.join("campaign.json");
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            continue;
-        };
-        let c: Campaign = serde_json::from_str(&text)
-            .with_context(|| format!("{} is not a campaign record", path.display()))?;
-        if c.submitted {
-            out.push((dir, c));
-        }
-    }
-    Ok(out)
 }

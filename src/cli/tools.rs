@@ -9,7 +9,7 @@ use serde_json::json;
 use wearcoef::solve::SolveOptions;
 use wearcoef::store::cluster_table::ClusterRows;
 
-use super::{check_memory, check_outputs, write_atomically, InputError};
+use super::checks::{check_memory, check_outputs, write_atomically, InputError};
 use wearcoef::analytic::{ModelError, PlateauPowerLaw};
 use wearcoef::clusters::{self, Connectivity};
 use wearcoef::grid::Grid;
@@ -154,7 +154,7 @@ pub fn clusters(args: ClustersArgs) -> anyhow::Result<ExitCode> {
     let conn = Connectivity::from_neighbours(connectivity)
         .ok_or_else(|| InputError(format!("--connectivity must be 4 or 8, got {connectivity}")))?;
     if let Some(path) = &out {
-        super::check_output_named(
+        super::checks::check_output_named(
             "--out",
             path,
             "parquet",

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 pub use wearcoef::io::prepare::{FillArg, Preparation, Prepared};
 
-use super::{check_output_named, write_atomically};
+use super::checks::{check_output_named, write_atomically};
 
 /// Reading and preparing a measured map (shared by `topography` and `wear`).
 #[derive(clap::Args, Debug, Clone)]

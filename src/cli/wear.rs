@@ -7,8 +7,8 @@ use std::process::ExitCode;
 
 use wearcoef::wear::{compute, Settings, WearOptions};
 
+use super::checks::InputError;
 use super::topography::{prepare, FillArg, PrepareArgs};
-use super::InputError;
 
 #[derive(clap::Args)]
 pub struct WearArgs {
@@ -38,7 +38,9 @@ fn check_output_dir(out: &Path) -> Result<(), InputError> {
             }
             Ok(())
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => super::check_dir("--out", out),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            super::checks::check_dir("--out", out)
+        }
         Err(_) if out.exists() => Err(InputError(format!(
             "--out {}: exists and is not a directory; name a new directory",
             out.display()

@@ -20,6 +20,9 @@
 //!   well), times `cluster.time_safety`, at least `cluster.min_minutes`.
 
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
 
 use serde::{Deserialize, Serialize};
 
@@ -302,6 +305,74 @@ pub fn utc_stamp(unix_seconds: u64) -> String {
         secs / 60 % 60,
         secs % 60
     )
+}
+
+// The record of a submitted campaign (`campaign.json`), written by `wearcoef submit` and
+// read by `wearcoef status`.
+
+/// One submitted chunk of an array.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SubmittedChunk {
+    pub chunk: Chunk,
+    pub script: String,
+    pub job_id: Option<String>,
+}
+
+/// One array of a campaign.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CampaignArray {
+    pub spec: ArraySpec,
+    pub plan: String,
+    pub chunks: Vec<SubmittedChunk>,
+}
+
+/// `campaign.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Campaign {
+    pub profile: String,
+    pub created: String,
+    pub submitted: bool,
+    pub binary: String,
+    pub data: String,
+    pub cluster: ClusterConfig,
+    pub node: Option<NodeLimits>,
+    pub max_array_size: u32,
+    pub instances: usize,
+    pub core_hours: f64,
+    pub arrays: Vec<CampaignArray>,
+}
+
+impl Campaign {
+    /// Every job id, in submission order.
+    pub fn job_ids(&self) -> Vec<String> {
+        self.arrays
+            .iter()
+            .flat_map(|a| a.chunks.iter().filter_map(|c| c.job_id.clone()))
+            .collect()
+    }
+}
+
+/// The submitted campaigns of a profile, oldest first.
+pub fn campaigns(data: &Path, profile: &str) -> anyhow::Result<Vec<(PathBuf, Campaign)>> {
+    let base = data.join("campaigns").join(profile);
+    let mut out = Vec::new();
+    let Ok(read) = std::fs::read_dir(&base) else {
+        return Ok(out);
+    };
+    let mut dirs: Vec<PathBuf> = read.filter_map(|e| Some(e.ok()?.path())).collect();
+    dirs.sort();
+    for dir in dirs {
+        let path = dir.join("campaign.json");
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            continue;
+        };
+        let c: Campaign = serde_json::from_str(&text)
+            .with_context(|| format!("{} is not a campaign record", path.display()))?;
+        if c.submitted {
+            out.push((dir, c));
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -160,6 +160,19 @@ impl Store {
         Self { root: root.into() }
     }
 
+    /// The store a run wrote at `data`, or an input error naming `--data` when there is none
+    /// (no `cache/` directory).
+    pub fn existing(data: &Path) -> Result<Self, crate::ranges::InputError> {
+        if !data.join("cache").is_dir() {
+            return Err(crate::ranges::InputError(format!(
+                "--data {}: no store there (no cache/ directory); give the data directory a run \
+                 wrote (default: data)",
+                data.display()
+            )));
+        }
+        Ok(Store::new(data))
+    }
+
     /// The data directory.
     pub fn root(&self) -> &Path {
         &self.root

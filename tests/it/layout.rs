@@ -236,24 +236,56 @@ fn module_of(file: &Path, src: &Path) -> String {
         .components()
         .map(|c| c.as_os_str().to_string_lossy().into_owned())
         .collect();
-    if parts.last().is_some_and(|p| p == "mod" || p == "lib") {
+    if parts
+        .last()
+        .is_some_and(|p| p == "mod" || p == "lib" || p == "main")
+    {
         parts.pop();
     }
     parts.join("::")
 }
 
-/// Every `crate::…` and `super::…` path of a file, resolved to module paths (`{a, b}`
-/// groups split; the item names at the end are kept and trimmed later).
+/// The child modules a file declares (`mod a;`, `pub mod b;`, `pub(crate) mod c;`).
+fn children_declared(code: &str) -> Vec<String> {
+    code.lines()
+        .filter_map(|l| {
+            let l = l.trim();
+            let rest = l.strip_suffix(';')?;
+            let rest = rest
+                .strip_prefix("pub(crate) ")
+                .or_else(|| rest.strip_prefix("pub(super) "))
+                .or_else(|| rest.strip_prefix("pub "))
+                .unwrap_or(rest);
+            let name = rest.strip_prefix("mod ")?.trim();
+            name.chars()
+                .all(|c| c.is_alphanumeric() || c == '_')
+                .then(|| name.to_string())
+        })
+        .collect()
+}
+
+/// Every `crate::…`, `super::…`, `self::…` path of a file, and every path through a child
+/// module it declares (`use child::X`), resolved to module paths (`{a, b}` groups split; the
+/// item names at the end are kept and trimmed later).
 fn paths_in(text: &str, module: &str, is_mod_file: bool) -> Vec<String> {
     let mut out = Vec::new();
-    let code: String = text
+    let mut code: String = text
         .lines()
         .filter(|l| !l.trim_start().starts_with("//"))
         .collect::<Vec<_>>()
         .join("\n");
-    for (prefix, base) in [
-        ("crate::", String::new()),
-        ("super::", {
+    // A file's inline test module (last, by convention) is not part of the design, and its
+    // `super::` is the file itself.
+    let inline_tests = code.find("#[cfg(test)]\nmod ").filter(|&i| {
+        let line = code[i..].lines().nth(1).unwrap_or("");
+        line.trim_end().ends_with('{')
+    });
+    if let Some(i) = inline_tests {
+        code.truncate(i);
+    }
+    let mut prefixes = vec![
+        ("crate::".to_string(), String::new()),
+        ("super::".to_string(), {
             // The parent of this file's module (for a mod.rs, of the directory's module).
             let mut m: Vec<&str> = module.split("::").filter(|s| !s.is_empty()).collect();
             if !is_mod_file || !m.is_empty() {
@@ -261,7 +293,14 @@ fn paths_in(text: &str, module: &str, is_mod_file: bool) -> Vec<String> {
             }
             m.join("::")
         }),
-    ] {
+        ("self::".to_string(), module.to_string()),
+    ];
+    for child in children_declared(&code) {
+        prefixes.push((format!("{child}::"), module.to_string()));
+    }
+    for (prefix, base) in &prefixes {
+        let (prefix, base) = (prefix.as_str(), base.as_str());
+        let child_prefix = !["crate::", "super::", "self::"].contains(&prefix);
         let mut rest = code.as_str();
         while let Some(i) = rest.find(prefix) {
             let before = rest[..i].chars().last();
@@ -273,8 +312,14 @@ fn paths_in(text: &str, module: &str, is_mod_file: bool) -> Vec<String> {
                 .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
                 .unwrap_or(rest.len());
             let path = rest[..end].trim_end_matches(':');
-            let full = if base.is_empty() {
+            // A child's prefix is part of the path (`child::X` is `module::child::X`).
+            let path = if child_prefix {
+                format!("{prefix}{path}").trim_end_matches(':').to_string()
+            } else {
                 path.to_string()
+            };
+            let full = if base.is_empty() {
+                path
             } else {
                 format!("{base}::{path}")
             };
@@ -301,6 +346,11 @@ fn import_circles(src: &Path, skip: &[PathBuf]) -> (Vec<String>, usize) {
     let mut files = Vec::new();
     rust_files(src, &mut files);
     files.retain(|f| !f.ends_with("main.rs") && !skip.iter().any(|s| f.starts_with(s)));
+    circles_among(src, &files)
+}
+
+/// The import circles among `files` of the crate rooted at `src`.
+fn circles_among(src: &Path, files: &[PathBuf]) -> (Vec<String>, usize) {
     let modules: BTreeMap<String, PathBuf> = files
         .iter()
         .map(|f| (module_of(f, src), f.clone()))
@@ -356,13 +406,82 @@ fn import_circles(src: &Path, skip: &[PathBuf]) -> (Vec<String>, usize) {
     (cycles, edges.values().map(BTreeSet::len).sum())
 }
 
+/// Modules whose `mod.rs` still holds items its children import while it imports them back
+/// (a parent-and-child knot; each to be untied by moving those items into a child of their
+/// own, so that the parent only declares and re-exports), in the application (src/) and in
+/// the core crate. The scan must find exactly these: a new circle fails, and so does a knot
+/// untied but still listed.
+const APP_KNOTS_LEFT: [&str; 6] = [
+    "config",
+    "figures::plot",
+    "pipeline::plan",
+    "pipeline::report",
+    "stages::statistics",
+    "store",
+];
+const CORE_KNOTS_LEFT: [&str; 4] = [
+    "contact::solver",
+    "contact::solver::extension",
+    "powerlaw",
+    "spectral",
+];
+
+/// The circles' outermost modules (`a -> a::b -> a` is a knot at `a`).
+fn knots(cycles: &[String]) -> BTreeSet<String> {
+    cycles
+        .iter()
+        .filter_map(|c| {
+            c.split(" -> ")
+                .min_by_key(|m| (m.matches("::").count(), m.to_string()))
+                .map(str::to_string)
+        })
+        .collect()
+}
+
+/// Each circle found is a knot `listed`, and each knot listed is still found.
+fn check_circles(cycles: &[String], listed: &[&str], place: &str) {
+    let found = knots(cycles);
+    let unknown: Vec<&String> = found
+        .iter()
+        .filter(|k| !listed.contains(&k.as_str()))
+        .collect();
+    assert!(unknown.is_empty(), "import circles in {place}: {cycles:#?}");
+    let untied: Vec<&&str> = listed.iter().filter(|k| !found.contains(**k)).collect();
+    assert!(
+        untied.is_empty(),
+        "{place}: {untied:?} no longer knotted: remove them from the knots left"
+    );
+}
+
 #[test]
 fn the_application_modules_import_each_other_without_a_circle() {
     let src = root().join("src");
     // Library files only (main.rs and cli/ are the binary, a crate of their own).
     let (cycles, edges) = import_circles(&src, &[src.join("cli")]);
     assert!(edges > 20, "the scan finds the imports ({edges} edges)");
-    assert!(cycles.is_empty(), "import circles in src/: {cycles:#?}");
+    let here = [
+        "config",
+        "figures::plot",
+        "pipeline::plan",
+        "pipeline::report",
+    ];
+    check_circles(
+        &cycles,
+        &[&here[..], &["stages::statistics", "store"]].concat(),
+        "src/",
+    );
+}
+
+/// The binary (src/main.rs and the commands under src/cli/) is a crate of its own: its
+/// modules import each other without a circle too.
+#[test]
+fn the_command_line_modules_import_each_other_without_a_circle() {
+    let src = root().join("src");
+    let mut files = vec![src.join("main.rs")];
+    rust_files(&src.join("cli"), &mut files);
+    let (cycles, edges) = circles_among(&src, &files);
+    assert!(edges > 8, "the scan finds the imports ({edges} edges)");
+    assert!(cycles.is_empty(), "import circles in src/cli/: {cycles:#?}");
 }
 
 #[test]
@@ -383,11 +502,17 @@ fn the_workspace_crates_import_their_modules_without_a_circle() {
             "{}: the scan finds the imports ({edges} edges in {files} files)",
             src.display()
         );
-        assert!(
-            cycles.is_empty(),
-            "import circles in {}: {cycles:#?}",
-            src.display()
-        );
+        let listed: &[&str] = if src.ends_with("core/src") {
+            &[
+                "contact::solver",
+                "contact::solver::extension",
+                "powerlaw",
+                "spectral",
+            ]
+        } else {
+            &[]
+        };
+        check_circles(&cycles, listed, &src.display().to_string());
         checked += 1;
     }
     assert!(checked > 0, "no crate under crates/");
@@ -418,6 +543,30 @@ fn the_circle_scan_finds_a_small_circle() {
     );
     // Broken ring: no circle.
     write("ring/c.rs", "pub struct C;\n");
+    assert!(import_circles(src, &[]).0.is_empty());
+}
+
+/// The scan reads a parent's imports of its own children: a `mod.rs` that re-exports its
+/// child while the child imports the parent is a circle (the solver's knot, in small).
+#[test]
+fn the_circle_scan_finds_a_parent_and_child_knot() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    std::fs::create_dir_all(src.join("knot")).unwrap();
+    let write = |p: &str, text: &str| std::fs::write(src.join(p), text).unwrap();
+    write("lib.rs", "pub mod knot;\n");
+    write(
+        "knot/mod.rs",
+        "mod part;\npub use part::Part;\npub struct Whole;\n",
+    );
+    write(
+        "knot/part.rs",
+        "use super::Whole;\npub struct Part(Whole);\n",
+    );
+    let (cycles, _) = import_circles(src, &[]);
+    assert_eq!(cycles, ["knot -> knot::part -> knot"]);
+    // The parent only declaring its child, the child importing the parent: no circle.
+    write("knot/mod.rs", "pub mod part;\npub struct Whole;\n");
     assert!(import_circles(src, &[]).0.is_empty());
 }
 
