@@ -3,9 +3,10 @@
 
 use std::fmt::Write as _;
 
-use super::{escape, Context, FigureRecord, Provenance, Sizes};
+use super::context::{escape, Context, Sizes};
 use crate::config::FigureKind;
 use crate::format::number;
+use crate::pipeline::gallery::{FigureRecord, Provenance};
 use crate::store::table::{f64_column, str_column};
 use crate::store::Store;
 

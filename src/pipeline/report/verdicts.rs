@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::escape;
+use super::context::escape;
 use crate::format::number;
 use crate::pipeline::gallery::FigureRecord;
 use crate::store::Store;
