@@ -1,6 +1,6 @@
 //! The figure and audit instances of each declared figure, from its studies' keys.
 
-use super::{Builder, StudyKeys};
+use super::builder::{Builder, StudyKeys};
 use crate::config::{FigureDecl, FigureKind};
 use crate::stages::analytic::{Analytic, AnalyticJob};
 use crate::stages::audits::{AuditJob, Audits, Setting};

@@ -11,10 +11,11 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::cost::Estimate;
 use super::sources::measured_surfaces;
 
+mod builder;
 mod figures;
+
 pub use super::sources::SourceFile;
 use crate::config::{ExponentLoads, Pipeline, StudyPlan};
 use crate::stages::analytic::{Analytic, AnalyticJob};
@@ -22,47 +23,10 @@ use crate::stages::clusters::{Clusters, ClustersJob};
 use crate::stages::contact::{Contact, ContactJob};
 use crate::stages::statistics::{Statistics, StatisticsJob, A_STAR_OVER_LS2};
 use crate::stages::surface::{Surface, SurfaceJob};
-use crate::stages::{keyed, InputRef, Stage};
+use crate::stages::{InputRef, Stage};
 use crate::store::Store;
-
-/// One stage instance of a plan.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Instance {
-    pub stage: String,
-    pub key: String,
-    /// The job, as the stage reads it and the key hashes it.
-    pub params: Value,
-    /// Inputs in the order the stage reads them.
-    pub inputs: Vec<InputRef>,
-    /// Longest path from a source (surfaces and model curves are level 0): every input of
-    /// an instance is on a lower level, so a level runs once the previous ones are done.
-    pub level: usize,
-    /// Studies of the profile that use this instance (several may share one).
-    pub studies: Vec<String>,
-    pub realization: Option<u32>,
-    /// The figure or audit this instance draws or checks (figures and audits stages).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub name: Option<String>,
-    /// Whether the store holds it (set by [`Plan::mark`]).
-    #[serde(default)]
-    pub cached: bool,
-    #[serde(default)]
-    pub estimate: Estimate,
-    /// A file the runner copies into the entry before computing it (a measured study's
-    /// topography); its content, not its place, is in the key.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub source: Option<SourceFile>,
-}
-
-impl Instance {
-    /// The reference other instances use to name this one as an input.
-    pub fn as_input(&self) -> InputRef {
-        InputRef {
-            stage: self.stage.clone(),
-            key: self.key.clone(),
-        }
-    }
-}
+pub use builder::Instance;
+use builder::{Builder, StudyKeys};
 
 /// The instances of the `i`-th of `k` contiguous slices of `len` (`wearcoef exec --slice
 /// I/K`): slices of `⌈len/k⌉`, the last ones shorter or empty.
@@ -76,69 +40,6 @@ pub fn slice_range(len: usize, i: usize, k: usize) -> std::ops::Range<usize> {
 pub struct Plan {
     pub profile: String,
     pub instances: Vec<Instance>,
-}
-
-/// The keys of one study's instances that figures and audits read.
-struct StudyKeys<'a> {
-    plan: &'a StudyPlan,
-    surfaces: Vec<InputRef>,
-    contacts: Vec<InputRef>,
-    clusters: Vec<InputRef>,
-    statistics: InputRef,
-    analytic: InputRef,
-}
-
-/// Instances being collected, deduplicated by key.
-#[derive(Default)]
-struct Builder {
-    out: Vec<Instance>,
-    index: BTreeMap<String, usize>,
-}
-
-impl Builder {
-    /// Add an instance of `S` (or record more studies on the one with the same key).
-    fn add<S: Stage>(
-        &mut self,
-        job: &S::Job,
-        inputs: Vec<InputRef>,
-        studies: &[String],
-        realization: Option<u32>,
-        name: Option<&str>,
-    ) -> InputRef {
-        let (params, key) = keyed::<S>(job, &inputs);
-        if let Some(&i) = self.index.get(&key) {
-            let existing = &mut self.out[i];
-            for s in studies {
-                if !existing.studies.contains(s) {
-                    existing.studies.push(s.clone());
-                }
-            }
-        } else {
-            let level = inputs
-                .iter()
-                .map(|r| self.out[self.index[&r.key]].level + 1)
-                .max()
-                .unwrap_or(0);
-            self.index.insert(key.clone(), self.out.len());
-            self.out.push(Instance {
-                stage: S::NAME.to_string(),
-                key: key.clone(),
-                params,
-                inputs,
-                level,
-                studies: studies.to_vec(),
-                realization,
-                name: name.map(str::to_string),
-                cached: false,
-                estimate: Estimate::default(),
-                source: None,
-            });
-        }
-        InputRef {
-            stage: S::NAME.to_string(),
-            key,
-        }
-    }
 }
 
 impl Plan {
