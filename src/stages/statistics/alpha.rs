@@ -5,7 +5,7 @@ use std::path::Path;
 
 use polars::prelude::*;
 
-use super::{StatisticsJob, Study};
+use super::job::{StatisticsJob, Study};
 use crate::powerlaw::{self, Estimator};
 use crate::resample::{self, NoInterval};
 use crate::store::table::{col, write};
