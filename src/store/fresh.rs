@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::base::{io_err, list_dirs, read_manifest, Manifest, Store, StoreError, MANIFEST};
 use super::hash::{canonical_json, instance_key, sha256_file, sha256_hex};
-use super::{io_err, list_dirs, read_manifest, Manifest, Store, StoreError};
 
 /// What says whether a file changed since it was hashed.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -214,7 +214,7 @@ impl Store {
     fn find_key(&self, key: &str) -> Result<Option<(String, PathBuf)>, StoreError> {
         for stage_dir in list_dirs(&self.cache_dir())? {
             let dir = stage_dir.join(key);
-            if dir.join(super::MANIFEST).is_file() {
+            if dir.join(MANIFEST).is_file() {
                 let stage = stage_dir
                     .file_name()
                     .map(|s| s.to_string_lossy().into_owned())

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use polars::prelude::DataFrame;
 use serde::{Deserialize, Serialize};
 
-use super::{Manifest, Store};
+use super::base::{Manifest, Store};
 
 /// A reference to a stage instance: its stage and key.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{Store, MANIFEST};
+use super::base::{Store, MANIFEST};
 
 /// What a store holds, for `clean` to say what it removes.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

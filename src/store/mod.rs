@@ -24,136 +24,19 @@ use serde_json::Value;
 
 use hash::sha256_file;
 
+mod base;
 pub mod cluster_table;
 mod fresh;
 pub mod hash;
 pub mod inputs;
 mod layout;
 pub mod table;
+use base::{io_err, list_dirs, read_manifest};
+pub use base::{
+    CommitOutcome, EntryProblem, Manifest, OutputFile, Program, Store, StoreError, TempEntry,
+    MANIFEST,
+};
 pub use layout::Contents;
-
-/// Name of the manifest file in every entry.
-pub const MANIFEST: &str = "manifest.json";
-
-/// Errors of the store.
-#[derive(Debug, thiserror::Error)]
-pub enum StoreError {
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
-    #[error("{0}")]
-    Write(String),
-    #[error("corrupt cache entry {path}: {reason}. Fix: run `wearcoef verify` to list damaged entries and `wearcoef clean --corrupt` to remove them; the next run rebuilds them")]
-    Corrupt { path: String, reason: String },
-}
-
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
-    move |source| StoreError::Io {
-        path: path.display().to_string(),
-        source,
-    }
-}
-
-/// One output file of an entry.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct OutputFile {
-    pub sha256: String,
-    pub bytes: u64,
-}
-
-/// Who wrote an entry.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct Program {
-    pub name: String,
-    pub version: String,
-    pub git_commit: Option<String>,
-}
-
-impl Program {
-    /// This build of wearcoef.
-    pub fn current() -> Self {
-        Self {
-            name: env!("CARGO_PKG_NAME").to_string(),
-            version: env!("CARGO_PKG_VERSION").to_string(),
-            git_commit: option_env!("WEARCOEF_GIT_COMMIT")
-                .filter(|s| !s.is_empty())
-                .map(str::to_string),
-        }
-    }
-}
-
-/// `manifest.json`: everything needed to explain and check an entry.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct Manifest {
-    pub stage: String,
-    pub version: u32,
-    pub key: String,
-    pub params: Value,
-    pub inputs: Vec<String>,
-    /// The [`Manifest::content_digest`] of each input (by key) when this entry was computed
-    /// from it (absent in entries of older builds).
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub input_digests: BTreeMap<String, String>,
-    pub outputs: BTreeMap<String, OutputFile>,
-    pub program: Program,
-    pub wall_seconds: f64,
-    /// CPU seconds the instance used on all its threads (absent in entries of older
-    /// builds): what the cost model fits, since instances that run side by side share the
-    /// cores and each one's wall time counts the others'.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cpu_seconds: Option<f64>,
-    /// Peak resident memory of the process while this instance ran alone in it (absent
-    /// when instances ran side by side, or in entries of older builds): what the cost
-    /// model's memory estimate is checked against.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub peak_rss_bytes: Option<u64>,
-    /// Stage-specific results (realised statistics, solver reports, ...).
-    pub results: Value,
-    /// SHA-256 of the canonical JSON of `results` and `wall_seconds`, so that `verify`
-    /// notices an edited result (absent in entries of older builds).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub results_sha256: Option<String>,
-}
-
-impl Manifest {
-    /// The hash `results_sha256` records.
-    pub fn results_hash(&self) -> String {
-        let v = serde_json::json!({"results": self.results, "wall_seconds": self.wall_seconds});
-        hash::sha256_hex(hash::canonical_json(&v).as_bytes())
-    }
-}
-
-/// The store rooted at a data directory.
-#[derive(Debug, Clone)]
-pub struct Store {
-    root: PathBuf,
-}
-
-/// A temporary entry being written; dropped without [`TempEntry::commit`] it is removed.
-pub struct TempEntry {
-    dir: PathBuf,
-    final_dir: PathBuf,
-    committed: bool,
-}
-
-/// How a commit ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CommitOutcome {
-    /// Our copy is now the entry.
-    Stored,
-    /// Another process stored the same key first; our identical copy was discarded.
-    AlreadyPresent,
-}
-
-/// Result of checking one entry.
-#[derive(Debug, Clone, Serialize)]
-pub struct EntryProblem {
-    pub path: String,
-    pub reason: String,
-}
 
 impl Store {
     pub fn new(root: impl Into<PathBuf>) -> Self {
@@ -361,33 +244,6 @@ fn file_name(p: &Path) -> String {
         .and_then(|s| s.to_str())
         .unwrap_or_default()
         .to_string()
-}
-
-fn list_dirs(dir: &Path) -> Result<Vec<PathBuf>, StoreError> {
-    if !dir.exists() {
-        return Ok(Vec::new());
-    }
-    let mut out = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(io_err(dir))? {
-        let entry = entry.map_err(io_err(dir))?;
-        if entry.file_type().map_err(io_err(dir))?.is_dir() {
-            out.push(entry.path());
-        }
-    }
-    out.sort();
-    Ok(out)
-}
-
-fn read_manifest(dir: &Path) -> Result<Manifest, StoreError> {
-    let path = dir.join(MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| StoreError::Corrupt {
-        path: path.display().to_string(),
-        reason: format!("manifest unreadable ({e})"),
-    })?;
-    serde_json::from_str(&text).map_err(|e| StoreError::Corrupt {
-        path: path.display().to_string(),
-        reason: format!("manifest is not valid ({e})"),
-    })
 }
 
 fn check_entry(store: &Store, stage: &str, key: &str, dir: &Path) -> Result<(), String> {
