@@ -18,7 +18,8 @@
 //! alternatives and, for the nested cut-off, `P(χ²₁ > 2|R|) = erfc(√|R|)` (Wilks).
 //! A small p says the sign of `R` is significant.
 
-use super::{checked_counts, discrete_normalisation, fit_discrete, FitError};
+use super::fit::{checked_counts, fit_discrete, FitError};
+use super::sums::discrete_normalisation;
 
 /// The distributions the power law is tested against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

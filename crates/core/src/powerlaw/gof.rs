@@ -10,7 +10,7 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::{checked_counts, fit_tail_at_max, FitError, PowerLawFit};
+use super::fit::{checked_counts, fit_tail_at_max, FitError, PowerLawFit};
 
 /// The widest fitted range `[k_min, k_max]` sampled from (its cumulative table is held in
 /// memory: 8 bytes a value).

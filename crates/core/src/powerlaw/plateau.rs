@@ -1,8 +1,8 @@
 //! The paper's p_PL (plateau, power law, cut-off; discrete), its joint maximum-likelihood
 //! fit, and a 95 % profile-likelihood interval for α.
 
+use super::fit::{checked_counts, golden_max, Estimator, FitError, MIN_TAIL};
 use super::sums::moments;
-use super::{checked_counts, golden_max, Estimator, FitError, MIN_TAIL};
 
 /// Joint fit of the discrete `p_PL`: `P(k) ∝ 1` for `1 ≤ k ≤ k_s`, `∝ (k/k_s)^(−α)` for
 /// `k_s < k ≤ k_m`, with `k_m = max k`.

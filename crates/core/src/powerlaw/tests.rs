@@ -1,3 +1,9 @@
+use rand::RngExt;
+use rand_chacha::rand_core::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::fit::*;
+use super::sums::{continuous_log_stats, moments};
 use super::*;
 
 /// Direct summation of the moments (with `u = ln k − ln k0`, as `moments` defines it:
