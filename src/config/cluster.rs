@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::ConfigError;
+use super::error::ConfigError;
 
 /// Settings of `wearcoef submit`.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

@@ -8,7 +8,8 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
-use super::ConfigError;
+use super::error::ConfigError;
+use super::study::Study;
 
 /// What a figure declaration draws (each kind is one figure family of the paper, or one of
 /// the project's audits drawn as a figure).
@@ -197,7 +198,7 @@ impl FigureDecl {
         &self,
         name: &str,
         origin: &str,
-        studies: &BTreeMap<String, super::Study>,
+        studies: &BTreeMap<String, Study>,
         profiles: &BTreeMap<String, String>,
     ) -> Result<(), ConfigError> {
         self.check_fields(name, origin)?;
@@ -305,7 +306,7 @@ impl FigureDecl {
         &self,
         name: &str,
         origin: &str,
-        studies: &BTreeMap<String, super::Study>,
+        studies: &BTreeMap<String, Study>,
         profiles: &BTreeMap<String, String>,
     ) -> Result<(), ConfigError> {
         let invalid = |field: &str, value: String, allowed: String| {

@@ -1,7 +1,7 @@
 //! Bounds of the counts `pipeline.yaml` may ask for, derived from this machine, and the YAML
 //! parser's messages in the user's terms.
 
-use super::ConfigError;
+use super::error::ConfigError;
 
 /// The plan holds every realization's instances and their loads in memory (a few KiB each,
 /// and ~100 bytes a load): refused before it is built if that cannot fit in an eighth of

@@ -3,7 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{ConfigError, FigureKind, MeasuredPlan, MeasuredStudy, Pipeline, StudyPlan};
+use super::error::ConfigError;
+use super::figures::FigureKind;
+use super::schema::Pipeline;
+use super::study::{MeasuredPlan, MeasuredStudy, StudyPlan};
 use crate::surface::{Method, SurfaceParams};
 
 impl Pipeline {

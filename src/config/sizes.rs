@@ -1,7 +1,8 @@
 //! A study's sizes checked against what a surface and a grid can be, each error naming the
 //! field of pipeline.yaml and the range it must lie in.
 
-use super::{ConfigError, Study, StudyProfile, MAX_N};
+use super::error::ConfigError;
+use super::study::{Study, StudyProfile, MAX_N};
 
 /// A field a generated study must give.
 pub(super) fn required<T: Copy>(
