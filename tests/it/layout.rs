@@ -324,15 +324,14 @@ fn paths_in(text: &str, module: &str, is_mod_file: bool) -> Vec<String> {
             // `super::super::…` climbs one module more per `super`.
             let mut base: Vec<&str> = base.split("::").filter(|s| !s.is_empty()).collect();
             let mut path = path.as_str();
-            while prefix == "super::" {
-                let Some(rest) = path
+            if prefix == "super::" {
+                while let Some(rest) = path
                     .strip_prefix("super::")
-                    .or_else(|| path.strip_prefix("super"))
-                else {
-                    break;
-                };
-                base.pop();
-                path = rest;
+                    .or((path == "super").then_some(""))
+                {
+                    base.pop();
+                    path = rest;
+                }
             }
             let path = path.to_string();
             let full = if base.is_empty() {
