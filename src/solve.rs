@@ -132,10 +132,9 @@ pub fn sweep(
     n: usize,
     loads: &[f64],
     options: &SolveOptions,
-    each: impl FnMut(usize, &Solved) -> Result<(), String>,
+    mut each: impl FnMut(usize, &Solved) -> Result<(), String>,
 ) -> anyhow::Result<Vec<LoadResult>> {
     let cfg = options.config(loads)?;
-    let mut each = each;
     let (_, results) = sweep_heights_solved(
         heights,
         n,
@@ -157,12 +156,11 @@ pub fn sweep_free(
     n: usize,
     loads: &[f64],
     options: &SolveOptions,
-    each: impl FnMut(usize, &Solved) -> Result<(), String>,
+    mut each: impl FnMut(usize, &Solved) -> Result<(), String>,
 ) -> anyhow::Result<Vec<LoadResult>> {
     let cfg = options.config(loads)?;
     let pixel = 1.0 / n as f64;
     let map = Topography::new(n, n, pixel, pixel, heights.to_vec())?;
-    let mut each = each;
     let (layout, results) = sweep_window_solved(
         &map,
         options.e_star,

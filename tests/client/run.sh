@@ -31,14 +31,14 @@ echo "quick profile end to end: $(( (end - start) / 1000000 )) ms"
 # (tests/golden/quick_values.json; `values.py digest data quick` makes them anew).
 "$venv/bin/python" "$repo/tests/client/values.py" digest data quick > values.json
 "$venv/bin/python" "$repo/tests/client/values.py" compare "$repo/tests/golden/quick_values.json" values.json
-# The README's pandas example, as written, on this quick store (its profile line switched).
-python3 - "$repo/README.md" > readme_example.py <<'PY'
+# docs/READING.md's pandas example, as written, on this quick store (its profile line switched).
+python3 - "$repo/docs/READING.md" > readme_example.py <<'PY'
 import re, sys
 text = open(sys.argv[1], encoding="utf-8").read()
 section = text.split("## Reading the results with pandas", 1)[1]
 block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
-assert 'root, profile = "data", "default"' in block, "the README example no longer names its store and profile"
+assert 'root, profile = "data", "default"' in block, "docs/READING.md's example no longer names its store and profile"
 print(block.replace('root, profile = "data", "default"', 'root, profile = "data", "quick"', 1))
 PY
 "$venv/bin/python" readme_example.py
-echo "README example ran"
+echo "docs/READING.md example ran"

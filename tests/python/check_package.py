@@ -14,7 +14,9 @@ import warnings
 import numpy as np
 import pandas as pd
 
+import common
 import wearcoef
+from common import same_frame
 
 BIN, WORK = sys.argv[1], sys.argv[2]
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
@@ -23,22 +25,7 @@ os.makedirs(WORK, exist_ok=True)
 
 
 def run(*args):
-    out = subprocess.run([BIN, *args], capture_output=True, text=True)
-    assert out.returncode == 0, f"{args}: exit {out.returncode}: {out.stderr}"
-    return out
-
-
-def same_frame(mine, theirs, what):
-    """Equal columns, dtypes and values, floats compared by their bits (NaN = NaN)."""
-    assert list(mine.columns) == list(theirs.columns), f"{what}: columns {list(mine.columns)} against {list(theirs.columns)}"
-    assert len(mine) == len(theirs), f"{what}: {len(mine)} rows against {len(theirs)}"
-    for c in mine.columns:
-        a, b = mine[c].to_numpy(), theirs[c].to_numpy()
-        if a.dtype.kind == "f" or b.dtype.kind == "f":
-            a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-            assert np.array_equal(a.view(np.uint64), b.view(np.uint64)), f"{what}.{c}: values differ"
-        else:
-            assert np.array_equal(a, b), f"{what}.{c}: values differ"
+    return common.run(BIN, *args)
 
 
 def version():
@@ -266,13 +253,13 @@ def store():
         raise AssertionError("several rows loaded as one")
     # The README's two lines, as written, on this store (its store and profile switched).
     with open(os.path.join(REPO, "README.md"), encoding="utf-8") as f:
-        section = f.read().split("## Reading the results with pandas", 1)[1].split("\n## ", 1)[0]
+        section = f.read().split("## Reading the results\n", 1)[1].split("\n## ", 1)[0]
     block = [b for b in re.findall(r"```python\n(.*?)```", section, re.S) if "open_store" in b]
     assert len(block) == 1 and 'open_store("data", "default")' in block[0], "the README's two-line block moved"
     names = {"wearcoef": wearcoef}
     exec(block[0].replace('open_store("data", "default")',
                           f'open_store({os.path.join(work, "data")!r}, "quick")'), names)
-    path = cat.query("stage == 'statistics' and study == 'fig3_ll128' and file == 'wear.parquet'")
+    path = cat.query("study == 'fig3_ll128' and file == 'wear.parquet'")
     assert len(path) == 1, len(path)
     same_frame(names["wear"], pd.read_parquet(os.path.join(work, "data", path["path"].iloc[0])), "README's wear")
     print(f"open_store: {len(cat)} catalog rows of the quick profile; a surface "

@@ -14,7 +14,9 @@ import numpy as np
 import pandas as pd
 import SurfaceTopography as st
 
+import common
 import wearcoef
+from common import same_frame
 
 BIN, WORK = sys.argv[1], sys.argv[2]
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
@@ -23,21 +25,7 @@ os.makedirs(WORK, exist_ok=True)
 
 
 def run(*args):
-    out = subprocess.run([BIN, *args], capture_output=True, text=True)
-    assert out.returncode == 0, f"{args}: exit {out.returncode}: {out.stderr}"
-    return out
-
-
-def same_frame(mine, theirs, what):
-    assert list(mine.columns) == list(theirs.columns), f"{what}: columns differ"
-    assert len(mine) == len(theirs), f"{what}: {len(mine)} rows against {len(theirs)}"
-    for c in mine.columns:
-        a, b = mine[c].to_numpy(), theirs[c].to_numpy()
-        if a.dtype.kind == "f" or b.dtype.kind == "f":
-            a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-            assert np.array_equal(a.view(np.uint64), b.view(np.uint64)), f"{what}.{c}: values differ"
-        else:
-            assert np.array_equal(a, b), f"{what}.{c}: values differ"
+    return common.run(BIN, *args)
 
 
 def against_the_file(name, loads, d_star_m, trust_band):
