@@ -1,6 +1,9 @@
 # wearcoef: `make figures` rebuilds every artifact and figure of a profile; `make test` runs
-# the whole test suite (format, lint, tests). Build products go to a fixed directory outside
-# the clone so that repeated fresh clones (CI) reuse them.
+# the whole test suite (format, the features check, lint, tests). Build products go to a fixed
+# directory outside the clone so that repeated fresh clones (CI) reuse them. The tests run in
+# release, where the binary is built anyway (one build of the dependencies, not two), all of
+# them, those `#[ignore]`d as slow in debug included; the numerical core's run again in debug
+# too, for its overflow checks and debug assertions.
 CARGO_TARGET_DIR ?= /var/tmp/wearcoef-target
 export CARGO_TARGET_DIR
 PROFILE ?= default
@@ -17,9 +20,10 @@ build:
 
 test:
 	cargo fmt --all --check
+	bash scripts/same-features.sh
 	cargo clippy --locked --workspace --all-targets -- -D warnings
-	cargo test --locked --workspace
-	cargo test --locked --release --test it -- --ignored
+	cargo test --locked -p wearcoef-core
+	cargo test --locked --release --workspace -- --include-ignored
 	$(MAKE) test-client
 	$(MAKE) test-measured
 	$(MAKE) test-python

@@ -730,7 +730,7 @@ fn preconditioned_solver_matches_the_plain_one_in_fewer_iterations() {
 /// few percent; accept the ensemble mean in [2.0, 2.7]). The mean over three realizations is
 /// tested, as one realization can stray (seed 21 gives 2.72 at W/W0 = 0.005).
 #[test]
-#[ignore = "slow in debug builds: run by `make test` in release (cargo test --release -- --ignored)"]
+#[ignore = "slow in debug builds: run by `make test` in release (--include-ignored)"]
 fn area_load_slope_at_small_loads() {
     let n = 512;
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);

@@ -258,7 +258,7 @@ fn plateau_power_law_joint_fit_recovers_alpha_and_plateau() {
 /// clusters, the cut-off estimated by the largest): 200 samples, so the coverage of a
 /// correct interval lies in [0.90, 0.99] with probability 0.998 (binomial, ±3σ).
 #[test]
-#[ignore = "about a minute in a debug build; make test runs it in the release run (--ignored)"]
+#[ignore = "about a minute in a debug build; make test runs it in release (--include-ignored)"]
 fn plateau_interval_covers_the_true_alpha_at_its_nominal_rate() {
     let mut r = rng(11);
     let trials = 200;

@@ -3,9 +3,10 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use super::scene::{plot_err, DrawResult};
+use super::series::{Series, LEGEND_PX};
 use super::style::{draw_marker, draw_path, BAND_OPACITY};
 use super::text::{self, Align, TextLook};
-use super::{plot_err, DrawResult, Series, LEGEND_PX};
 
 /// Size of the legend: one row per entry, a line sample then the label.
 pub(super) struct LegendBox {

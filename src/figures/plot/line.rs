@@ -9,13 +9,14 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::legend::{covered_pixels, free_spot, Fractions, LegendBox, Rect};
+use super::scene::{plot_err, write_scene, DrawResult, Scene};
+use super::series::{
+    finite_on, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX, DATA_COLUMNS, LEGEND_PX, SIZE_PX,
+    TICK_PX, TITLE_PX,
+};
 use super::style::{draw_marker, draw_path, Dash, BAND_OPACITY};
 use super::text::{self, Align, TextLook};
 use super::ticks::{log_key_points, padded, snap_zero_on, LinLogCoord, Ticks};
-use super::{
-    finite_on, plot_err, write_scene, DrawResult, LegendAt, LinePlot, Series, YAxis, AXIS_LABEL_PX,
-    DATA_COLUMNS, LEGEND_PX, SIZE_PX, TICK_PX, TITLE_PX,
-};
 
 /// Curves, marks and bands of a plot in pixels of its plotting area.
 type PixelPaths = (
@@ -562,5 +563,11 @@ impl LinePlot {
         self.data_rows(&text::flat(&self.title), &mut w)?;
         w.flush()?;
         Ok(())
+    }
+}
+
+impl Scene for LinePlot {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        self.draw_on(root, 1.0, &[]).map(|_| ())
     }
 }

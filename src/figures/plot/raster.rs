@@ -6,11 +6,10 @@ use plotters::style::colors::colormaps::ViridisRGB;
 
 use std::path::Path;
 
+use super::scene::{plot_err, write_scene, DrawResult, Scene};
+use super::series::{AXIS_LABEL_PX, LEGEND_PX, RASTER_SIZE_PX, TICK_PX, TITLE_PX};
 use super::text::{self, Align, TextLook};
-use super::{
-    number, plot_err, snap_zero, write_scene, DrawResult, AXIS_LABEL_PX, LEGEND_PX, RASTER_SIZE_PX,
-    TICK_PX, TITLE_PX,
-};
+use super::ticks::{number, snap_zero};
 
 /// A colour bar beside a raster: values `lo … hi` mapped through viridis.
 #[derive(Clone, Debug)]
@@ -237,4 +236,10 @@ fn draw_colorbar<DB: DrawingBackend>(
         }))
         .map_err(plot_err)?;
     Ok(())
+}
+
+impl Scene for RasterPlot {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
+        self.draw_on(root)
+    }
 }

@@ -4,7 +4,7 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::{plot_err, DrawResult};
+use super::scene::{plot_err, DrawResult};
 
 /// How a curve's line is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

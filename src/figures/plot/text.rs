@@ -226,12 +226,29 @@ fn style(family: &'static str, size: f64, look: &TextLook) -> TextStyle<'static>
     st
 }
 
+/// The embedded text font's bytes.
+static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+/// The embedded math font (DejaVu Math TeX Gyre, same licence), for the few mathematical
+/// letters the text font lacks (𝒦).
+static MATH_FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuMathTeXGyre.ttf");
+
+/// Register the embedded fonts under the families the text module asks for.
+pub(super) fn ensure_font() -> anyhow::Result<()> {
+    static DONE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *DONE.get_or_init(|| {
+        plotters::style::register_font(TEXT_FAMILY, FontStyle::Normal, FONT).is_ok()
+            && plotters::style::register_font(MATH_FAMILY, FontStyle::Normal, MATH_FONT).is_ok()
+    });
+    anyhow::ensure!(ok, "the embedded fonts could not be registered");
+    Ok(())
+}
+
 /// The embedded font of `family`.
 fn font_of(family: &str) -> ab_glyph::FontRef<'static> {
     let bytes = if family == MATH_FAMILY {
-        super::MATH_FONT
+        MATH_FONT
     } else {
-        super::FONT
+        FONT
     };
     ab_glyph::FontRef::try_from_slice(bytes).expect("the embedded fonts parse")
 }
@@ -415,7 +432,7 @@ mod glyph_tests {
     #[test]
     fn each_glyph_of_a_label_starts_where_the_fonts_layout_puts_it() {
         use ab_glyph::{Font, ScaleFont};
-        super::super::ensure_font().unwrap();
+        ensure_font().unwrap();
         let (w, h, size) = (900u32, 80u32, 40.0);
         let text = "0123456789";
         let mut buf = vec![255u8; (w * h * 3) as usize];
