@@ -66,6 +66,8 @@ fn no_source_file_is_over_700_lines() {
     let mut files = Vec::new();
     rust_files(&root().join("src"), &mut files);
     rust_files(&root().join("crates"), &mut files);
+    rust_files(&root().join("tests"), &mut files);
+    rust_files(&root().join("benches"), &mut files);
     let long: Vec<String> = files
         .iter()
         .filter_map(|f| {
@@ -430,7 +432,7 @@ fn circles_among(src: &Path, files: &[PathBuf]) -> (Vec<String>, usize) {
 /// the core crate. The scan must find exactly these: a new circle fails, and so does a knot
 /// untied but still listed.
 const APP_KNOTS_LEFT: [&str; 0] = [];
-const CORE_KNOTS_LEFT: [&str; 2] = ["contact::solver", "spectral"];
+const CORE_KNOTS_LEFT: [&str; 1] = ["contact::solver"];
 
 /// The circles' outermost modules (`a -> a::b -> a` is a knot at `a`).
 fn knots(cycles: &[String]) -> BTreeSet<String> {

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use rustfft::{num_complex::Complex, Fft, FftPlanner};
 
-use super::Real;
+use super::precision::Real;
 
 /// Planned real-to-complex and complex-to-real transforms of rows of even length `n`.
 pub(super) struct RealRows<T: Real> {
@@ -265,7 +265,7 @@ mod lanes {
     #[derive(Clone, Copy)]
     pub(super) struct F32x4(__m256);
 
-    impl super::Lanes for F64x2 {
+    impl crate::spectral::halfcomplex::Lanes for F64x2 {
         type Real = f64;
         const WIDTH: usize = 2;
         #[inline(always)]
@@ -316,7 +316,7 @@ mod lanes {
         }
     }
 
-    impl super::Lanes for F32x4 {
+    impl crate::spectral::halfcomplex::Lanes for F32x4 {
         type Real = f32;
         const WIDTH: usize = 4;
         #[inline(always)]

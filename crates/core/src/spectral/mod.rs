@@ -26,35 +26,13 @@ use rayon::prelude::*;
 use rustfft::{num_complex::Complex, num_complex::Complex64, Fft, FftPlanner};
 
 mod halfcomplex;
+mod lines;
+mod precision;
 mod real;
 use halfcomplex::RealRows;
-pub use real::Real;
-use real::Work;
-
-/// How many rows ahead the column gather of [`Fft2::convolve_start`] prefetches.
-const PREFETCH_ROWS: usize = 16;
-
-/// A hint that the cache line holding `at` will be read soon (no effect on results; a
-/// no-op off x86-64).
-#[inline(always)]
-fn prefetch<T>(at: *const Complex<T>) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch never faults, whatever the address.
-    unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(at as *const i8);
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = at;
-}
-
-/// A hint that the real row `row` will be read soon, one prefetch per cache line.
-#[inline(always)]
-fn prefetch_row<T: Real>(row: &[T]) {
-    let step = 64 / std::mem::size_of::<T>();
-    for i in (0..row.len()).step_by(step) {
-        prefetch(row[i..].as_ptr() as *const Complex<T>);
-    }
-}
+use lines::prefetch_row;
+pub use precision::Real;
+use precision::Work;
 
 /// Upper bound on the number of independent work blocks.
 const MAX_BLOCKS: usize = 64;
