@@ -436,25 +436,19 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let known = |e: &str| {
-        [
-            "npy", "x3p", "nc", "gsf", "sdf", "txt", "csv", "asc", "dat", "xyz", "tsv",
-        ]
-        .contains(&e)
-    };
     match content {
         Content::Foreign(what) => return Err(err(format!("is {what}"))),
         Content::Binary => {
             return Err(err(if sniff::suffixes(Content::Text).contains(&ext.as_str()) {
-                format!("is a binary file, not text (a matrix or an x-y-z list); the formats read are {}", measured::READ_EXTENSIONS)
+                format!("is a binary file, not text (a matrix or an x-y-z list); the formats read are {}", measured::formats_read())
             } else {
                 format!(
                     "is a binary file of no format read here; the formats read are {}",
-                    measured::READ_EXTENSIONS
+                    measured::formats_read()
                 )
             }))
         }
-        c if known(&ext) && !sniff::suffixes(c).contains(&ext.as_str()) => {
+        c if measured::is_format_suffix(&ext) && !sniff::suffixes(c).contains(&ext.as_str()) => {
             return Err(err(format!(
                 "is named .{ext} but holds {}: rename it to what it holds, or check that it is the file meant",
                 sniff::name(c)
@@ -487,13 +481,13 @@ pub fn read_measured(path: &Path) -> Result<measured::MeasuredMap, IoError> {
         Content::SdfText | Content::SdfBinary => sdf::read(path).map_err(err),
         _ => {
             let table = read_table(path).map_err(|e| {
-                if known(&ext) {
+                if measured::is_format_suffix(&ext) {
                     err(e)
                 } else {
                     err(format!(
                         "a .{ext} file is not read, and as text it {}; the formats read are {}",
                         e.trim_start_matches("is "),
-                        measured::READ_EXTENSIONS
+                        measured::formats_read()
                     ))
                 }
             })?;

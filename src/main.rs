@@ -80,7 +80,7 @@ enum Command {
     /// Generate one self-affine surface into a .npy file (lengths in grid spacings).
     Surface(cli::tools::SurfaceArgs),
 
-    /// Prepare a measured map: read it (.x3p, .nc, .npy or text), state its units, refuse
+    /// Prepare a measured map: read it (any format of --input), state its units, refuse
     /// or fill missing points, remove its form (mean, plane or curvature) and report its rms
     /// height and slope; -o writes the prepared heights in metres.
     Topography(cli::topography::TopographyArgs),

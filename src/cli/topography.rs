@@ -8,19 +8,27 @@ use std::process::ExitCode;
 pub use wearcoef::io::prepare::{FillArg, Preparation, Prepared};
 
 use super::checks::{check_output_named, write_atomically};
+use wearcoef::io::measured::{formats_read, formats_stating_units};
 
 /// Reading and preparing a measured map (shared by `topography` and `wear`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct PrepareArgs {
-    /// The map: .x3p (ISO 25178-72), .sdf (ISO 25178-71, text or binary), .gsf (Gwyddion),
-    /// .nc (NetCDF 3 as SurfaceTopography writes it), which state their units; a 2-D .npy
-    /// (float32 or float64, any shape, rows along y), a text matrix (.txt, .csv, .asc,
-    /// .dat: one row per line) or an x-y-z list (.xyz: one point per line on a regular
-    /// grid). NaN or the format's invalid flag marks a missing point.
-    #[arg(long)]
+    // The map; its help lists the formats read (`io::measured::FORMATS`).
+    #[arg(long, help = input_help())]
     pub input: PathBuf,
     #[command(flatten)]
     pub preparation: Preparation,
+}
+
+/// `--input`'s help: every format read, and which state their units.
+fn input_help() -> String {
+    format!(
+        "The map: {}. The content decides, not the suffix. Files that state their units: {}; \
+         the others need --height-unit and --pixel-size. NaN or the format's invalid flag marks \
+         a missing point",
+        formats_read(),
+        formats_stating_units()
+    )
 }
 
 /// Read, scale to metres, remove the form and fill (or refuse) missing points.

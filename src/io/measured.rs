@@ -42,12 +42,87 @@ impl MeasuredMap {
     }
 }
 
-/// The file extensions read, for error messages and `--help`.
-pub const READ_EXTENSIONS: &str = ".x3p (ISO 25178-72), .sdf (ISO 25178-71), .gsf (Gwyddion), .nc (NetCDF 3), .npy, text matrix (.txt, .csv, .asc, .dat), x-y-z list (.xyz)";
+/// One topography format read: the one list that every help text and message names.
+pub struct Format {
+    /// What a user calls it (`.x3p`, `text matrix`).
+    pub name: &'static str,
+    /// What it is, in a few words.
+    pub what: &'static str,
+    /// The suffixes it goes by (lower case, no dot).
+    pub suffixes: &'static [&'static str],
+    /// How the file states its units; None where it never does (the user gives them).
+    pub units: Option<&'static str>,
+}
 
-/// The formats that state their units (a .npy never does; text and x-y-z lists only with
-/// the header named), for the message that asks for one.
-pub const STATE_UNITS: &str = ".x3p, .sdf, .gsf, .nc with `unit` attributes, a text matrix with SurfaceTopography's `# Value units:` header, an x-y-z list with Gwyddion's `# Lateral units:` and `# Value units:`";
+/// Every topography format read (`io::read_measured`; the content decides, not the suffix).
+pub const FORMATS: [Format; 7] = [
+    Format {
+        name: ".x3p",
+        what: "ISO 25178-72",
+        suffixes: &["x3p"],
+        units: Some("metres by the standard"),
+    },
+    Format {
+        name: ".sdf",
+        what: "ISO 25178-71, text or binary",
+        suffixes: &["sdf"],
+        units: Some("metres by the standard"),
+    },
+    Format {
+        name: ".gsf",
+        what: "Gwyddion Simple Field",
+        suffixes: &["gsf"],
+        units: Some("`XYUnits` and `ZUnits`"),
+    },
+    Format {
+        name: ".nc",
+        what: "NetCDF 3 as SurfaceTopography writes it",
+        suffixes: &["nc"],
+        units: Some("`unit` attributes"),
+    },
+    Format {
+        name: ".npy",
+        what: "a 2-D float32 or float64 array, rows along y",
+        suffixes: &["npy"],
+        units: None,
+    },
+    Format {
+        name: "text matrix",
+        what: ".txt, .csv, .asc, .dat, .tsv: one row per line",
+        suffixes: &["txt", "csv", "asc", "dat", "tsv"],
+        units: Some("SurfaceTopography's `# Value units:` header"),
+    },
+    Format {
+        name: "x-y-z list",
+        what: ".xyz: one point per line on a regular grid",
+        suffixes: &["xyz"],
+        units: Some("Gwyddion's `# Lateral units:` and `# Value units:` header"),
+    },
+];
+
+/// The formats read, for error messages and `--help`: `.x3p (ISO 25178-72), …`.
+pub fn formats_read() -> String {
+    FORMATS
+        .iter()
+        .map(|f| format!("{} ({})", f.name, f.what))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The formats that state their units and how, for the message that asks for one (a .npy
+/// never does; text and x-y-z lists only with the header named).
+pub fn formats_stating_units() -> String {
+    FORMATS
+        .iter()
+        .filter_map(|f| f.units.map(|u| format!("{} ({u})", f.name)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Whether `suffix` (lower case, no dot) is one a format read goes by.
+pub fn is_format_suffix(suffix: &str) -> bool {
+    FORMATS.iter().any(|f| f.suffixes.contains(&suffix))
+}
 
 /// Metres per unit for a length unit as files spell it (`m`, `mm`, `um`/`µm`/`μm`,
 /// `nm`, `pm`, `A`/`Å`); None if unknown.
@@ -241,6 +316,46 @@ fn apply_header(f: &Found, map: &mut MeasuredMap) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The one list of formats and the reader's content map agree: every suffix a content
+    /// goes by is a format's, and every format's suffix is some content's; every format
+    /// appears in the help's and the messages' list, and only the .npy states no unit.
+    #[test]
+    fn the_format_list_is_the_readers_own() {
+        use crate::io::sniff::{suffixes, Content};
+        let contents = [
+            Content::Npy,
+            Content::Zip,
+            Content::NetCdf3,
+            Content::Gsf,
+            Content::SdfText,
+            Content::SdfBinary,
+            Content::Text,
+        ];
+        let mut by_content: Vec<&str> = contents
+            .iter()
+            .flat_map(|&c| suffixes(c).iter().copied())
+            .collect();
+        let mut by_format: Vec<&str> = FORMATS
+            .iter()
+            .flat_map(|f| f.suffixes.iter().copied())
+            .collect();
+        by_content.sort_unstable();
+        by_content.dedup();
+        by_format.sort_unstable();
+        assert_eq!(by_content, by_format);
+        let read = formats_read();
+        let stating = formats_stating_units();
+        for f in &FORMATS {
+            assert!(read.contains(&format!("{} ({})", f.name, f.what)), "{read}");
+            assert_eq!(stating.contains(f.name), f.units.is_some(), "{stating}");
+            for s in f.suffixes {
+                assert!(is_format_suffix(s));
+            }
+        }
+        assert!(!is_format_suffix("png") && !is_format_suffix(""));
+        assert_eq!(FORMATS.iter().filter(|f| f.units.is_none()).count(), 1);
+    }
 
     fn map(rows: usize, cols: usize) -> MeasuredMap {
         MeasuredMap {

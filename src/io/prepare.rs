@@ -9,7 +9,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::measured::{MeasuredMap, STATE_UNITS};
+use super::measured::{formats_stating_units, MeasuredMap};
 use super::{read_measured, IoError};
 use crate::psd::{log_edges, radial_psd, resolve, PsdBin};
 use crate::topography::{Form, Topography};
@@ -154,7 +154,8 @@ fn height_scale(
         (Some(u), None) => Ok((u.metres(), "height_unit")),
         (None, Some(_)) => Ok((1.0, "the file")),
         (None, None) => Err(bad(format!(
-            "the file states no height unit; give one (--height-unit, or height_unit in pipeline.yaml: m, mm, um, nm). Files that state theirs: {STATE_UNITS}"
+            "the file states no height unit; give one (--height-unit, or height_unit in pipeline.yaml: m, mm, um, nm). Files that state theirs: {}",
+            formats_stating_units()
         ))),
     }
 }
