@@ -4,6 +4,7 @@
 
 use serde_json::json;
 
+use crate::contact::interface::Interface;
 use crate::contact::solver::{Extension, SolverConfig};
 use crate::contact::sweep::{sweep_heights_solved, LoadResult, Solved, MAX_W_OVER_W0};
 use crate::contact::window::sweep_window_solved;
@@ -86,6 +87,16 @@ impl Default for SolveOptions {
 }
 
 impl SolveOptions {
+    /// The interface `--hardness` asks for, checked once (its message names the flag).
+    pub fn interface(&self) -> Result<Interface, InputError> {
+        Interface::from_hardness(self.hardness).map_err(|_| {
+            InputError(format!(
+                "--hardness {} must be > 0 (in units of E*·rms slope, as the loads; omit it, or give inf, for elastic contact)",
+                self.hardness.unwrap_or(f64::NAN)
+            ))
+        })
+    }
+
     /// The solver's configuration for `loads` (W/W0), every option checked.
     pub fn config(&self, loads: &[f64]) -> Result<SolverConfig, InputError> {
         let extension = extension(self, loads)?;
@@ -141,7 +152,7 @@ pub fn sweep(
         options.e_star,
         loads,
         &cfg,
-        options.hardness,
+        options.interface()?,
         |i, solved, _| each(i, solved),
     )?;
     Ok(results)
@@ -159,6 +170,7 @@ pub fn sweep_free(
     mut each: impl FnMut(usize, &Solved) -> Result<(), String>,
 ) -> anyhow::Result<Vec<LoadResult>> {
     let cfg = options.config(loads)?;
+    let interface = options.interface()?;
     let pixel = 1.0 / n as f64;
     let map = Topography::new(n, n, pixel, pixel, heights.to_vec())?;
     let (layout, results) = sweep_window_solved(
@@ -166,7 +178,7 @@ pub fn sweep_free(
         options.e_star,
         loads,
         &cfg,
-        options.hardness,
+        interface,
         |i, solved, _| each(i, solved),
     )?;
     Ok(results
@@ -177,8 +189,8 @@ pub fn sweep_free(
             area_fraction: r.area_fraction,
             n_contact_px: r.n_contact_px,
             n_saturated_px: r.n_saturated_px,
-            ceiling: (options.hardness)
-                .filter(|h| h.is_finite())
+            ceiling: interface
+                .hardness()
                 .map(|h| h * options.e_star * layout.rms_slope),
             report: r.report,
             seconds: r.seconds,
@@ -205,23 +217,17 @@ fn extension(args: &SolveOptions, loads: &[f64]) -> Result<Extension, InputError
             i + 1
                 )));
     }
-    if let Some(h) = args.hardness {
-        if h.is_nan() || h <= 0.0 {
-            return Err(InputError(format!(
-                "--hardness {h} must be > 0 (in units of E*·rms slope, as the loads; omit it, or give inf, for elastic contact)"
-            )));
-        }
-        if args.plain_cg && h.is_finite() {
-            return Err(InputError(
-                "--plain-cg with --hardness: the plain iteration stalls under a pressure ceiling on rough surfaces (512², hardness 1 and 0.5, docs/VALIDATION.md); drop --plain-cg for the default preconditioned iteration".into(),
-            ));
-        }
-        if let Some((i, w)) = loads.iter().enumerate().find(|(_, w)| **w > h) {
-            return Err(InputError(format!(
-                "--loads: load {} is {w}, above --hardness {h}: a pressure capped at the hardness cannot carry a mean above it",
-                i + 1
-            )));
-        }
+    let interface = args.interface()?;
+    if args.plain_cg && !interface.is_elastic() {
+        return Err(InputError(
+            "--plain-cg with --hardness: the plain iteration stalls under a pressure ceiling on rough surfaces (512², hardness 1 and 0.5, docs/VALIDATION.md); drop --plain-cg for the default preconditioned iteration".into(),
+        ));
+    }
+    if let (Some((i, w)), Some(h)) = (interface.first_load_above(loads), interface.hardness()) {
+        return Err(InputError(format!(
+            "--loads: load {} is {w}, above --hardness {h}: a pressure capped at the hardness cannot carry a mean above it",
+            i + 1
+        )));
     }
     if !(args.e_star.is_finite() && args.e_star > 0.0) {
         return Err(InputError(format!(

@@ -9,8 +9,9 @@ use serde_json::{json, Value};
 
 use super::{Inputs, Stage};
 use crate::contact::elastic::ElasticOperator;
+use crate::contact::interface::Interface;
 use crate::contact::solver::SolverConfig;
-use crate::contact::sweep::{pack_contact, sweep_heights_with_hardness, LoadResult};
+use crate::contact::sweep::{pack_contact, sweep_heights_under, LoadResult};
 use crate::contact::window::sweep_window;
 use crate::grid::Grid;
 use crate::store::table::{col, load_columns, write};
@@ -32,10 +33,14 @@ pub struct ContactJob {
     /// Solver tolerance on the complementarity error, and iteration cap.
     pub tolerance: f64,
     pub max_iterations: u32,
-    /// The hardness (units of W/W0) of a perfectly plastic interface; absent (and then not
-    /// in the key) for elastic contact.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hardness: Option<f64>,
+    /// The interface: written as the hardness (units of W/W0) of a perfectly plastic one,
+    /// absent (and then not in the key) for elastic contact.
+    #[serde(
+        default,
+        rename = "hardness",
+        skip_serializing_if = "Interface::is_elastic"
+    )]
+    pub interface: Interface,
 }
 
 /// File name of the packed contact map of load `index`.
@@ -76,13 +81,13 @@ impl Stage for Contact {
             ..SolverConfig::default()
         };
         let row_bytes = n.div_ceil(8);
-        let (slope, results) = sweep_heights_with_hardness(
+        let (slope, results) = sweep_heights_under(
             &heights,
             n,
             job.e_star,
             &job.loads,
             &cfg,
-            job.hardness,
+            job.interface,
             |index, pressure, result| {
                 let packed = pack_contact(pressure, n);
                 crate::io::write_u8(&dir.join(contact_file(index)), &[n, row_bytes], packed)
@@ -154,7 +159,10 @@ fn compute_window(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Resu
     let (rows, cols) = (map.rows, map.cols);
     // As the window computes it, (𝓗·h'_rms)·E*, so that a saturated node's pressure equals
     // it to the bit.
-    let ceiling = job.hardness.map(|h| (h * map.rms_slope()) * job.e_star);
+    let ceiling = job
+        .interface
+        .hardness()
+        .map(|h| (h * map.rms_slope()) * job.e_star);
     let bits = |on: &dyn Fn(f64) -> bool, p: &[f64]| -> Vec<u8> {
         p.iter().map(|&v| u8::from(on(v))).collect()
     };
@@ -163,7 +171,7 @@ fn compute_window(job: &ContactJob, inputs: &Inputs, dir: &Path) -> anyhow::Resu
         job.e_star,
         &job.loads,
         &cfg,
-        job.hardness,
+        job.interface,
         |index, pressure, _| {
             let write = |name: String, values: Vec<u8>| {
                 crate::io::write_u8(&dir.join(name), &[rows, cols], values)

@@ -14,6 +14,7 @@ use polars::prelude::{DataFrame, ParquetWriter};
 use serde_json::json;
 
 use crate::clusters::{self, Boundary, Connectivity};
+use crate::contact::interface::Interface;
 use crate::contact::solver::SolverConfig;
 use crate::contact::window::sweep_window;
 use crate::io::prepare::Prepared;
@@ -309,7 +310,7 @@ pub fn compute(
     let pixel_m2 = map.dx * map.dy;
     let area_m2 = (map.rows * map.cols) as f64 * pixel_m2;
     let a_star_px = a_star_m2 / pixel_m2;
-    let hardness = hardness_pa.map(|h| h / (e_star * slope));
+    let interface = Interface::from_hardness(hardness_pa.map(|h| h / (e_star * slope)))?;
     let cfg = SolverConfig {
         tolerance: s.tolerance,
         ..SolverConfig::default()
@@ -318,7 +319,7 @@ pub fn compute(
     let mut rows_out = Vec::new();
     let mut cluster_rows = ClusterRows::default();
     let (rows, cols) = (map.rows, map.cols);
-    let (layout, _) = sweep_window(&map, e_star, &loads, &cfg, hardness, |i, p, r| {
+    let (layout, _) = sweep_window(&map, e_star, &loads, &cfg, interface, |i, p, r| {
         on_pressure(p)?;
         let contact: Vec<bool> = p.iter().map(|&v| v > 0.0).collect();
         let labelling =
@@ -375,7 +376,7 @@ pub fn compute(
     );
     report["contact"] = json!({
         "half_space": "free boundary (zero-padded), the map's outside never in contact",
-        "e_star_pa": e_star, "hardness_pa": hardness_pa, "hardness_w_over_w0": hardness,
+        "e_star_pa": e_star, "hardness_pa": hardness_pa, "hardness_w_over_w0": interface.hardness(),
         "tolerance": s.tolerance, "layout": layout,
         "w0_n": e_star * slope * area_m2, "map_area_um2": area_m2 * 1e12,
         "a_star_um2": a_star_m2 * 1e12, "a_star_px": a_star_px,

@@ -11,6 +11,7 @@
 //! clusters (docs/CONVENTIONS.md says why).
 
 use crate::clusters::{self, Boundary, Connectivity};
+use crate::contact::interface::Interface;
 use crate::contact::solver::SolverConfig;
 use crate::contact::window::sweep_window;
 use crate::statistics::{wear_at, WearAt};
@@ -106,7 +107,8 @@ pub fn solve(
     let slope = map.rms_slope();
     let scale = physics.e_star_pa * slope;
     let loads: Vec<f64> = pressures_pa.iter().map(|p| p / scale).collect();
-    let hardness = physics.hardness_pa.map(|h| h / scale);
+    let interface = Interface::from_hardness(physics.hardness_pa.map(|h| h / scale))
+        .map_err(|e| e.to_string())?;
     let a_star_px = physics.a_star_m2 / (map.dx * map.dy);
     let mut out = Vec::with_capacity(loads.len());
     sweep_window(
@@ -114,7 +116,7 @@ pub fn solve(
         physics.e_star_pa,
         &loads,
         &physics.cfg,
-        hardness,
+        interface,
         |_, p, _| {
             let contact: Vec<bool> = p.iter().map(|&v| v > 0.0).collect();
             let l = clusters::label_with(

@@ -5,6 +5,7 @@
 
 use std::f64::consts::PI;
 
+use wearcoef::contact::interface::Interface;
 use wearcoef::contact::reference::Hertz;
 use wearcoef::contact::solver::SolverConfig;
 use wearcoef::contact::window::sweep_window;
@@ -41,10 +42,17 @@ fn solve(map: &Topography, load: f64) -> (Vec<f64>, usize) {
         ..SolverConfig::default()
     };
     let mut pressure = Vec::new();
-    let (_, results) = sweep_window(map, E_STAR, &[w_over_w0], &cfg, None, |_, p, _| {
-        pressure = p.to_vec();
-        Ok(())
-    })
+    let (_, results) = sweep_window(
+        map,
+        E_STAR,
+        &[w_over_w0],
+        &cfg,
+        Interface::Elastic,
+        |_, p, _| {
+            pressure = p.to_vec();
+            Ok(())
+        },
+    )
     .unwrap();
     let r = &results[0];
     let carried: f64 = pressure.iter().sum::<f64>() * pixel;
@@ -209,8 +217,15 @@ fn far_beyond_full_contact_the_embedding_holds() {
             tolerance: 1e-10,
             ..SolverConfig::default()
         };
-        let (_, results) = sweep_window(&map, E_STAR, &[0.5, 50.0], &cfg, None, |_, _, _| Ok(()))
-            .unwrap_or_else(|e| panic!("pixels {DX} × {dy} m: {e}"));
+        let (_, results) = sweep_window(
+            &map,
+            E_STAR,
+            &[0.5, 50.0],
+            &cfg,
+            Interface::Elastic,
+            |_, _, _| Ok(()),
+        )
+        .unwrap_or_else(|e| panic!("pixels {DX} × {dy} m: {e}"));
         assert_eq!(results[1].n_contact_px, 40 * 50, "full contact");
         assert!(results[0].n_contact_px < 40 * 50);
     }
@@ -222,6 +237,14 @@ fn window_refuses_what_it_cannot_solve() {
     let cfg = SolverConfig::default();
     let mut map = sphere(20, 30);
     map.heights[31] = f64::NAN;
-    let e = sweep_window(&map, E_STAR, &[0.01], &cfg, None, |_, _, _| Ok(())).unwrap_err();
+    let e = sweep_window(
+        &map,
+        E_STAR,
+        &[0.01],
+        &cfg,
+        Interface::Elastic,
+        |_, _, _| Ok(()),
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("row 1, column 1"), "{e}");
 }

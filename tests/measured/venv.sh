@@ -3,7 +3,9 @@
 # made if it does not import; shared by the measured suite and the Python package's tests.
 set -euo pipefail
 venv="$1"
-if ! "$venv/bin/python" -c "import SurfaceTopography, ContactMechanics, gsffile, pandas, powerlaw; assert powerlaw.__version__ == '2.0.0'" 2>/dev/null; then
+# A venv moved since it was made imports but its pip no longer runs (its shebang): remade.
+if ! "$venv/bin/python" -c "import SurfaceTopography, ContactMechanics, gsffile, pandas, powerlaw; assert powerlaw.__version__ == '2.0.0'" 2>/dev/null ||
+    ! "$venv/bin/pip" --version >/dev/null 2>&1; then
     echo "creating the peers' venv in $venv (SurfaceTopography, ContactMechanics, gsffile, powerlaw from PyPI)"
     rm -rf "$venv"
     python3 -m venv "$venv"

@@ -18,6 +18,7 @@ mod figures;
 
 pub use super::sources::SourceFile;
 use crate::config::{ExponentLoads, Pipeline, StudyPlan};
+use crate::contact::interface::Interface;
 use crate::stages::analytic::{Analytic, AnalyticJob};
 use crate::stages::clusters::{Clusters, ClustersJob};
 use crate::stages::contact::{Contact, ContactJob};
@@ -249,6 +250,8 @@ fn study_instances<'a>(
         }
         _ => None,
     };
+    // The configuration checked the hardness; from here on the interface carries it.
+    let interface = Interface::from_hardness(plan.hardness)?;
     let (mut contacts, mut clusters) = (Vec::new(), Vec::new());
     for (r, surface) in surfaces.iter().enumerate() {
         let r = r as u32;
@@ -258,7 +261,7 @@ fn study_instances<'a>(
             e_star: plan.e_star,
             tolerance: plan.tolerance,
             max_iterations: plan.max_iterations,
-            hardness: plan.hardness,
+            interface,
         };
         let contact = b.add::<Contact>(&job, vec![surface.clone()], studies, Some(r), None);
         let job = ClustersJob {
@@ -267,7 +270,7 @@ fn study_instances<'a>(
             lambda_s_px: plan.surface.lambda_s_px,
             realization: r,
             connectivity: Default::default(),
-            saturated: plan.hardness.is_some(),
+            saturated: !interface.is_elastic(),
             window,
         };
         clusters.push(b.add::<Clusters>(&job, vec![contact.clone()], studies, Some(r), None));

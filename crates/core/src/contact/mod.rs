@@ -1,8 +1,10 @@
 //! Frictionless normal contact of a rigid rough surface on an elastic half-space:
-//! the periodic FFT operator ([`elastic`]), the Polonsky–Keer solver ([`solver`]), load
+//! the periodic FFT operator ([`elastic`]), the Polonsky–Keer solver ([`solver`]) under an
+//! [`interface`] law, load
 //! sweeps and contact-map packing ([`sweep`]) and analytic references ([`reference`]).
 
 pub mod elastic;
+pub mod interface;
 pub mod padded;
 pub mod reference;
 pub mod solver;

@@ -3,9 +3,8 @@
 //! two, the first warm step scaled from the last one).
 
 use super::elastic::ElasticOperator;
-use super::solver::{
-    Ceiling, Constraint, ContactError, NonNegative, Operator, SolveReport, Solver, SolverConfig,
-};
+use super::interface::{ConstraintTask, Interface};
+use super::solver::{Constraint, ContactError, Operator, SolveReport, Solver, SolverConfig};
 use crate::grid::{Grid, GridError};
 
 /// One solved load.
@@ -73,23 +72,23 @@ pub fn sweep_heights(
     cfg: &SolverConfig,
     on_load: impl FnMut(usize, &[f64], &LoadResult) -> Result<(), String>,
 ) -> Result<(f64, Vec<LoadResult>), SweepError> {
-    sweep_heights_with_hardness(heights, n, e_star, loads, cfg, None, on_load)
+    sweep_heights_under(heights, n, e_star, loads, cfg, Interface::Elastic, on_load)
 }
 
-/// [`sweep_heights`] under a perfectly plastic interface when `hardness` is given: the
+/// [`sweep_heights`] under `interface`: perfectly plastic, the
 /// pressure is capped at `𝓗 = hardness·E*·rms slope` (hardness in the units of W/W0, so that
 /// `p̄/𝓗 = (W/W0)/hardness`); a load above the hardness is refused before any work.
 /// `None` (or `+∞`) is elastic contact, with exactly the elastic solver's bits.
-pub fn sweep_heights_with_hardness(
+pub fn sweep_heights_under(
     heights: &[f64],
     n: usize,
     e_star: f64,
     loads: &[f64],
     cfg: &SolverConfig,
-    hardness: Option<f64>,
+    interface: Interface,
     mut on_load: impl FnMut(usize, &[f64], &LoadResult) -> Result<(), String>,
 ) -> Result<(f64, Vec<LoadResult>), SweepError> {
-    sweep_heights_solved(heights, n, e_star, loads, cfg, hardness, |i, s, r| {
+    sweep_heights_solved(heights, n, e_star, loads, cfg, interface, |i, s, r| {
         on_load(i, s.pressure, r)
     })
 }
@@ -116,7 +115,7 @@ impl<'a> Solved<'a> {
     }
 }
 
-/// [`sweep_heights_with_hardness`] handing on each load as [`Solved`], so that its gap can
+/// [`sweep_heights_under`] handing on each load as [`Solved`], so that its gap can
 /// be read as well as its pressure (the same bits of pressure).
 pub fn sweep_heights_solved(
     heights: &[f64],
@@ -124,25 +123,10 @@ pub fn sweep_heights_solved(
     e_star: f64,
     loads: &[f64],
     cfg: &SolverConfig,
-    hardness: Option<f64>,
+    interface: Interface,
     mut on_load: impl FnMut(usize, &Solved, &LoadResult) -> Result<(), String>,
 ) -> Result<(f64, Vec<LoadResult>), SweepError> {
-    let hardness = hardness.filter(|h| *h != f64::INFINITY);
-    if let Some(h) = hardness {
-        if !(h.is_finite() && h > 0.0) {
-            return Err(ContactError::BadConfig(format!(
-                "hardness {h} must be > 0 (in units of E*·rms slope, as W/W0; absent or inf is elastic)"
-            ))
-            .into());
-        }
-        if let Some((index, &w)) = loads.iter().enumerate().find(|(_, &w)| w > h) {
-            return Err(SweepError::AboveHardness {
-                index,
-                w_over_w0: w,
-                hardness: h,
-            });
-        }
-    }
+    check_loads_carried(interface, loads)?;
     if heights.len() != n * n {
         return Err(ContactError::BadLength {
             expected: n * n,
@@ -200,36 +184,78 @@ pub fn sweep_heights_solved(
         on_load(i, &Solved::new(field, gap), &r)
     };
     let slope_solved = slope / to_h;
-    let mut results = match hardness {
-        None => sweep(
-            &op,
-            &scaled,
-            slope_solved,
-            loads,
-            cfg,
-            NonNegative,
-            |i, s, r| pass_on(i, s.pressure(), &|| s.gap().map(|g| g * to_h).collect(), r),
-        )?,
-        Some(h) => {
-            // In the solved units: p_max = hardness·E*·slope, E* and slope both scaled.
-            let ceiling = Ceiling::new(h * op.e_star() * slope_solved)?;
-            sweep(
-                &op,
-                &scaled,
-                slope_solved,
-                loads,
-                cfg,
-                ceiling,
-                |i, s, r| pass_on(i, s.pressure(), &|| s.gap().map(|g| g * to_h).collect(), r),
-            )?
-        }
+    let task = SweepTask {
+        op: &op,
+        heights: &scaled,
+        slope: slope_solved,
+        loads,
+        cfg,
+        gap_scale: to_h,
+        on_load: &mut pass_on,
     };
+    // In the solved units: p_max = hardness·E*·slope, E* and slope both scaled.
+    let mut results = interface.dispatch(|h| h * op.e_star() * slope_solved, task)??;
     for r in &mut results {
         r.mean_pressure *= to_p;
         r.ceiling = r.ceiling.map(|c| c * to_p);
         r.report.mean_pressure *= to_p;
     }
     Ok((slope, results))
+}
+
+/// A load the interface cannot carry (a mean pressure above the hardness), refused before
+/// any work.
+pub(super) fn check_loads_carried(interface: Interface, loads: &[f64]) -> Result<(), SweepError> {
+    match (interface.first_load_above(loads), interface.hardness()) {
+        (Some((index, w_over_w0)), Some(hardness)) => Err(SweepError::AboveHardness {
+            index,
+            w_over_w0,
+            hardness,
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// One [`sweep`] under the constraint an [`Interface`] dispatches to: each converged load's
+/// pressure and, on demand, its gap (times `gap_scale`) handed to `on_load`.
+pub(super) struct SweepTask<'a, O, F> {
+    pub op: &'a O,
+    pub heights: &'a [f64],
+    pub slope: f64,
+    pub loads: &'a [f64],
+    pub cfg: &'a SolverConfig,
+    pub gap_scale: f64,
+    pub on_load: F,
+}
+
+impl<O, F> ConstraintTask for SweepTask<'_, O, F>
+where
+    O: Operator,
+    F: FnMut(usize, &[f64], &dyn Fn() -> Vec<f64>, &LoadResult) -> Result<(), String>,
+{
+    type Output = Result<Vec<LoadResult>, SweepError>;
+
+    fn run<C: Constraint>(mut self, constraint: C) -> Self::Output {
+        let scale = self.gap_scale;
+        sweep(
+            self.op,
+            self.heights,
+            self.slope,
+            self.loads,
+            self.cfg,
+            constraint,
+            |i, s, r| {
+                let gap = || -> Vec<f64> {
+                    if scale == 1.0 {
+                        s.gap().collect()
+                    } else {
+                        s.gap().map(|g| g * scale).collect()
+                    }
+                };
+                (self.on_load)(i, s.pressure(), &gap, r)
+            },
+        )
+    }
 }
 
 /// `2^k` with `k` the integer nearest `log2 x` (x finite and > 0).

@@ -19,9 +19,12 @@
 //! window's mean pressure is `p̄ = (W/W0)·E*·rms slope`. Solved in units where the square
 //! is the unit box and `E* = 1`; pressures are returned in the unit of the `e_star` given.
 
+use super::interface::Interface;
 use super::padded::PaddedOperator;
-use super::solver::{Ceiling, ContactError, NonNegative, SolveReport, SolverConfig};
-use super::sweep::{check_rms_slope, sweep, LoadResult, Solved, SweepError};
+use super::solver::{ContactError, SolveReport, SolverConfig};
+use super::sweep::{
+    check_loads_carried, check_rms_slope, LoadResult, Solved, SweepError, SweepTask,
+};
 use crate::grid::Grid;
 use crate::topography::Topography;
 
@@ -60,18 +63,18 @@ pub struct WindowLayout {
 }
 
 /// The contact of `map` (no missing point; pixels `dx × dy`, square or not) at every load `W/W0` of `loads`
-/// on the free-boundary half-space of modulus `e_star`, capped at `hardness·E*·rms slope`
-/// when a hardness (in the units of W/W0) is given. After each converged load,
+/// on the free-boundary half-space of modulus `e_star`, under `interface` (perfectly plastic:
+/// capped at `hardness·E*·rms slope`, the hardness in the units of W/W0). After each converged load,
 /// `on_load(index, window pressure row-major rows × cols, result)`.
 pub fn sweep_window(
     map: &Topography,
     e_star: f64,
     loads: &[f64],
     cfg: &SolverConfig,
-    hardness: Option<f64>,
+    interface: Interface,
     mut on_load: impl FnMut(usize, &[f64], &WindowLoad) -> Result<(), String>,
 ) -> Result<(WindowLayout, Vec<WindowLoad>), SweepError> {
-    sweep_window_solved(map, e_star, loads, cfg, hardness, |i, s, r| {
+    sweep_window_solved(map, e_star, loads, cfg, interface, |i, s, r| {
         on_load(i, s.pressure, r)
     })
 }
@@ -83,11 +86,12 @@ pub fn sweep_window_solved(
     e_star: f64,
     loads: &[f64],
     cfg: &SolverConfig,
-    hardness: Option<f64>,
+    interface: Interface,
     mut on_load: impl FnMut(usize, &Solved, &WindowLoad) -> Result<(), String>,
 ) -> Result<(WindowLayout, Vec<WindowLoad>), SweepError> {
     let (rows, cols) = (map.rows, map.cols);
     check_map(map, e_star)?;
+    check_loads_carried(interface, loads)?;
     let slope = map.rms_slope();
     check_rms_slope(slope)?;
     let largest = loads.iter().copied().fold(0.0, f64::max);
@@ -167,30 +171,18 @@ pub fn sweep_window_solved(
         out.push(pass_on(i, s, r)?);
         Ok(())
     };
-    let solve = |constraint, each: &mut EachLoad| {
-        run(
-            &op,
-            &square,
-            solve_slope,
-            &square_loads,
-            &square_cfg,
-            constraint,
-            each,
-        )
+    let task = SweepTask {
+        op: &op,
+        heights: &square,
+        slope: solve_slope,
+        loads: &square_loads,
+        cfg: &square_cfg,
+        gap_scale: 1.0,
+        on_load: |i, p: &[f64], gap: &dyn Fn() -> Vec<f64>, r: &LoadResult| {
+            each(i, &Solved::new(p, gap), r)
+        },
     };
-    match hardness.filter(|h| *h != f64::INFINITY) {
-        None => solve(Bound::Elastic, &mut each)?,
-        Some(h) => {
-            if let Some((index, &w)) = loads.iter().enumerate().find(|(_, &w)| w > h) {
-                return Err(SweepError::AboveHardness {
-                    index,
-                    w_over_w0: w,
-                    hardness: h,
-                });
-            }
-            solve(Bound::Ceiling(Ceiling::new(h * solve_slope)?), &mut each)?
-        }
-    }
+    interface.dispatch(|h| h * solve_slope, task)??;
     Ok((layout, out))
 }
 
@@ -264,34 +256,4 @@ fn check_map(map: &Topography, e_star: f64) -> Result<(), SweepError> {
         );
     }
     Ok(())
-}
-
-/// What is done with each converged load: its index, the square's pressure, its result.
-type EachLoad<'a> = dyn FnMut(usize, &Solved, &LoadResult) -> Result<(), String> + 'a;
-
-/// The constraint on the pressure: none above zero, or a ceiling.
-enum Bound {
-    Elastic,
-    Ceiling(Ceiling),
-}
-
-/// One sweep on the square under `bound`, each converged load handed to `each`.
-fn run(
-    op: &PaddedOperator,
-    square: &[f64],
-    slope: f64,
-    loads: &[f64],
-    cfg: &SolverConfig,
-    bound: Bound,
-    each: &mut EachLoad,
-) -> Result<(), SweepError> {
-    match bound {
-        Bound::Elastic => sweep(op, square, slope, loads, cfg, NonNegative, |i, s, r| {
-            each(i, &Solved::new(s.pressure(), &|| s.gap().collect()), r)
-        }),
-        Bound::Ceiling(c) => sweep(op, square, slope, loads, cfg, c, |i, s, r| {
-            each(i, &Solved::new(s.pressure(), &|| s.gap().collect()), r)
-        }),
-    }
-    .map(|_| ())
 }
