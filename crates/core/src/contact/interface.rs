@@ -7,7 +7,7 @@
 //! A new law (adhesion, a hardening cap) is a variant here, its constraint in the solver's
 //! folder, and its field in the configuration.
 
-use super::solver::{Ceiling, Constraint, ContactError, NonNegative};
+use super::solver::{Ceiling, Complementarity, ContactError, NonNegative};
 
 /// What bounds the contact pressure.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -25,7 +25,7 @@ pub enum Interface {
 /// each interface's solve is compiled for its own constraint.
 pub trait ConstraintTask {
     type Output;
-    fn run<C: Constraint>(self, constraint: C) -> Self::Output;
+    fn run<C: Complementarity>(self, constraint: C) -> Self::Output;
 }
 
 impl Interface {
@@ -103,7 +103,7 @@ mod tests {
     struct Ceil;
     impl ConstraintTask for Ceil {
         type Output = f64;
-        fn run<C: Constraint>(self, c: C) -> f64 {
+        fn run<C: Complementarity>(self, c: C) -> f64 {
             c.project(1e300)
         }
     }

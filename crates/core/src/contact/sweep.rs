@@ -4,7 +4,7 @@
 
 use super::elastic::ElasticOperator;
 use super::interface::{ConstraintTask, Interface};
-use super::solver::{Constraint, ContactError, Operator, SolveReport, Solver, SolverConfig};
+use super::solver::{Complementarity, ContactError, Operator, SolveReport, Solver, SolverConfig};
 use crate::grid::{Grid, GridError};
 
 /// One solved load.
@@ -235,7 +235,7 @@ where
 {
     type Output = Result<Vec<LoadResult>, SweepError>;
 
-    fn run<C: Constraint>(mut self, constraint: C) -> Self::Output {
+    fn run<C: Complementarity>(mut self, constraint: C) -> Self::Output {
         let scale = self.gap_scale;
         sweep(
             self.op,
@@ -245,13 +245,8 @@ where
             self.cfg,
             constraint,
             |i, s, r| {
-                let gap = || -> Vec<f64> {
-                    if scale == 1.0 {
-                        s.gap().collect()
-                    } else {
-                        s.gap().map(|g| g * scale).collect()
-                    }
-                };
+                // `g · 1` is `g`, bit for bit: one form for every scale.
+                let gap = || -> Vec<f64> { s.gap().map(|g| g * scale).collect() };
                 (self.on_load)(i, s.pressure(), &gap, r)
             },
         )
@@ -303,7 +298,7 @@ pub fn check_rms_slope(rms_slope: f64) -> Result<(), SweepError> {
 /// converged load, `on_load(index, solver, result)` may store fields; the first load that
 /// does not converge stops the sweep with an error (nothing is passed on for it).
 #[allow(clippy::too_many_arguments)]
-pub fn sweep<C: Constraint, O: Operator>(
+pub fn sweep<C: Complementarity, O: Operator>(
     op: &O,
     heights: &[f64],
     rms_slope: f64,
@@ -339,13 +334,14 @@ pub fn sweep<C: Constraint, O: Operator>(
             });
         }
         let n_contact_px = solver.contact_count();
+        let saturation = solver.saturation();
         let result = LoadResult {
             w_over_w0: w,
             mean_pressure,
             area_fraction: n_contact_px as f64 / nodes,
             n_contact_px,
-            n_saturated_px: C::BOUNDED.then(|| solver.saturated_count()),
-            ceiling: C::BOUNDED.then(|| solver.ceiling()),
+            n_saturated_px: saturation.map(|(_, count)| count),
+            ceiling: saturation.map(|(max, _)| max),
             report,
             seconds,
         };

@@ -2,53 +2,47 @@
 //! nodes the conjugate gradient moves, and which may enter the free set.
 //!
 //! The solver is generic over it ([`super::Solver`]`<C>`): every pass that projects a
-//! pressure or asks whether a node is in contact calls its methods, which inline into the
-//! scalar and AVX2 row kernels alike, so a constraint costs nothing at run time and
-//! [`NonNegative`] gives exactly the bits the solver always had. A new constraint implements
-//! [`Constraint`] in a file of its own and is passed to [`super::Solver::with_constraint`];
-//! the perfectly plastic ceiling `0 ≤ p ≤ p_max` (`ceiling.rs`) is one, and what a bounded
-//! constraint changes beyond these methods is in `bounded.rs` (docs/ARCHITECTURE.md).
+//! pressure or asks whether a node is in contact calls its rules, written once over lanes
+//! ([`Lanes`]) and inlined into the scalar and AVX2 row kernels alike, so a constraint costs
+//! nothing at run time and [`NonNegative`] gives exactly the bits the solver always had. A
+//! new constraint implements [`Constraint`] and its part in the solve
+//! ([`super::complementarity::Complementarity`]) in a folder of its own, as the perfectly
+//! plastic ceiling `0 ≤ p ≤ p_max` does (`ceiling/`), and is passed to
+//! [`super::Solver::with_constraint`] (docs/ARCHITECTURE.md).
 
-#[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::*;
+use super::lanes::Lanes;
 
-/// The admissible set of the pressure at one node. The scalar and AVX2 forms must do the same
-/// operations, so that both give the same bits (the row kernels' tests compare them); a
-/// pressure of 0 must be inactive (the row kernels pad their tails with it).
+/// The admissible set of the pressure at one node. Each rule is written once, generic over
+/// [`Lanes`]: the scalar code runs it on one `f64`, the AVX2 kernels on four lanes, and both
+/// give the same bits (the rules' test, [`tests::check`], compares them). A pressure of 0 must
+/// be inactive (the row kernels pad their tails with it).
 pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static {
     /// The admissible pressure nearest to `p` (NaN maps to an admissible value).
-    fn project(self, p: f64) -> f64;
+    fn project<V: Lanes>(self, p: V) -> V;
 
     /// Whether a node of pressure `p` is active: in contact and free to move both ways. The
     /// conjugate gradient works on the active set; the gradient's statistics, the plain
     /// direction and the load offset's slope are taken over it.
-    fn active(self, p: f64) -> bool;
+    fn active<V: Lanes>(self, p: V) -> V::Mask;
 
-    /// Whether the constraint has a ceiling `p ≤ p_max` ([`Self::ceiling`]). A bounded
-    /// constraint is not positively homogeneous, so the solver never rescales its pressures:
-    /// it restores the load by an offset `p ← P(p + c)` and measures the error on both
-    /// bounds (`Solver::complementarity_error`). A compile-time constant: the unbounded
-    /// solver's code is unchanged by it.
-    const BOUNDED: bool = false;
-
-    /// The ceiling `p_max` (`+∞` when unbounded).
+    /// The ceiling `p_max` of the pressure, if it has one.
     #[inline(always)]
-    fn ceiling(self) -> f64 {
-        f64::INFINITY
+    fn ceiling(self) -> Option<f64> {
+        None
     }
 
-    /// Whether a node of pressure `p` sits on the ceiling (never when unbounded).
+    /// Whether a node of pressure `p` sits on the ceiling (never without one).
     #[inline(always)]
-    fn saturated(self, _p: f64) -> bool {
-        false
+    fn saturated<V: Lanes>(self, p: V) -> V::Mask {
+        p.none()
     }
 
     /// Whether a node of pressure `p` and separation `w = u − h` is in the free set of the
     /// preconditioned iteration, given the level `mean` of the gradient and the entry
     /// threshold `entry ≤ mean`: the active nodes and those that interpenetrate.
     #[inline(always)]
-    fn free(self, p: f64, w: f64, entry: f64, _mean: f64) -> bool {
-        self.active(p) || w < entry
+    fn free<V: Lanes>(self, p: V, w: V, entry: V, _mean: V) -> V::Mask {
+        self.active(p) | w.lt(entry)
     }
 
     /// Whether a load offset moves a node of pressure `p` ([`Self::offset`]); `wide` asks
@@ -73,60 +67,34 @@ pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static
     }
 
     /// The plain iteration's re-admission after the step: `kept` is the projected pressure,
-    /// `gc = w − level` the gradient, `tau` the step. A node the projection left at 0 where
-    /// the surfaces interpenetrate (`gc < 0`) re-enters with `−τ gc`; the others keep `kept`.
+    /// `gc = w − level` the gradient, `neg_tau` the step `−τ`. A node the projection left at
+    /// 0 where the surfaces interpenetrate (`gc < 0`) re-enters with `−τ gc`; the others keep
+    /// `kept`.
     #[inline(always)]
-    fn readmit(self, kept: f64, gc: f64, tau: f64) -> f64 {
-        if kept == 0.0 && gc < 0.0 {
-            -tau * gc
-        } else {
-            kept
-        }
+    fn readmit<V: Lanes>(self, kept: V, gc: V, neg_tau: V) -> V {
+        let zero = kept.splat(0.0);
+        V::select(kept.eq(zero) & gc.lt(zero), neg_tau * gc, kept)
     }
 
-    /// [`Self::project`] on four lanes.
-    ///
-    /// # Safety
-    /// AVX2 must be present; call it from a function compiled with AVX2, into which it
-    /// inlines.
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn project_avx2(self, p: __m256d) -> __m256d;
-
-    /// [`Self::active`] on four lanes: all bits set where active, none elsewhere.
-    ///
-    /// # Safety
-    /// As [`Self::project_avx2`].
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn active_avx2(self, p: __m256d) -> __m256d;
-
-    /// [`Self::free`] on four lanes, as a mask.
-    ///
-    /// # Safety
-    /// As [`Self::project_avx2`].
-    #[cfg(target_arch = "x86_64")]
+    /// Adds a node of pressure `p` and gradient `g` to the sums that the error and the level
+    /// of the gradient are made of, beyond those over the active set: `min g` and `Σpg` over
+    /// every node (`sums`' saturated sums are a bounded constraint's own).
     #[inline(always)]
-    unsafe fn free_avx2(self, p: __m256d, w: __m256d, entry: __m256d, _mean: __m256d) -> __m256d {
-        // SAFETY: the caller guarantees AVX2.
-        unsafe { _mm256_or_pd(self.active_avx2(p), _mm256_cmp_pd::<_CMP_LT_OQ>(w, entry)) }
+    fn add_to_level<V: Lanes>(self, p: V, g: V, sums: LevelSums<'_, V>) {
+        *sums.min = g.min(*sums.min);
+        *sums.spg = *sums.spg + p * g;
     }
+}
 
-    /// [`Self::readmit`] on four lanes (`neg_tau` is `−τ`).
-    ///
-    /// # Safety
-    /// As [`Self::project_avx2`].
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn readmit_avx2(self, kept: __m256d, gc: __m256d, neg_tau: __m256d) -> __m256d {
-        // SAFETY: the caller guarantees AVX2.
-        unsafe {
-            let zero = _mm256_setzero_pd();
-            let enter = _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_EQ_OQ>(kept, zero),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(gc, zero),
-            );
-            _mm256_blendv_pd(kept, _mm256_mul_pd(neg_tau, gc), enter)
-        }
-    }
+/// The accumulators [`Constraint::add_to_level`] adds a node to, one lane's (or four's):
+/// `min g` and `Σpg` over the nodes a constraint says, and over its saturated nodes their
+/// number, `Σg` and `max g`.
+pub struct LevelSums<'a, V> {
+    pub min: &'a mut V,
+    pub spg: &'a mut V,
+    pub sat_n: &'a mut V,
+    pub sat_g: &'a mut V,
+    pub sat_max: &'a mut V,
 }
 
 /// Frictionless elastic contact: `p ≥ 0`, every node of positive pressure active.
@@ -134,33 +102,15 @@ pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static
 pub struct NonNegative;
 
 impl Constraint for NonNegative {
+    /// `0` where `p > 0` fails (NaN too).
     #[inline(always)]
-    fn project(self, p: f64) -> f64 {
-        if p > 0.0 {
-            p
-        } else {
-            0.0
-        }
+    fn project<V: Lanes>(self, p: V) -> V {
+        p.keep(p.gt(p.splat(0.0)))
     }
 
     #[inline(always)]
-    fn active(self, p: f64) -> bool {
-        p > 0.0
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn project_avx2(self, p: __m256d) -> __m256d {
-        // SAFETY: the caller guarantees AVX2. Where `p > 0` fails (NaN too) the mask is 0,
-        // and so is the result, as in `project`.
-        unsafe { _mm256_and_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(p, _mm256_setzero_pd()), p) }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn active_avx2(self, p: __m256d) -> __m256d {
-        // SAFETY: the caller guarantees AVX2.
-        unsafe { _mm256_cmp_pd::<_CMP_GT_OQ>(p, _mm256_setzero_pd()) }
+    fn active<V: Lanes>(self, p: V) -> V::Mask {
+        p.gt(p.splat(0.0))
     }
 }
 
@@ -168,8 +118,8 @@ impl Constraint for NonNegative {
 pub(super) mod tests {
     use super::*;
 
-    /// Each AVX2 form gives the scalar form's bits on values either side of 0, ±0, ±∞ and NaN
-    /// (the ceiling's own test calls [`check`] with ceilings among those values).
+    /// Each rule on four lanes gives its scalar form's bits on values either side of 0, ±0,
+    /// ±∞ and NaN (the ceiling's own test calls [`check`] with ceilings among those values).
     #[test]
     fn vector_forms_match_the_scalar_ones() {
         super::super::test_support::require_vector_path();
@@ -179,7 +129,8 @@ pub(super) mod tests {
         }
     }
 
-    /// Every AVX2 form of `c` against its scalar form, bit for bit (AVX2 must be present).
+    /// Every rule of `c` on four lanes against its scalar form, bit for bit (AVX2 must be
+    /// present).
     #[cfg(target_arch = "x86_64")]
     pub(in super::super) fn check<C: Constraint>(c: C) {
         let values = [
@@ -200,31 +151,42 @@ pub(super) mod tests {
         for p in values.chunks(4) {
             for w in values.chunks(4) {
                 let (p, w): ([f64; 4], [f64; 4]) = (p.try_into().unwrap(), w.try_into().unwrap());
-                let mut out = [[0.0; 4]; 4];
                 // SAFETY: AVX2 is present (checked by the caller).
-                unsafe { lanes(c, &p, &w, [entry, mean, tau], &mut out) };
-                let [project, active, free, readmit] = out;
+                let vector = unsafe { lanes(c, &p, &w, [entry, mean, tau]) };
                 for l in 0..4 {
                     let at = format!("{c:?} p {} w {}", p[l], w[l]);
-                    assert_eq!(project[l].to_bits(), c.project(p[l]).to_bits(), "{at}");
-                    assert_eq!(active[l].to_bits() != 0, c.active(p[l]), "{at}");
-                    assert_eq!(
-                        free[l].to_bits() != 0,
-                        c.free(p[l], w[l], entry, mean),
-                        "{at}"
-                    );
+                    let mut sums = [1.0, 0.5, 2.0, -1.0, 0.25];
+                    let [min, spg, sat_n, sat_g, sat_max] = &mut sums;
+                    let level = LevelSums {
+                        min,
+                        spg,
+                        sat_n,
+                        sat_g,
+                        sat_max,
+                    };
+                    c.add_to_level(p[l], w[l], level);
                     // The re-admission takes a projected pressure and a gradient.
                     let kept = c.project(p[l]);
-                    assert_eq!(
-                        readmit[l].to_bits(),
-                        c.readmit(kept, w[l], tau).to_bits(),
-                        "{at}"
-                    );
+                    let mask = |b: bool| if b { f64::from_bits(u64::MAX) } else { 0.0 };
+                    let scalar = [
+                        c.project(p[l]),
+                        mask(c.active(p[l])),
+                        mask(c.free(p[l], w[l], entry, mean)),
+                        c.readmit(kept, w[l], -tau),
+                        mask(c.saturated(p[l])),
+                    ]
+                    .into_iter()
+                    .chain(sums);
+                    for (k, (s, v)) in scalar.zip(&vector).enumerate() {
+                        assert_eq!(s.to_bits(), v[l].to_bits(), "{at}: rule {k}");
+                    }
                 }
             }
         }
     }
 
+    /// The rules on four lanes: project, active, free, readmit, saturated, then the five
+    /// level sums after adding each lane to `[1, 0.5, 2, −1, 0.25]`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn lanes<C: Constraint>(
@@ -232,19 +194,55 @@ pub(super) mod tests {
         p: &[f64; 4],
         w: &[f64; 4],
         [entry, mean, tau]: [f64; 3],
-        out: &mut [[f64; 4]; 4],
-    ) {
-        unsafe {
-            let (pv, wv) = (_mm256_loadu_pd(p.as_ptr()), _mm256_loadu_pd(w.as_ptr()));
-            let free = c.free_avx2(pv, wv, _mm256_set1_pd(entry), _mm256_set1_pd(mean));
-            let kept = c.project_avx2(pv);
-            let readmit = c.readmit_avx2(kept, wv, _mm256_set1_pd(-tau));
-            for (o, v) in out
-                .iter_mut()
-                .zip([c.project_avx2(pv), c.active_avx2(pv), free, readmit])
-            {
-                _mm256_storeu_pd(o.as_mut_ptr(), v);
-            }
+    ) -> [[f64; 4]; 10] {
+        use super::super::lanes::F64x4;
+        use std::arch::x86_64::*;
+        // SAFETY: AVX2 is present (this function's contract).
+        let (pv, wv) = unsafe {
+            (
+                F64x4::from_raw(_mm256_loadu_pd(p.as_ptr())),
+                F64x4::from_raw(_mm256_loadu_pd(w.as_ptr())),
+            )
+        };
+        let mut sums = [1.0, 0.5, 2.0, -1.0, 0.25].map(|x| pv.splat(x));
+        let [min, spg, sat_n, sat_g, sat_max] = &mut sums;
+        c.add_to_level(
+            pv,
+            wv,
+            LevelSums {
+                min,
+                spg,
+                sat_n,
+                sat_g,
+                sat_max,
+            },
+        );
+        let kept = c.project(pv);
+        let rules = [
+            c.project(pv),
+            pv.splat(0.0),
+            pv.splat(0.0),
+            c.readmit(kept, wv, pv.splat(-tau)),
+            pv.splat(0.0),
+        ];
+        let masks = [
+            c.active(pv),
+            c.free(pv, wv, pv.splat(entry), pv.splat(mean)),
+            c.saturated(pv),
+        ];
+        let mut out = [[0.0; 4]; 10];
+        let registers = rules
+            .iter()
+            .map(|v| v.raw())
+            .chain(sums.iter().map(|v| v.raw()));
+        for (o, v) in out.iter_mut().zip(registers) {
+            // SAFETY: AVX2 is present; `o` holds four values.
+            unsafe { _mm256_storeu_pd(o.as_mut_ptr(), v) };
         }
+        for (k, m) in [1, 2, 4].into_iter().zip(masks) {
+            // SAFETY: as above.
+            unsafe { _mm256_storeu_pd(out[k].as_mut_ptr(), m.raw()) };
+        }
+        out
     }
 }

@@ -3,15 +3,17 @@
 //! after a step. `solve` itself reads as the algorithm; each part here is one step of it, in
 //! the order `solve` calls them, with exactly the operations it always did.
 
+use super::config::SolverConfig;
 use super::constraint::Constraint;
 use super::level::Level;
 use super::operator::Operator;
 use super::parts;
 use super::passes::UpdateTotals;
 use super::preconditioner::{Fields, Preconditioner};
+use super::report::{SolveReport, Status};
 use super::restricted::Restricted;
 use super::rows::GradientStats;
-use super::{SolveReport, Solver, SolverConfig, Status};
+use super::state::Solver;
 
 /// The preconditioned iteration keeps its conjugate direction unless more than this
 /// fraction of the contact set left or entered it in the last step (restarting at every
@@ -25,12 +27,12 @@ pub(super) const RESTART_FRACTION: f64 = 0.03;
 pub(super) const DESCENT_FRACTION: f64 = 0.5;
 
 /// Iterations without a new least error after which a bounded solve gives up the extended
-/// preconditioner for `P K⁻¹ P` ([`Solver::fall_back`]); converging solves make a new least
+/// preconditioner for `P K⁻¹ P` ([`Solver::set_extension_aside`]); converging solves make a new least
 /// error every few iterations.
 pub(super) const FALLBACK_WINDOW: usize = 10;
 
 /// What one iteration of [`Solver::solve`] hands to the next.
-pub(super) struct Iteration {
+pub struct Iteration {
     /// The deflection `u = K p` was last computed exactly (not updated linearly).
     pub exact: bool,
     /// Linear updates of `u` since the last exact one.
@@ -119,32 +121,32 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// only when the settings that choose it changed: a sweep keeps its part, and the state
     /// of the part's layers, from load to load.
     pub(super) fn prepare_parts(&mut self, cfg: &SolverConfig) {
-        if let Some(extended) = self.suspended.take() {
-            self.preconditioner = Some(extended);
+        if let Some(extended) = self.parts.suspended.take() {
+            self.parts.preconditioner = Some(extended);
         }
         let choice = parts::choice(cfg);
-        if self.choice != Some(choice) {
-            self.preconditioner = parts::choose(cfg, self.op);
-            self.choice = Some(choice);
+        if self.parts.choice != Some(choice) {
+            self.parts.preconditioner = parts::choose(cfg, self.op);
+            self.parts.choice = Some(choice);
         }
     }
 
-    /// Under a ceiling, once the error has not improved for [`FALLBACK_WINDOW`] iterations
+    /// Once the error has not improved for [`FALLBACK_WINDOW`] iterations
     /// with the extended preconditioner, sets it aside for the rest of the solve and goes on
-    /// with `P K⁻¹ P` from a fresh direction. Where a large part of the contact set is
+    /// with `P K⁻¹ P` from a fresh direction (the ceiling's
+    /// [`super::complementarity::Complementarity::fall_back`]). Where a large part of the contact set is
     /// saturated, the extension's long modes can make each step move a quarter of the
     /// active set across the bounds and back, and the error cycles near 5e-3 for good
     /// (a 1024² surface of one λ_l at 𝓗 = 0.5, W/W0 = 0.035: the `it` test
     /// `extension_stagnation_under_a_ceiling_falls_back`); `P K⁻¹ P` converges there.
-    pub(super) fn fall_back(&mut self, it: &mut Iteration, report: &SolveReport) {
-        let extended = matches!(self.choice, Some((true, Some(_))));
-        if C::BOUNDED
-            && extended
-            && self.suspended.is_none()
+    pub(super) fn set_extension_aside(&mut self, it: &mut Iteration, report: &SolveReport) {
+        let extended = matches!(self.parts.choice, Some((true, Some(_))));
+        if extended
+            && self.parts.suspended.is_none()
             && report.iterations - it.best_at >= FALLBACK_WINDOW
         {
             let restricted: Box<dyn Preconditioner<C, O>> = Box::new(Restricted::new(self.op));
-            self.suspended = self.preconditioner.replace(restricted);
+            self.parts.suspended = self.parts.preconditioner.replace(restricted);
             it.restart = true;
         }
     }
@@ -167,7 +169,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         it: &mut Iteration,
         report: &mut SolveReport,
     ) -> GradientStats {
-        self.pressure.fill(target);
+        self.fields.pressure.fill(target);
         let stats = self.exact_deflection(1.0, it.shift);
         report.convolutions += 1;
         (it.exact, it.restart, it.changes) = (true, true, None);
@@ -193,12 +195,12 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         let mut fields = Fields {
             op: self.op,
             ws: &mut self.ws,
-            chunk: self.chunk,
-            pressure: &self.pressure,
-            separation: &self.separation,
-            direction: &mut self.direction,
+            chunk: self.blocks.chunk,
+            pressure: &self.fields.pressure,
+            separation: &self.fields.separation,
+            direction: &mut self.fields.direction,
         };
-        let mut preconditioner = self.preconditioner.as_deref_mut();
+        let mut preconditioner = self.parts.preconditioner.as_deref_mut();
         let preconditioned = preconditioner.as_mut().map(|part| {
             // The part may switch its layers as the contact set settles; the direction
             // restarts when it does. A node joins F below the level less the part's margin.

@@ -5,24 +5,27 @@
 
 use rayon::prelude::*;
 
+use super::config::SolverConfig;
 use super::constraint::Constraint;
 use super::iteration::Iteration;
 use super::operator::Operator;
 use super::passes::{UpdateTotals, MAX_SPARSE};
+use super::report::SolveReport;
 use super::rows::*;
-use super::{SolveReport, Solver, SolverConfig};
+use super::state::Solver;
 
 /// Exact recomputation of `u = K p` after this many linear updates.
 pub(super) const RESYNC: usize = 32;
 
 impl<C: Constraint, O: Operator> Solver<'_, C, O> {
-    /// After a step that left the load `totals.sum_p > 0`: the load `target` per node restored,
+    /// After a step that left the load `totals.sum_p > 0`, the elastic law's restoration
+    /// ([`super::complementarity::Complementarity::restore_load`]): the load `target` per node restored,
     /// by a uniform offset of the pressures where the step changed many nodes (`u = K p`
     /// recomputed: one convolution, as a correction of that many changes would take), else
     /// by a rescaling with `u` updated linearly or exactly; the next gradient's statistics.
     /// When the load is below the rounding of the largest pressures (W/W0 ≈ 1e-20) the
     /// offset's sum cancels to zero, and the rescaling restores it instead.
-    pub(super) fn restore_load(
+    pub(super) fn restore_elastic_load(
         &mut self,
         cfg: &SolverConfig,
         totals: &UpdateTotals,
@@ -31,18 +34,8 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         it: &mut Iteration,
         report: &mut SolveReport,
     ) -> GradientStats {
-        if C::BOUNDED {
-            return self.restore_bounded_load(
-                cfg.preconditioned,
-                totals,
-                linear_stats,
-                target,
-                it,
-                report,
-            );
-        }
         let total = totals.sum_p;
-        let load = target * self.pressure.len() as f64;
+        let load = target * self.fields.pressure.len() as f64;
         let offset = (cfg.preconditioned
             && cfg.offset_to_load
             && totals.changed > MAX_SPARSE
@@ -69,15 +62,17 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// projection and active set), reduced over the fixed blocks.
     pub(super) fn shifted_sum(&mut self, c: f64, wide: bool) -> (f64, f64) {
         let constraint = self.constraint;
-        self.pressure
-            .par_chunks(self.chunk)
-            .zip(self.offset_acc.par_iter_mut())
+        self.fields
+            .pressure
+            .par_chunks(self.blocks.chunk)
+            .zip(self.blocks.offset_acc.par_iter_mut())
             .for_each(|(pc, [sums, counts])| {
                 *sums = [0.0; LANES];
                 *counts = [0.0; LANES];
                 dispatch_offset_sums(constraint, c, wide, pc, sums, counts);
             });
-        self.offset_acc
+        self.blocks
+            .offset_acc
             .iter()
             .fold((0.0, 0.0), |(s, k), [sums, counts]| {
                 (s + sums.iter().sum::<f64>(), k + counts.iter().sum::<f64>())

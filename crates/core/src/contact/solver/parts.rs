@@ -1,11 +1,12 @@
 //! The one place where a solve's parts are chosen from its settings.
 
+use super::config::SolverConfig;
 use super::constraint::Constraint;
 use super::extension::Extended;
+use super::extension::Extension;
 use super::operator::Operator;
 use super::preconditioner::Preconditioner;
 use super::restricted::Restricted;
-use super::{Extension, SolverConfig};
 
 /// The settings that decide a solve's preconditioner: it is chosen anew only when they
 /// change, so that a sweep keeps its part (and the state of its layers) from load to load.

@@ -6,8 +6,8 @@ use rayon::prelude::*;
 use super::constraint::Constraint;
 use super::operator::Operator;
 use super::rows::*;
+use super::state::Solver;
 use super::update::{dispatch_update, UpdateAcc, UpdateArgs};
-use super::Solver;
 
 /// When at most this many nodes leave or re-enter the contact set in an iteration, the
 /// deflection is corrected by direct summation (all nodes' kernel rows added row by row, in
@@ -22,7 +22,7 @@ pub(super) const CHANGES_PER_NODE: usize = 16;
 
 /// Totals of one update pass ([`Solver::update_from_transform`]).
 #[derive(Debug, Default, Clone, Copy)]
-pub(super) struct UpdateTotals {
+pub struct UpdateTotals {
     /// `Σp` after the step and projection.
     pub sum_p: f64,
     /// `Σ t` over the new contact set.
@@ -38,24 +38,26 @@ pub(super) struct UpdateTotals {
 impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// Sum of `f(p_i)` over all nodes with fixed chunking.
     pub(super) fn chunked_sum(&mut self, f: impl Fn(f64) -> f64 + Sync) -> f64 {
-        self.pressure
-            .par_chunks(self.chunk)
-            .zip(self.lane_sums.par_iter_mut())
+        self.fields
+            .pressure
+            .par_chunks(self.blocks.chunk)
+            .zip(self.blocks.lane_sums.par_iter_mut())
             .for_each(|(pc, part)| part[0] = pc.iter().map(|&p| f(p)).sum());
-        self.lane_sums.iter().map(|p| p[0]).sum()
+        self.blocks.lane_sums.iter().map(|p| p[0]).sum()
     }
 
-    /// `u ← s (u + K Δ)` for the changed nodes gathered in `self.sparse` (direct summation,
+    /// `u ← s (u + K Δ)` for the changed nodes gathered in `self.blocks.sparse` (direct summation,
     /// row by row), `p ← s p`, and the gradient statistics ([`gradient_row`]) in the same pass.
     pub(super) fn sparse_update(&mut self, scale: f64, shift: f64) -> GradientStats {
         let constraint = self.constraint;
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
-        let (op, loads) = (self.op, &self.sparse);
-        self.pressure
+        let (n, chunk, h) = (self.op.grid().n(), self.blocks.chunk, self.heights);
+        let (op, loads) = (self.op, &self.blocks.sparse);
+        self.fields
+            .pressure
             .par_chunks_mut(chunk)
-            .zip(self.separation.par_chunks_mut(chunk))
+            .zip(self.fields.separation.par_chunks_mut(chunk))
             .zip(h.par_chunks(chunk))
-            .zip(self.block_stats.par_iter_mut())
+            .zip(self.blocks.block_stats.par_iter_mut())
             .enumerate()
             .for_each(|(b, (((pc, wc), hc), part))| {
                 let mut acc = GradientLanes::new();
@@ -80,16 +82,16 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
                 }
                 *part = acc.finish();
             });
-        GradientStats::merged(self.block_stats.iter().copied())
+        GradientStats::merged(self.blocks.block_stats.iter().copied())
     }
 
     /// `u ← s K p`, `p ← s p` (an exact deflection, then the load correction), with the
     /// statistics ([`gradient_row`]) gathered as the rows of `K p` come out of the
     /// inverse FFT (one pass over the fields fewer than applying `K` and then scanning).
     pub(super) fn exact_deflection(&mut self, scale: f64, shift: f64) -> GradientStats {
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        let (n, chunk) = (self.op.grid().n(), self.blocks.chunk);
         self.op.start_rows(
-            self.pressure.par_chunks(chunk),
+            self.fields.pressure.par_chunks(chunk),
             |rows: &mut &[f64], r, buf| buf.copy_from_slice(&rows[r * n..(r + 1) * n]),
             &mut self.ws,
         );
@@ -107,9 +109,9 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         shift: f64,
     ) -> GradientStats {
         let constraint = self.constraint;
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        let (n, chunk) = (self.op.grid().n(), self.blocks.chunk);
         self.op.start_rows(
-            self.pressure.par_chunks(chunk),
+            self.fields.pressure.par_chunks(chunk),
             |rows: &mut &[f64], r, buf| {
                 for (b, &p) in buf.iter_mut().zip(&rows[r * n..(r + 1) * n]) {
                     *b = constraint.offset(p, offset, wide);
@@ -133,13 +135,14 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         shift: f64,
     ) -> GradientStats {
         let constraint = self.constraint;
-        let (n, chunk, h) = (self.op.grid().n(), self.chunk, self.heights);
+        let (n, chunk, h) = (self.op.grid().n(), self.blocks.chunk, self.heights);
         let blocks = self
+            .fields
             .pressure
             .par_chunks_mut(chunk)
-            .zip(self.separation.par_chunks_mut(chunk))
+            .zip(self.fields.separation.par_chunks_mut(chunk))
             .zip(h.par_chunks(chunk))
-            .zip(self.update_acc.par_iter_mut());
+            .zip(self.blocks.update_acc.par_iter_mut());
         self.op.finish_rows(
             blocks,
             |(((pc, wc), hc), acc), r, kx| {
@@ -169,7 +172,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
 
     /// The gradient statistics gathered per block in `update_acc`.
     pub(super) fn update_gradient(&self) -> GradientStats {
-        GradientStats::merged(self.update_acc.iter().map(|a| a.grad.finish()))
+        GradientStats::merged(self.blocks.update_acc.iter().map(|a| a.grad.finish()))
     }
 
     /// Pass 2 fused with the first half of `K t`: `t ← (g − ḡ_S) + β (t − t̄_S)` on S, 0
@@ -183,13 +186,14 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         direction_mean: f64,
     ) -> (f64, f64) {
         let constraint = self.constraint;
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        let (n, chunk) = (self.op.grid().n(), self.blocks.chunk);
         let blocks = self
+            .fields
             .direction
             .par_chunks_mut(chunk)
-            .zip(self.pressure.par_chunks(chunk))
-            .zip(self.separation.par_chunks(chunk))
-            .zip(self.lane_sums.par_iter_mut());
+            .zip(self.fields.pressure.par_chunks(chunk))
+            .zip(self.fields.separation.par_chunks(chunk))
+            .zip(self.blocks.lane_sums.par_iter_mut());
         let energy = self.op.start_rows(
             blocks,
             |(((tc, pc), wc), part), r, row| {
@@ -211,7 +215,12 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             },
             &mut self.ws,
         );
-        let numerator = self.lane_sums.iter().map(|p| p.iter().sum::<f64>()).sum();
+        let numerator = self
+            .blocks
+            .lane_sums
+            .iter()
+            .map(|p| p.iter().sum::<f64>())
+            .sum();
         (energy, numerator)
     }
 
@@ -228,7 +237,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         next_shift: f64,
         readmit: bool,
     ) -> (UpdateTotals, GradientStats) {
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        let (n, chunk) = (self.op.grid().n(), self.blocks.chunk);
         let args = UpdateArgs {
             tau,
             level,
@@ -237,12 +246,13 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             constraint: self.constraint,
         };
         let blocks = self
+            .fields
             .pressure
             .par_chunks_mut(chunk)
-            .zip(self.separation.par_chunks_mut(chunk))
-            .zip(self.direction.par_chunks(chunk))
-            .zip(self.update_acc.par_iter_mut())
-            .zip(self.changes.par_iter_mut())
+            .zip(self.fields.separation.par_chunks_mut(chunk))
+            .zip(self.fields.direction.par_chunks(chunk))
+            .zip(self.blocks.update_acc.par_iter_mut())
+            .zip(self.blocks.changes.par_iter_mut())
             .enumerate();
         self.op.finish_rows(
             blocks,
@@ -266,7 +276,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             &mut self.ws,
         );
         let mut totals = UpdateTotals::default();
-        for acc in &self.update_acc {
+        for acc in &self.blocks.update_acc {
             let s = acc.grad.finish();
             totals.sum_p += s.sum_p;
             totals.sum_t_kept += acc.kept_t.iter().sum::<f64>();
@@ -280,33 +290,35 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// Collect the changed nodes of the last update in index order; false if there are
     /// more than [`MAX_SPARSE`] (then an FFT is needed).
     pub(super) fn gather_changes(&mut self) -> bool {
-        self.sparse.clear();
-        for (list, acc) in self.changes.iter().zip(&self.update_acc) {
+        self.blocks.sparse.clear();
+        for (list, acc) in self.blocks.changes.iter().zip(&self.blocks.update_acc) {
             let count = acc.changed;
-            if self.sparse.len() + count > MAX_SPARSE {
+            if self.blocks.sparse.len() + count > MAX_SPARSE {
                 return false;
             }
-            self.sparse.extend_from_slice(&list[..count]);
+            self.blocks.sparse.extend_from_slice(&list[..count]);
         }
         true
     }
 
     /// Whether every block's list holds all of its changed nodes.
     pub(super) fn changes_listed(&self) -> bool {
-        self.changes
+        self.blocks
+            .changes
             .iter()
-            .zip(&self.update_acc)
+            .zip(&self.blocks.update_acc)
             .all(|(list, acc)| list.len() == acc.changed)
     }
 
-    /// `u ← s (u + K Δ)`, `p ← s p` for the changed nodes listed in `self.changes`, by one
+    /// `u ← s (u + K Δ)`, `p ← s p` for the changed nodes listed in `self.blocks.changes`, by one
     /// FFT convolution of the sparse field `Δ` (its rows without a change skip the forward
     /// row transform), with the gradient statistics ([`gradient_row`]) gathered as the rows
     /// of `K Δ` come out.
     pub(super) fn fft_correction(&mut self, scale: f64, shift: f64) -> GradientStats {
-        let (n, chunk) = (self.op.grid().n(), self.chunk);
+        let (n, chunk) = (self.op.grid().n(), self.blocks.chunk);
         self.op.start_rows(
-            self.changes
+            self.blocks
+                .changes
                 .par_iter()
                 .enumerate()
                 .map(|(b, list)| (b * chunk, list.as_slice())),
@@ -327,41 +339,13 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         self.finish_deflection(true, None, scale, shift)
     }
 
-    /// Record `min w` (over the unsaturated nodes under a ceiling), the rigid-body level of the
-    /// gap `w − min w` ([`Solver::gap`]; `w = u − h` must be exact), and under a ceiling the
-    /// size of the contact set.
-    pub(super) fn finish_gap(&mut self) {
-        let c = self.constraint;
-        self.gap_level = if C::BOUNDED {
-            // The level of the unsaturated nodes, and the contact set, in one pass; with
-            // every node saturated (the mean at the ceiling) the highest `w`, so that no
-            // node has a gap.
-            let (unsaturated, contact) = self
-                .pressure
-                .par_iter()
-                .zip(self.separation.par_iter())
-                .map(|(&p, &w)| {
-                    let level = if c.saturated(p) { f64::INFINITY } else { w };
-                    (level, usize::from(p > 0.0))
-                })
-                .reduce(
-                    || (f64::INFINITY, 0),
-                    |(w1, k1), (w2, k2)| (w1.min(w2), k1 + k2),
-                );
-            self.solved_contact = contact;
-            if unsaturated.is_finite() {
-                unsaturated
-            } else {
-                self.separation
-                    .par_iter()
-                    .copied()
-                    .reduce(|| f64::NEG_INFINITY, f64::max)
-            }
-        } else {
-            self.separation
-                .par_iter()
-                .copied()
-                .reduce(|| f64::INFINITY, f64::min)
-        };
+    /// `min w` over every node: the rigid-body level of the gap `w − min w` ([`Solver::gap`];
+    /// `w = u − h` must be exact), as the elastic law records it after a solve.
+    pub(super) fn lowest_separation(&self) -> f64 {
+        self.fields
+            .separation
+            .par_iter()
+            .copied()
+            .reduce(|| f64::INFINITY, f64::min)
     }
 }

@@ -10,6 +10,8 @@
 use rayon::prelude::*;
 
 use super::constraint::Constraint;
+#[cfg(target_arch = "x86_64")]
+use super::lanes::F64x4;
 use super::level::Level;
 use super::operator::Operator;
 use super::preconditioner::{Coefficients, Fields, PreconditionSums, Preconditioner};
@@ -218,9 +220,12 @@ unsafe fn precondition_output_avx2<C: Constraint>(
                 _mm256_loadu_pd(t.as_ptr().add(i)),
             )
         };
-        // `Level::free`, through the constraint's AVX2 form.
+        // `Level::free`, by the constraint's rule on four lanes.
         // SAFETY: AVX2 is present (this function's contract).
-        let on = unsafe { level.constraint.free_avx2(pv, wv, entry_v, level_v) };
+        let (p4, w4) = unsafe { (F64x4::from_raw(pv), F64x4::from_raw(wv)) };
+        // SAFETY: as above.
+        let (entry4, level4) = unsafe { (F64x4::from_raw(entry_v), F64x4::from_raw(level_v)) };
+        let on = level.constraint.free(p4, w4, entry4, level4).raw();
         // z on F (v, exactly the f32 value), NaN off it.
         let stored = _mm256_cvtpd_ps(_mm256_blendv_pd(off, v, on));
         // SAFETY: as for the loads.

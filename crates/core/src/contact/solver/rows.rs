@@ -5,7 +5,7 @@
 // structure the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use super::constraint::Constraint;
+use super::constraint::{Constraint, LevelSums};
 use super::operator::Operator;
 
 /// Independent accumulators per reduction (breaks floating-point dependency chains; the
@@ -36,7 +36,7 @@ pub(super) struct GradientLanes {
     pub(super) spg: [f64; LANES],
     pub(super) sp: [f64; LANES],
     pub(super) min: [f64; LANES],
-    /// A bounded constraint's saturated nodes ([`Constraint::saturated`]): their count,
+    /// A bounded constraint's saturated nodes ([`Constraint::add_to_level`]): their count,
     /// `Σg` and `max g` (untouched when unbounded).
     pub(super) sat_n: [f64; LANES],
     pub(super) sat_g: [f64; LANES],
@@ -63,33 +63,17 @@ impl GradientLanes {
     pub(super) fn add<C: Constraint>(&mut self, c: C, p: &[f64; LANES], g: &[f64; LANES]) {
         for l in 0..LANES {
             let m = if c.active(p[l]) { 1.0 } else { 0.0 };
-            if C::BOUNDED {
-                // Without branches (the saturated nodes are many and scattered): a saturated
-                // node enters the saturated sums, the others the minimum (the level is that
-                // of the unsaturated nodes) and Σpg.
-                let saturated = c.saturated(p[l]);
-                let s = if saturated { 1.0 } else { 0.0 };
-                self.sat_n[l] += s;
-                self.sat_g[l] += s * g[l];
-                self.sat_max[l] = if saturated & (g[l] > self.sat_max[l]) {
-                    g[l]
-                } else {
-                    self.sat_max[l]
-                };
-                self.min[l] = if !saturated & (g[l] < self.min[l]) {
-                    g[l]
-                } else {
-                    self.min[l]
-                };
-                self.spg[l] += (1.0 - s) * (p[l] * g[l]);
-            } else {
-                self.min[l] = if g[l] < self.min[l] {
-                    g[l]
-                } else {
-                    self.min[l]
-                };
-                self.spg[l] += p[l] * g[l];
-            }
+            c.add_to_level(
+                p[l],
+                g[l],
+                LevelSums {
+                    min: &mut self.min[l],
+                    spg: &mut self.spg[l],
+                    sat_n: &mut self.sat_n[l],
+                    sat_g: &mut self.sat_g[l],
+                    sat_max: &mut self.sat_max[l],
+                },
+            );
             self.n[l] += m;
             self.sg[l] += m * g[l];
             self.sg2[l] += m * g[l] * g[l];
@@ -139,7 +123,7 @@ impl GradientLanes {
 /// nodes; `Σpg` and `min g` over the unsaturated nodes (all of them when unbounded); and over
 /// the saturated ones their number, `Σg` and `max g`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct GradientStats {
+pub struct GradientStats {
     pub contact_nodes: f64,
     pub sum_g: f64,
     pub sum_g2: f64,

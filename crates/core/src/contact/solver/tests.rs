@@ -2,6 +2,7 @@
 
 use super::rows::GradientStats;
 use super::*;
+use crate::contact::elastic::ElasticOperator;
 use crate::grid::Grid;
 
 /// The FFT correction `u ← s (u + K Δ)` from the change lists equals an exact
@@ -35,36 +36,46 @@ fn fft_correction_equals_an_exact_recomputation() {
     for changes in [few, many] {
         let (scale, shift) = (0.9, 0.003);
         let mut solver = Solver::new(&op, &heights).unwrap();
-        solver.pressure.copy_from_slice(&start);
+        solver.fields.pressure.copy_from_slice(&start);
         solver.exact_deflection(1.0, 0.0);
         let mut changed = start.clone();
         let mut sorted = changes.clone();
         sorted.sort_by_key(|c| c.0);
         sorted.dedup_by_key(|c| c.0);
-        for list in &mut solver.changes {
+        for list in &mut solver.blocks.changes {
             list.clear();
         }
-        for acc in &mut solver.update_acc {
+        for acc in &mut solver.blocks.update_acc {
             acc.changed = 0;
         }
         for &(i, d) in &sorted {
             changed[i] += d;
-            solver.pressure[i] += d;
-            let b = i / solver.chunk;
-            solver.changes[b].push((i, d));
-            solver.update_acc[b].changed += 1;
+            solver.fields.pressure[i] += d;
+            let b = i / solver.blocks.chunk;
+            solver.blocks.changes[b].push((i, d));
+            solver.blocks.update_acc[b].changed += 1;
         }
         assert!(solver.changes_listed());
         let stats = solver.fft_correction(scale, shift);
 
         let mut exact = Solver::new(&op, &heights).unwrap();
-        exact.pressure.copy_from_slice(&changed);
+        exact.fields.pressure.copy_from_slice(&changed);
         let expected = exact.exact_deflection(scale, shift);
-        let u_max = exact.separation.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (i, (a, b)) in solver.separation.iter().zip(&exact.separation).enumerate() {
+        let u_max = exact
+            .fields
+            .separation
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        for (i, (a, b)) in solver
+            .fields
+            .separation
+            .iter()
+            .zip(&exact.fields.separation)
+            .enumerate()
+        {
             assert!((a - b).abs() <= 1e-13 * u_max, "node {i}: {a} vs {b}");
         }
-        assert_eq!(solver.pressure, exact.pressure);
+        assert_eq!(solver.fields.pressure, exact.fields.pressure);
         let fields = |s: &GradientStats| {
             [
                 ("contact_nodes", s.contact_nodes),
@@ -92,13 +103,13 @@ fn overflowing_change_lists_are_detected() {
     let op = ElasticOperator::new(Grid::unit(n).unwrap(), 1.0);
     let heights: Vec<f64> = (0..n * n).map(|i| (i % 7) as f64).collect();
     let mut solver = Solver::new(&op, &heights).unwrap();
-    let cap = solver.changes[0].capacity();
+    let cap = solver.blocks.changes[0].capacity();
     for k in 0..cap {
-        solver.changes[0].push((k, 1.0));
+        solver.blocks.changes[0].push((k, 1.0));
     }
-    solver.update_acc[0].changed = cap;
+    solver.blocks.update_acc[0].changed = cap;
     assert!(solver.changes_listed());
-    solver.update_acc[0].changed = cap + 1;
+    solver.blocks.update_acc[0].changed = cap + 1;
     assert!(!solver.changes_listed());
 }
 
@@ -115,7 +126,7 @@ fn load_offset_matches_a_sorted_projection() {
     let mut next = super::test_support::sequence(11);
     for (case, keep) in [0.999, 0.9, 0.5, 0.1, 1e-3].into_iter().enumerate() {
         let mut solver = Solver::new(&op, &heights).unwrap();
-        for p in solver.pressure.iter_mut() {
+        for p in solver.fields.pressure.iter_mut() {
             let v = next();
             // A third of the nodes at zero, some ties (values on a coarse lattice).
             *p = if v < -1.0 / 3.0 {
@@ -124,11 +135,12 @@ fn load_offset_matches_a_sorted_projection() {
                 ((v + 1.0) * 32.0).floor() / 16.0
             };
         }
-        let total: f64 = solver.pressure.iter().sum();
-        let count = solver.pressure.iter().filter(|&&p| p > 0.0).count() as f64;
+        let total: f64 = solver.fields.pressure.iter().sum();
+        let count = solver.fields.pressure.iter().filter(|&&p| p > 0.0).count() as f64;
         let load = keep * total;
         let (c, sum) = solver.load_offset(load, total, count);
         let mut sorted: Vec<f64> = solver
+            .fields
             .pressure
             .iter()
             .copied()
@@ -148,7 +160,12 @@ fn load_offset_matches_a_sorted_projection() {
             (c - expected).abs() <= 1e-12 * sorted[0],
             "case {case}: offset {c}, sorted {expected}"
         );
-        let recomputed: f64 = solver.pressure.iter().map(|p| (p + c).max(0.0)).sum();
+        let recomputed: f64 = solver
+            .fields
+            .pressure
+            .iter()
+            .map(|p| (p + c).max(0.0))
+            .sum();
         assert!(
             (sum / load - 1.0).abs() <= 1e-12,
             "case {case}: {sum} vs {load}"
@@ -170,7 +187,7 @@ fn preconditioned(
     let heights = vec![0.0; n * n];
     let mut solver = Solver::new(op, &heights).unwrap();
     for i in 0..n * n {
-        (solver.pressure[i], solver.separation[i]) =
+        (solver.fields.pressure[i], solver.fields.separation[i]) =
             if contact[i] { (1.0, x[i]) } else { (0.0, 1e3) };
     }
     let mut part = extension::Extended::new(op, settings);
@@ -179,10 +196,10 @@ fn preconditioned(
     let mut fields = Fields {
         op,
         ws: &mut solver.ws,
-        chunk: solver.chunk,
-        pressure: &solver.pressure,
-        separation: &solver.separation,
-        direction: &mut solver.direction,
+        chunk: solver.blocks.chunk,
+        pressure: &solver.fields.pressure,
+        separation: &solver.fields.separation,
+        direction: &mut solver.fields.direction,
     };
     let level = super::level::Level {
         mean: 0.0,
@@ -195,7 +212,7 @@ fn preconditioned(
         &mut fields,
         [sums.z_mean, 0.0, 0.0],
     );
-    solver.direction.clone()
+    solver.fields.direction.clone()
 }
 
 /// The preconditioner deflated by the blocks' loads (`M_B = Xᵀ M X + Z̃ E⁻¹ Z̃ᵀ`) is

@@ -12,6 +12,10 @@
 use std::arch::x86_64::*;
 
 use super::constraint::Constraint;
+#[cfg(target_arch = "x86_64")]
+use super::constraint::LevelSums;
+#[cfg(target_arch = "x86_64")]
+use super::lanes::F64x4;
 use super::rows::{avx2_dispatch, lanes, padded, GradientLanes, LANES};
 
 avx2_dispatch! {
@@ -80,7 +84,7 @@ fn update_lanes<C: Constraint>(
         let kept = a.constraint.project(stepped);
         let gc = wn[l] - level;
         let new = if a.readmit {
-            a.constraint.readmit(kept, gc, tau)
+            a.constraint.readmit(kept, gc, -tau)
         } else {
             kept
         };
@@ -210,7 +214,8 @@ unsafe fn update_row_avx2<C: Constraint>(
     assert!(wc.len() == len && tc.len() == len && rc.len() == len);
     let whole = len / LANES * LANES;
     let tau = _mm256_set1_pd(a.tau);
-    let neg_tau = _mm256_set1_pd(-a.tau);
+    // SAFETY: AVX2 is present (this function's contract).
+    let neg_tau = unsafe { F64x4::from_raw(_mm256_set1_pd(-a.tau)) };
     let level = _mm256_set1_pd(a.level);
     let next_shift = _mm256_set1_pd(a.next_shift);
     let zero = _mm256_setzero_pd();
@@ -218,7 +223,6 @@ unsafe fn update_row_avx2<C: Constraint>(
     let readmit = a.readmit;
     // SAFETY: AVX2 is present (this function's contract).
     let mut g = unsafe { GradientRegs::load(&acc.grad) };
-    let ceiling = _mm256_set1_pd(a.constraint.ceiling());
     let mut kept_t = _mm256_loadu_pd(acc.kept_t.as_ptr());
     let (pp, wp, tp, rp) = (pc.as_mut_ptr(), wc.as_mut_ptr(), tc.as_ptr(), rc.as_ptr());
     for i in (0..whole).step_by(LANES) {
@@ -234,22 +238,25 @@ unsafe fn update_row_avx2<C: Constraint>(
         // The operations of `update_lanes`, in its order.
         let stepped = _mm256_sub_pd(p, _mm256_mul_pd(tau, t));
         // SAFETY: AVX2 is present (this function's contract).
-        let kept = unsafe { a.constraint.project_avx2(stepped) };
+        let stepped_v = unsafe { F64x4::from_raw(stepped) };
+        let kept = a.constraint.project(stepped_v);
         let gc = _mm256_sub_pd(w, level);
         let new = if readmit {
             // SAFETY: as above.
-            unsafe { a.constraint.readmit_avx2(kept, gc, neg_tau) }
+            a.constraint
+                .readmit(kept, unsafe { F64x4::from_raw(gc) }, neg_tau)
         } else {
             kept
         };
+        let active = a.constraint.active(new);
+        let new = new.raw();
         let delta = _mm256_sub_pd(new, stepped);
-        // SAFETY: as above.
-        let m = _mm256_and_pd(unsafe { a.constraint.active_avx2(new) }, one);
+        let m = _mm256_and_pd(active.raw(), one);
         kept_t = _mm256_add_pd(kept_t, _mm256_mul_pd(m, t));
         let w_new = _mm256_sub_pd(w, _mm256_mul_pd(tau, r));
         let gn = _mm256_sub_pd(w_new, next_shift);
         // SAFETY: as above.
-        unsafe { g.add::<C>(new, gn, m, ceiling) };
+        unsafe { g.add(a.constraint, new, gn, m) };
         // SAFETY: as for the loads.
         unsafe {
             _mm256_storeu_pd(pp.add(i), new);
@@ -337,40 +344,37 @@ impl GradientRegs {
     }
 
     /// [`GradientLanes::add`] on four lanes: pressure `new`, gradient `gn`, active mask `m`
-    /// (1.0 where active). `if g < min { g } else { min }` is exactly `min_pd(g, min)`.
+    /// (1.0 where active); the constraint's sums ([`Constraint::add_to_level`]) by its rule
+    /// on four lanes.
     ///
     /// # Safety
     /// As [`Self::load`].
     #[inline(always)]
-    unsafe fn add<C: Constraint>(
-        &mut self,
-        new: __m256d,
-        gn: __m256d,
-        m: __m256d,
-        ceiling: __m256d,
-    ) {
+    unsafe fn add<C: Constraint>(&mut self, c: C, new: __m256d, gn: __m256d, m: __m256d) {
         // SAFETY: as in `load`.
         unsafe {
             self.n = _mm256_add_pd(self.n, m);
             let mg = _mm256_mul_pd(m, gn);
             self.sg = _mm256_add_pd(self.sg, mg);
             self.sg2 = _mm256_add_pd(self.sg2, _mm256_mul_pd(mg, gn));
-            if C::BOUNDED {
-                // The saturated lanes (`p ≥ p_max`) go to their own sums and maximum
-                // (`max_pd(g, max)` is `if g > max { g } else { max }`), the others to the
-                // minimum and Σpg; adding +0 in the lanes a sum skips leaves it as the
-                // scalar code's (no sum here is ever −0).
-                let sat = _mm256_cmp_pd::<_CMP_GE_OQ>(new, ceiling);
-                let one = _mm256_set1_pd(1.0);
-                self.min = _mm256_blendv_pd(_mm256_min_pd(gn, self.min), self.min, sat);
-                self.spg = _mm256_add_pd(self.spg, _mm256_andnot_pd(sat, _mm256_mul_pd(new, gn)));
-                self.sat_n = _mm256_add_pd(self.sat_n, _mm256_and_pd(sat, one));
-                self.sat_g = _mm256_add_pd(self.sat_g, _mm256_and_pd(sat, gn));
-                self.sat_max = _mm256_blendv_pd(self.sat_max, _mm256_max_pd(gn, self.sat_max), sat);
-            } else {
-                self.min = _mm256_min_pd(gn, self.min);
-                self.spg = _mm256_add_pd(self.spg, _mm256_mul_pd(new, gn));
-            }
+            let mut min = F64x4::from_raw(self.min);
+            let mut spg = F64x4::from_raw(self.spg);
+            let mut sat_n = F64x4::from_raw(self.sat_n);
+            let mut sat_g = F64x4::from_raw(self.sat_g);
+            let mut sat_max = F64x4::from_raw(self.sat_max);
+            c.add_to_level(
+                F64x4::from_raw(new),
+                F64x4::from_raw(gn),
+                LevelSums {
+                    min: &mut min,
+                    spg: &mut spg,
+                    sat_n: &mut sat_n,
+                    sat_g: &mut sat_g,
+                    sat_max: &mut sat_max,
+                },
+            );
+            (self.min, self.spg, self.sat_n) = (min.raw(), spg.raw(), sat_n.raw());
+            (self.sat_g, self.sat_max) = (sat_g.raw(), sat_max.raw());
             self.sp = _mm256_add_pd(self.sp, new);
         }
     }
@@ -448,7 +452,7 @@ mod tests {
                 !readmit || scalar.3 .1 > 0,
                 "with re-admission the row must re-admit some nodes"
             );
-            if C::BOUNDED && len > 8 {
+            if constraint.ceiling().is_some() && len > 8 {
                 let saturated = scalar
                     .0
                     .iter()

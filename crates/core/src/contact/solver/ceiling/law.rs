@@ -1,5 +1,5 @@
-//! What the solver does differently under a bounded constraint ([`Constraint::BOUNDED`]: the
-//! ceiling `0 ≤ p ≤ p_max`, `ceiling.rs`). A bounded field is not positively homogeneous,
+//! The ceiling's part in the solve ([`Complementarity`]): what the solver does differently
+//! under `0 ≤ p ≤ p_max`. A bounded field is not positively homogeneous,
 //! so the load is never restored by rescaling the pressures: every exact deflection first
 //! brings the mean to `p̄` by the offset `p ← P(p + c)` (the nearest admissible field of
 //! that mean), and between exact deflections the few nodes a step projects may move the
@@ -8,14 +8,17 @@
 
 use rayon::prelude::*;
 
-use super::constraint::Constraint;
-use super::iteration::Iteration;
-use super::load::dispatch_offset_sums;
-use super::load::RESYNC;
-use super::operator::Operator;
-use super::passes::{UpdateTotals, MAX_SPARSE};
-use super::rows::{GradientStats, LANES};
-use super::{SolveReport, Solver};
+use super::super::complementarity::Complementarity;
+use super::super::config::SolverConfig;
+use super::super::constraint::Constraint;
+use super::super::iteration::Iteration;
+use super::super::load::{dispatch_offset_sums, RESYNC};
+use super::super::operator::Operator;
+use super::super::passes::{UpdateTotals, MAX_SPARSE};
+use super::super::report::SolveReport;
+use super::super::rows::{GradientStats, LANES};
+use super::super::state::Solver;
+use super::rules::Ceiling;
 
 /// Newton steps allowed to find the load's offset (each a pass over `p`); bisection
 /// safeguards them, so 64 halve the bracket below the rounding of any pressure.
@@ -36,26 +39,18 @@ const STEP_ROUNDING: f64 = 1e-12;
 /// and 1 took 321, 314 and 320 iterations (docs/BENCHMARKS.md).
 const GAP_STEP: f64 = 0.5;
 
-impl<C: Constraint, O: Operator> Solver<'_, C, O> {
+impl<O: Operator> Solver<'_, Ceiling, O> {
     /// The complementarity error of a state with gradient statistics `stats` (of
-    /// `g = w − shift`), in units of the load times σ_h. Unbounded: `Σ p (g − min g)`
-    /// (docs/CONVENTIONS.md). Bounded, with `ℓ = min g` over the unsaturated nodes:
+    /// `g = w − shift`), in units of the load times σ_h (docs/CONVENTIONS.md), with
+    /// `ℓ = min g` over the unsaturated nodes:
     /// `Σ_{p<p_max} p (g − ℓ) + p_max Σ_{p=p_max} (g − ℓ)⁺`, zero exactly when every node
     /// with `0 < p < p_max` is at the level, none at 0 is below it and none on the ceiling
     /// above it. The second sum takes a pass over the saturated nodes; it is made only when
     /// one of them is above the level and the first sum alone is within `tolerance` (else
     /// the error is above the tolerance whatever the second sum, and its largest term
     /// stands for it: the error returned is then a lower bound, never below the tolerance).
-    pub(super) fn complementarity_error(
-        &mut self,
-        stats: &GradientStats,
-        shift: f64,
-        tolerance: f64,
-    ) -> f64 {
-        if !C::BOUNDED {
-            return stats.error(self.height_std);
-        }
-        let max = self.constraint.ceiling();
+    fn bounded_error(&mut self, stats: &GradientStats, shift: f64, tolerance: f64) -> f64 {
+        let max = self.constraint.max();
         let level = if stats.min_g.is_finite() {
             stats.min_g
         } else {
@@ -76,10 +71,11 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// `Σ (w − level)⁺` over the saturated nodes, reduced over the fixed blocks.
     fn saturated_violation(&mut self, level: f64) -> f64 {
         let c = self.constraint;
-        self.pressure
-            .par_chunks(self.chunk)
-            .zip(self.separation.par_chunks(self.chunk))
-            .zip(self.lane_sums.par_iter_mut())
+        self.fields
+            .pressure
+            .par_chunks(self.blocks.chunk)
+            .zip(self.fields.separation.par_chunks(self.blocks.chunk))
+            .zip(self.blocks.lane_sums.par_iter_mut())
             .for_each(|((pc, wc), part)| {
                 part[0] = pc
                     .iter()
@@ -93,14 +89,14 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
                     })
                     .sum();
             });
-        self.lane_sums.iter().map(|p| p[0]).sum()
+        self.blocks.lane_sums.iter().map(|p| p[0]).sum()
     }
 
     /// The level of the gradient that the search direction is centred on: its mean over the
-    /// active set, or, under a ceiling that left no node strictly between the bounds, the
+    /// active set, or, where the ceiling left no node strictly between the bounds, the
     /// lowest unsaturated `g` (else the highest saturated one).
-    pub(super) fn gradient_level(&self, stats: &GradientStats) -> f64 {
-        if C::BOUNDED && stats.contact_nodes == 0.0 {
+    fn bounded_level(&self, stats: &GradientStats) -> f64 {
+        if stats.contact_nodes == 0.0 {
             if stats.min_g.is_finite() {
                 stats.min_g
             } else {
@@ -117,7 +113,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// offset of every node (the nearest admissible field of that mean) and `true`. The sum is piecewise linear and non-decreasing in `c`, with slope the
     /// number of nodes still active; Newton's method, kept inside a shrinking bracket by
     /// bisection, is exact once a step stays on one linear piece. `p` is not changed.
-    pub(super) fn bounded_offset(&mut self, load: f64, total: f64) -> (f64, bool) {
+    fn bounded_offset(&mut self, load: f64, total: f64) -> (f64, bool) {
         if (total - load).abs() <= OFFSET_ROUNDING * load {
             return (0.0, false);
         }
@@ -133,7 +129,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// node, by passes over `p`, or the active ones, gathered first ([`Self::gather_moving`]).
     fn offset_in(&mut self, load: f64, total: f64, wide: bool) -> Option<f64> {
         // Offsets of ±p_max take every moving node to a bound.
-        let span = self.constraint.ceiling();
+        let span = self.constraint.max();
         let within = OFFSET_ROUNDING * load;
         if wide {
             let slope = self.shifted_sum(0.0, true).1;
@@ -147,15 +143,16 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
 
     /// Gathers, block by block, the pressures that a load offset moves ([`Constraint::offset`]:
     /// those off the bounds, the active ones and any a step left past a bound) into
-    /// `self.moving`, beside the sum of the others. One pass over `p`, after which each
+    /// `self.blocks.moving`, beside the sum of the others. One pass over `p`, after which each
     /// offset's sum ([`Self::moving_sum`]) passes over the moving nodes only (a few percent
     /// to a third of them). Returns how many of them are active (the sum's slope at `c = 0`).
     fn gather_moving(&mut self) -> f64 {
         let constraint = self.constraint;
         let active: usize = self
+            .fields
             .pressure
-            .par_chunks(self.chunk)
-            .zip(self.moving.par_iter_mut())
+            .par_chunks(self.blocks.chunk)
+            .zip(self.blocks.moving.par_iter_mut())
             .map(|(pc, (moving, fixed))| {
                 moving.clear();
                 let (mut rest, mut active) = ([0.0; 4], 0);
@@ -179,16 +176,18 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// over the fixed blocks.
     fn moving_sum(&mut self, c: f64) -> (f64, f64) {
         let constraint = self.constraint;
-        self.moving
+        self.blocks
+            .moving
             .par_iter()
-            .zip(self.offset_acc.par_iter_mut())
+            .zip(self.blocks.offset_acc.par_iter_mut())
             .for_each(|((moving, fixed), [sums, counts])| {
                 *sums = [0.0; LANES];
                 *counts = [0.0; LANES];
                 dispatch_offset_sums(constraint, c, true, moving, sums, counts);
                 sums[0] += fixed;
             });
-        self.offset_acc
+        self.blocks
+            .offset_acc
             .iter()
             .fold((0.0, 0.0), |(s, k), [sums, counts]| {
                 (s + sums.iter().sum::<f64>(), k + counts.iter().sum::<f64>())
@@ -199,25 +198,25 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// `total`), with the gradient statistics of `g = w − shift`: one convolution. An offset
     /// moves every active pressure, so the next direction restarts (the old one is not
     /// conjugate to the new state: kept, it stalls the plain iteration).
-    pub(super) fn deflection_at_load(
+    fn deflection_at_load(
         &mut self,
         target: f64,
         total: f64,
         shift: f64,
         restart: &mut bool,
     ) -> GradientStats {
-        let load = target * self.pressure.len() as f64;
+        let load = target * self.fields.pressure.len() as f64;
         let (offset, wide) = self.bounded_offset(load, total);
         *restart |= offset != 0.0;
         self.offset_deflection(offset, wide, 1.0, shift)
     }
 
-    /// [`Solver::restore_load`] under a ceiling: nothing to do where no node changed (the
+    /// The load restored under a ceiling: nothing to do where no node changed (the
     /// direction is centred, so the step kept the load), a direct correction of `u` for a
     /// few changed nodes (the mean moves by their projection until the next exact
     /// deflection), else the step's offset to the load ([`Self::step_offset`]) and the exact
     /// deflection.
-    pub(super) fn restore_bounded_load(
+    fn restore_bounded_load(
         &mut self,
         preconditioned: bool,
         totals: &UpdateTotals,
@@ -234,7 +233,7 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         } else {
             report.convolutions += 1;
             it.linear_steps = 0;
-            let load = target * self.pressure.len() as f64;
+            let load = target * self.fields.pressure.len() as f64;
             return match self.step_offset(load, totals.sum_p, totals.contact_nodes) {
                 Some(c) => {
                     // The preconditioned direction is kept across it, as across the elastic
@@ -267,11 +266,12 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
         }
         // Every moved node reaches a bound within p_max plus its distance past one.
         let past = self
+            .blocks
             .changes
             .iter()
             .flatten()
             .fold(0.0f64, |m, &(_, d)| m.max(d.abs()));
-        let span = self.constraint.ceiling() + past;
+        let span = self.constraint.max() + past;
         let within = STEP_ROUNDING * load;
         self.unproject_step(true);
         self.gather_moving();
@@ -287,10 +287,11 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// next update pass clears it; NaN marks the nodes left as they were); without, puts
     /// those pressures back. A pass over the lists only.
     fn unproject_step(&mut self, unproject: bool) {
-        let (constraint, chunk) = (self.constraint, self.chunk);
-        self.pressure
+        let (constraint, chunk) = (self.constraint, self.blocks.chunk);
+        self.fields
+            .pressure
             .par_chunks_mut(chunk)
-            .zip(self.changes.par_iter_mut())
+            .zip(self.blocks.changes.par_iter_mut())
             .enumerate()
             .for_each(|(b, (pc, list))| {
                 let first = b * chunk;
@@ -313,36 +314,67 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// ceiling (`target · n > p_max · #{p > 0}`): then no scaling of it, nor offset of its
     /// active nodes, reaches the load, and the start takes a projected gradient step
     /// instead ([`Self::gap_start`]).
-    pub(super) fn beyond_contact_set(&self, target: f64) -> bool {
-        C::BOUNDED
-            && self.has_solution
-            && self.separation_exact
-            && target * self.pressure.len() as f64
-                > self.constraint.ceiling() * self.solved_contact as f64
+    fn beyond_contact_set(&self, target: f64) -> bool {
+        self.warm.has_solution
+            && self.warm.separation_exact
+            && target * self.fields.pressure.len() as f64
+                > self.constraint.max() * self.warm.solved_contact as f64
     }
 
-    /// [`Solver::start`] under a ceiling: where the last solution's contact set can carry
+    /// The start under a ceiling: where the last solution's contact set can carry
     /// the load, that solution (extrapolated by [`Solver::warm_start`]) scaled to the load
     /// and projected, else the uniform pressure, offset to the load; where it cannot, the
     /// [`Self::gap_start`]. Then the exact deflection.
-    pub(super) fn bounded_start(&mut self, target: f64, report: &mut SolveReport) -> GradientStats {
+    fn bounded_start(&mut self, target: f64, report: &mut SolveReport) -> GradientStats {
         report.convolutions += 1;
         if self.beyond_contact_set(target) {
             return self.gap_start(target);
         }
-        let len = self.pressure.len();
+        let len = self.fields.pressure.len();
         let previous_total: f64 = self.chunked_sum(|p| p);
         let c = self.constraint;
-        if self.has_solution && previous_total > 0.0 {
+        if self.warm.has_solution && previous_total > 0.0 {
             let scale = target * len as f64 / previous_total;
-            self.pressure
+            self.fields
+                .pressure
                 .par_iter_mut()
                 .for_each(|p| *p = c.project(*p * scale));
         } else {
-            self.pressure.fill(target);
+            self.fields.pressure.fill(target);
         }
         let total = self.chunked_sum(|p| p);
         self.deflection_at_load(target, total, 0.0, &mut false)
+    }
+
+    /// Records `min w` over the unsaturated nodes, the rigid-body level of the gap `w − min w`
+    /// ([`Solver::gap`]; `w = u − h` must be exact), and the size of the contact set, in one
+    /// pass; with every node saturated (the mean at the ceiling) the highest `w`, so that no
+    /// node has a gap.
+    fn finish_bounded_gap(&mut self) {
+        let c = self.constraint;
+        let (unsaturated, contact) = self
+            .fields
+            .pressure
+            .par_iter()
+            .zip(self.fields.separation.par_iter())
+            .map(|(&p, &w)| {
+                let level = if c.saturated(p) { f64::INFINITY } else { w };
+                (level, usize::from(p > 0.0))
+            })
+            .reduce(
+                || (f64::INFINITY, 0),
+                |(w1, k1), (w2, k2)| (w1.min(w2), k1 + k2),
+            );
+        self.warm.solved_contact = contact;
+        self.fields.gap_level = if unsaturated.is_finite() {
+            unsaturated
+        } else {
+            self.fields
+                .separation
+                .par_iter()
+                .copied()
+                .reduce(|| f64::NEG_INFINITY, f64::max)
+        };
     }
 
     /// The start of a load beyond the last solution's contact set (a load mostly carried
@@ -353,17 +385,19 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
     /// ones stay). `w` must be exact for `p`.
     fn gap_start(&mut self, target: f64) -> GradientStats {
         let c = self.constraint;
-        let (tau, level) = (GAP_STEP / self.op.self_influence(), self.gap_level);
-        self.pressure
+        let (tau, level) = (GAP_STEP / self.op.self_influence(), self.fields.gap_level);
+        self.fields
+            .pressure
             .par_iter_mut()
-            .zip(self.separation.par_iter())
+            .zip(self.fields.separation.par_iter())
             .for_each(|(p, &w)| *p -= tau * (w - level));
         // The projected total, and the furthest step past a bound: offsets of ±(p_max + it)
         // take every node to a bound. Block by block, so that the sum's bits do not depend
         // on the thread count.
         let (total, past) = self
+            .fields
             .pressure
-            .par_chunks(self.chunk)
+            .par_chunks(self.blocks.chunk)
             .map(|pc| {
                 pc.iter().fold((0.0, 0.0f64), |(sum, past), &x| {
                     let kept = c.project(x);
@@ -373,9 +407,9 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             .collect::<Vec<_>>()
             .into_iter()
             .fold((0.0, 0.0f64), |(sum, past), (s, p)| (sum + s, past.max(p)));
-        let load = target * self.pressure.len() as f64;
+        let load = target * self.fields.pressure.len() as f64;
         let slope = self.shifted_sum(0.0, true).1;
-        let span = c.ceiling() + past;
+        let span = c.max() + past;
         let within = OFFSET_ROUNDING * load;
         match offset_to_load(load, total, slope, span, within, |o| {
             self.shifted_sum(o, true)
@@ -384,10 +418,80 @@ impl<C: Constraint, O: Operator> Solver<'_, C, O> {
             // Every load from 0 to n p_max is within that reach; the uniform pressure
             // stands in should rounding say otherwise.
             None => {
-                self.pressure.fill(target);
+                self.fields.pressure.fill(target);
                 self.exact_deflection(1.0, 0.0)
             }
         }
+    }
+}
+
+/// The ceiling's part in the solve: the error on both bounds, the level of a contact set
+/// with no active node, the start by scaling or by a gradient step, the load restored by
+/// offset, the extended preconditioner set aside where it stagnates, and the gap levelled on
+/// the unsaturated nodes.
+impl Complementarity for Ceiling {
+    /// Every node the step projects (the restoration reads where the step left each).
+    fn listed_changes(chunk: usize) -> usize {
+        chunk
+    }
+
+    fn error<O: Operator>(
+        s: &mut Solver<'_, Self, O>,
+        stats: &GradientStats,
+        shift: f64,
+        tolerance: f64,
+    ) -> f64 {
+        s.bounded_error(stats, shift, tolerance)
+    }
+
+    fn level<O: Operator>(s: &Solver<'_, Self, O>, stats: &GradientStats) -> f64 {
+        s.bounded_level(stats)
+    }
+
+    fn start<O: Operator>(
+        s: &mut Solver<'_, Self, O>,
+        target: f64,
+        report: &mut SolveReport,
+    ) -> GradientStats {
+        s.bounded_start(target, report)
+    }
+
+    fn beyond_contact_set<O: Operator>(s: &Solver<'_, Self, O>, target: f64) -> bool {
+        s.beyond_contact_set(target)
+    }
+
+    /// At the exact load by the offset (a rescaling would leave the bounds).
+    fn confirm<O: Operator>(
+        s: &mut Solver<'_, Self, O>,
+        target: f64,
+        stats: &GradientStats,
+        it: &mut Iteration,
+    ) -> GradientStats {
+        s.deflection_at_load(target, stats.sum_p, it.shift, &mut it.restart)
+    }
+
+    fn restore_load<O: Operator>(
+        s: &mut Solver<'_, Self, O>,
+        cfg: &SolverConfig,
+        totals: &UpdateTotals,
+        linear_stats: GradientStats,
+        target: f64,
+        it: &mut Iteration,
+        report: &mut SolveReport,
+    ) -> GradientStats {
+        s.restore_bounded_load(cfg.preconditioned, totals, linear_stats, target, it, report)
+    }
+
+    fn fall_back<O: Operator>(
+        s: &mut Solver<'_, Self, O>,
+        it: &mut Iteration,
+        report: &SolveReport,
+    ) {
+        s.set_extension_aside(it, report);
+    }
+
+    fn finish_gap<O: Operator>(s: &mut Solver<'_, Self, O>) {
+        s.finish_bounded_gap();
     }
 }
 
