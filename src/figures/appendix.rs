@@ -1,8 +1,8 @@
 //! Figs. B.1 and B.2 (the CCDF of cluster areas as the box size or the discretisation
 //! varies) and their convergence audit.
 
+use super::common::{tolerance_line, CcdfTable, Drawn};
 use super::plot::{Dash, Layout, LinePlot, Marker, Panels, Series, YAxis};
-use super::{tolerance_line, CcdfTable, Drawn};
 use crate::stages::audits::{ConvergenceRow, ConvergenceTable, CONVERGENCE_KS_TOLERANCE, TABLE};
 use crate::stages::figures::StudyRef;
 use crate::store::inputs::Inputs;

@@ -3,8 +3,8 @@
 //! and the realization curves, all from the settings audit.
 
 use super::appendix::push_convergence_curves;
+use super::common::{tolerance_line, CcdfTable, Drawn};
 use super::plot::{Layout, LinePlot, Marker, Panels, Series, YAxis};
-use super::{tolerance_line, CcdfTable, Drawn};
 use crate::stages::audits::{ConvergenceTable, CONVERGENCE_KS_TOLERANCE, TABLE};
 use crate::stages::figures::StudyRef;
 use crate::store::inputs::Inputs;

@@ -1,10 +1,10 @@
 //! Fig. 2: the surface and contact maps of one realization (2a–d), contact area, largest
 //! cluster and dN/dA_c over the sweep (2e–f), and the realization audit of 2e–f.
 
+use super::common::{tolerance_line, Drawn, NpyData};
 use super::plot::{
     viridis, ColorBar, Dash, Layout, LinePlot, Marker, Panels, RasterPlot, Series, YAxis,
 };
-use super::{tolerance_line, Drawn, NpyData};
 use crate::clusters::{label_with, Boundary, Connectivity};
 use crate::stages::analytic::AreaLoadSlopeRecord;
 use crate::stages::audits::{FIG2_CURVE_TOLERANCE, TABLE};
@@ -23,7 +23,7 @@ pub fn fig2ef(inputs: &Inputs, marked_loads: &[f64]) -> anyhow::Result<Vec<(Stri
     let df = &df;
     let w = f64_column(df, "w_over_w0")?;
     let dn = f64_column(df, "dn_dac_per_ls2_mean")?;
-    let realizations = super::realizations_of(inputs, 0)?;
+    let realizations = super::common::realizations_of(inputs, 0)?;
     let ensemble = if realizations >= crate::resample::MIN_REALIZATIONS as u64 {
         format!("mean of {realizations} realizations, shaded: 95 % interval")
     } else {

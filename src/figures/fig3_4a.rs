@@ -3,8 +3,8 @@
 
 use polars::prelude::*;
 
+use super::common::{pick_loads, rows_at, CcdfTable, Drawn};
 use super::plot::{Dash, Fractions, Layout, LinePlot, Marker, Panels, Series, YAxis};
-use super::{pick_loads, rows_at, CcdfTable, Drawn};
 use crate::stages::figures::StudyRef;
 use crate::store::inputs::Inputs;
 use crate::store::table::{f64_column, loads_of, str_column, u64_column};

@@ -3,9 +3,9 @@
 
 use polars::prelude::*;
 
+use super::common::{tolerance_line, Drawn};
 use super::plot::TENTATIVE_BELOW_CLUSTERS;
 use super::plot::{Dash, LinePlot, Marker, Series, YAxis};
-use super::{tolerance_line, Drawn};
 use crate::stages::audits::{FIG45_A_STAR, FIG45_CURVES, LOAD_RESOLUTION_TOLERANCE, TABLE};
 use crate::store::inputs::Inputs;
 use crate::store::table::{bool_column, f64_column, str_column, u64_column};
@@ -176,7 +176,7 @@ pub fn fig45(inputs: &Inputs, spectrum: &str) -> anyhow::Result<Vec<(String, Dra
     let mut kk = per_threshold(wear, "k_upscaled_pooled", "𝒦", false)?;
     kk.extend(per_threshold(model, "k_upscaled_pl", "𝒦_{PL} fit", true)?);
     let mut rate = per_threshold(wear, "wear_rate_over_l2_mean", "R/L^2", false)?;
-    let realizations = super::realizations_of(inputs, 0)?;
+    let realizations = super::common::realizations_of(inputs, 0)?;
     let key = |what: &str| {
         Series::band_key(
             if realizations >= crate::resample::MIN_REALIZATIONS as u64 {

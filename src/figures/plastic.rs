@@ -6,8 +6,8 @@
 
 use polars::prelude::*;
 
+use super::common::Drawn;
 use super::plot::{Dash, LinePlot, Marker, Series, YAxis};
-use super::Drawn;
 use crate::stages::figures::StudyRef;
 use crate::store::inputs::Inputs;
 use crate::store::table::{f64_column, str_column, u64_column};

@@ -8,9 +8,9 @@
 
 use polars::prelude::*;
 
+use super::common::Drawn;
 use super::plastic::{alpha_against, AlphaAxis};
 use super::plot::{Dash, LinePlot, Marker, Series, YAxis, TENTATIVE_BELOW_CLUSTERS};
-use super::Drawn;
 use crate::stages::figures::StudyRef;
 use crate::store::inputs::Inputs;
 use crate::store::table::{f64_column, u32_column, u64_column};
@@ -413,8 +413,9 @@ fn physical(inputs: &Inputs, scene: &SpectrumScene) -> anyhow::Result<LinePlot> 
     // Per threshold: the points, the band and which points are tentative.
     let mut curves = vec![(Vec::new(), Vec::new(), Vec::new()); scene.a_star_over_ll2.len()];
     for (s, setting) in scene.settings.iter().enumerate() {
-        let table = super::CcdfTable::read(inputs, s)?;
-        let Some(&(index, _)) = super::pick_loads(&table.loads(), &[w_plateau]).first() else {
+        let table = super::common::CcdfTable::read(inputs, s)?;
+        let Some(&(index, _)) = super::common::pick_loads(&table.loads(), &[w_plateau]).first()
+        else {
             continue;
         };
         let pooled = table.curve(index, None, false);

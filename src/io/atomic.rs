@@ -90,7 +90,7 @@ pub fn write_atomically(
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
         let cause = format!("{e:#}").replace(&tmp.display().to_string(), "");
-        anyhow::bail!(super::cannot_write(
+        anyhow::bail!(super::disk::cannot_write(
             path,
             cause.trim_start_matches([':', ' '])
         ));
@@ -121,7 +121,7 @@ pub fn write_all_atomically(files: Vec<(&Path, FileWriter<'_>)>) -> anyhow::Resu
             let _ = std::fs::remove_file(&tmp);
             cleanup(&written);
             let cause = format!("{e:#}").replace(&tmp.display().to_string(), "");
-            anyhow::bail!(super::cannot_write(
+            anyhow::bail!(super::disk::cannot_write(
                 path,
                 cause.trim_start_matches([':', ' '])
             ));
@@ -131,7 +131,7 @@ pub fn write_all_atomically(files: Vec<(&Path, FileWriter<'_>)>) -> anyhow::Resu
     for (i, (tmp, path)) in written.iter().enumerate() {
         if let Err(e) = std::fs::rename(tmp, path) {
             cleanup(&written[i..]);
-            anyhow::bail!(super::cannot_write(path, &e.to_string()));
+            anyhow::bail!(super::disk::cannot_write(path, &e.to_string()));
         }
     }
     Ok(())
@@ -173,7 +173,7 @@ impl StagedDir {
         }
         for dir in missing.into_iter().rev() {
             std::fs::create_dir(&dir)
-                .map_err(|e| anyhow::anyhow!(super::cannot_write(&dir, &e.to_string())))?;
+                .map_err(|e| anyhow::anyhow!(super::disk::cannot_write(&dir, &e.to_string())))?;
             created.push(dir);
         }
         let mut staged = StagedDir {
@@ -186,7 +186,7 @@ impl StagedDir {
         let _ = std::fs::remove_dir_all(&staged.staging);
         if let Err(e) = std::fs::create_dir(&staged.staging) {
             staged.done = false;
-            anyhow::bail!(super::cannot_write(target, &e.to_string()));
+            anyhow::bail!(super::disk::cannot_write(target, &e.to_string()));
         }
         Ok(staged)
     }
@@ -209,7 +209,7 @@ impl StagedDir {
                     self.target.display()
                 )
             }
-            Err(e) => anyhow::bail!(super::cannot_write(&self.target, &e.to_string())),
+            Err(e) => anyhow::bail!(super::disk::cannot_write(&self.target, &e.to_string())),
         }
     }
 }

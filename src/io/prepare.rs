@@ -9,8 +9,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use super::error::IoError;
 use super::measured::{formats_stating_units, MeasuredMap};
-use super::{read_measured, IoError};
+use super::read::read_measured;
 use crate::psd::{log_edges, radial_psd, resolve, PsdBin};
 use crate::topography::{Form, Topography};
 

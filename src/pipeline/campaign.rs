@@ -91,7 +91,7 @@ pub fn arrays(
     plan: &Plan,
     cluster: &ClusterConfig,
     node: Option<NodeLimits>,
-) -> Result<Vec<ArrayPlan>, super::UsageError> {
+) -> Result<Vec<ArrayPlan>, super::error::UsageError> {
     let mut groups: BTreeMap<(usize, bool, u32), Vec<Instance>> = BTreeMap::new();
     for inst in plan.instances.iter().filter(|i| !i.cached) {
         groups
@@ -145,7 +145,7 @@ pub fn arrays(
                     .iter()
                     .max_by_key(|i| i.estimate.peak_bytes)
                     .expect("a group is never empty");
-                return Err(super::UsageError(format!(
+                return Err(super::error::UsageError(format!(
                     "the {stage} instance {} (studies {}) needs about {memory_mib} MiB with the safety factor {}, more than the largest node's {} MiB: submit to a partition with bigger nodes (--partition), lower cluster.memory_safety, or choose smaller sizes",
                     &big.key[..12],
                     big.studies.join(", "),

@@ -77,7 +77,7 @@ pub fn run(
     let whole = Plan::build(pipeline, origin, &opts.profile, &[])?;
     let mut plan = whole.targeted(pipeline, origin, &opts.targets)?;
     if plan.instances.is_empty() {
-        return Err(crate::pipeline::UsageError(format!(
+        return Err(crate::pipeline::error::UsageError(format!(
             "profile {p} builds nothing: no study has an entry for it (studies.<name>.profiles.{p}) and no figure lists it; add one, or run another profile",
             p = opts.profile
         ))
@@ -241,7 +241,7 @@ impl Outcome {
 pub fn forced_keys(plan: &Plan, stages: &[String]) -> anyhow::Result<BTreeSet<String>> {
     for s in stages {
         if crate::pipeline::registry::find(s).is_none() {
-            return Err(crate::pipeline::UsageError(format!(
+            return Err(crate::pipeline::error::UsageError(format!(
                 "--force {s}: no such stage; use one of {}",
                 crate::pipeline::registry::names().join(", ")
             ))
@@ -553,7 +553,7 @@ fn build(
         // A measured file: copied in, so the entry holds what it was computed from (the
         // stage checks its hash against the key's).
         std::fs::copy(&src.path, entry.path().join(&src.file)).map_err(|e| {
-            crate::pipeline::UsageError(format!(
+            crate::pipeline::error::UsageError(format!(
                 "{}: cannot be read ({e}); a measured study's files must stay where the plan found them",
                 src.path.display()
             ))

@@ -24,7 +24,7 @@ pub fn measured_surfaces(m: &MeasuredPlan) -> anyhow::Result<Vec<(SurfaceJob, So
     let mut seen: Vec<(String, &str)> = Vec::new();
     for (path, field) in m.files.iter().zip(&m.fields) {
         let bad = |why: String| {
-            crate::pipeline::UsageError(format!("{field} = {}: {why}", path.display()))
+            crate::pipeline::error::UsageError(format!("{field} = {}: {why}", path.display()))
         };
         // A device (/dev/zero) or a pipe would be hashed forever: refused by its kind.
         crate::io::guard::regular_file(path).map_err(|e| {

@@ -9,10 +9,11 @@ use polars::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use super::{Inputs, Stage};
+use super::stage::Stage;
 use crate::analytic::PlateauPowerLaw;
 use crate::powerlaw::Estimator;
 use crate::statistics as stats;
+use crate::store::inputs::Inputs;
 use crate::store::table::{col, f64_column, str_column, u32_column, write};
 
 pub struct Analytic;

@@ -9,8 +9,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use super::contact::{contact_file, saturated_file};
-use super::{Inputs, Stage};
+use super::stage::Stage;
 use crate::clusters::{self, Boundary, Connectivity};
+use crate::store::inputs::Inputs;
 use crate::store::table::{col, load_columns, write};
 
 pub struct Clusters;

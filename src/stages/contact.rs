@@ -7,13 +7,14 @@ use polars::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use super::{Inputs, Stage};
+use super::stage::Stage;
 use crate::contact::elastic::ElasticOperator;
 use crate::contact::interface::Interface;
 use crate::contact::solver::SolverConfig;
 use crate::contact::sweep::{pack_contact, sweep_heights_under, LoadResult};
 use crate::contact::window::sweep_window;
 use crate::grid::Grid;
+use crate::store::inputs::Inputs;
 use crate::store::table::{col, load_columns, write};
 use crate::topography::Topography;
 

@@ -7,8 +7,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::{Inputs, Stage};
+use super::stage::Stage;
 use crate::figures::{self as draw};
+use crate::store::inputs::Inputs;
 
 /// One study as a figure shows it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -9,7 +9,8 @@ use std::path::Path;
 use polars::prelude::*;
 use serde_json::{json, Value};
 
-use super::{Inputs, Stage};
+use super::stage::Stage;
+use crate::store::inputs::Inputs;
 
 pub(crate) mod alpha;
 mod job;

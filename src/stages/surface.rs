@@ -8,9 +8,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use super::{Inputs, Stage};
+use super::stage::Stage;
 use crate::io::prepare::{prepare_quietly, FillArg, Preparation};
 use crate::spectral::Fft2;
+use crate::store::inputs::Inputs;
 use crate::store::table::{col, write};
 use crate::surface::{self, SurfaceParams};
 

@@ -71,7 +71,7 @@ impl Plan {
                 || figures.iter().any(|(n, _)| n == t)
                 || crate::pipeline::registry::find(t).is_some();
             if !known {
-                return Err(crate::pipeline::UsageError(format!(
+                return Err(crate::pipeline::error::UsageError(format!(
                     "unknown target '{t}' for profile '{profile}': use a stage ({}), a study ({}) or a figure ({}) of this profile",
                     crate::pipeline::registry::names().join(", "),
                     plans.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "),
@@ -136,7 +136,7 @@ impl Plan {
     /// Refuse a plan whose largest instance needs more memory than `available` bytes.
     pub fn check_memory(&self, available: u64) -> anyhow::Result<()> {
         if let Some(i) = self.largest().filter(|i| i.estimate.peak_bytes > available) {
-            return Err(crate::pipeline::UsageError(format!(
+            return Err(crate::pipeline::error::UsageError(format!(
                 "the {} instance {} (studies {}) needs about {:.1} GiB, more than this machine's {:.1} GiB: run it where there is more memory (wearcoef submit) or choose smaller sizes for profile {}",
                 i.stage,
                 &i.key[..12],

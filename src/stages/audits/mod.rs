@@ -12,7 +12,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::{Inputs, Stage};
+use super::stage::Stage;
+use crate::store::inputs::Inputs;
 
 mod load_resolution;
 mod realizations;

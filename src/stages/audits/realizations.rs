@@ -5,7 +5,7 @@
 use polars::prelude::*;
 use serde_json::{json, Value};
 
-use crate::stages::Inputs;
+use crate::store::inputs::Inputs;
 use crate::store::table::{f64_column, loads_of, u32_column};
 
 /// Per realization and load, the quantities behind Fig. 2e–f: contact area `A_c/λ_s²`,

@@ -7,7 +7,7 @@ use polars::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use crate::stages::Inputs;
+use crate::store::inputs::Inputs;
 use crate::store::table::{bool_column, f64_column, loads_of, str_column, u32_column, u64_column};
 
 /// One compared setting.
