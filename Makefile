@@ -10,7 +10,7 @@ PROFILE ?= default
 JOBS ?= $(shell nproc)
 BIN := $(CARGO_TARGET_DIR)/release/wearcoef
 
-.PHONY: figures build test test-client test-measured test-python test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
+.PHONY: figures benchmarks build test test-client test-measured test-python test-report test-slurm slurm-start slurm-stop fmt clippy bench bench-fft bench-solver bench-peers bench-plastic bench-iteration bench-warm-start bench-labelling bench-iteration-growth bench-deflation-probe speed-accuracy clean
 
 figures: build
 	$(BIN) run --profile $(PROFILE) --jobs $(JOBS)
@@ -65,6 +65,10 @@ slurm-stop:
 
 fmt:
 	cargo fmt --all
+
+# docs/BENCHMARKS.md from the dated runs under docs/benchmarks/ (scripts/benchmarks.py).
+benchmarks:
+	python3 scripts/benchmarks.py
 
 bench: bench-fft bench-solver bench-peers bench-iteration bench-iteration-growth bench-deflation-probe bench-warm-start bench-labelling speed-accuracy
 

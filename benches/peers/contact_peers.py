@@ -14,6 +14,11 @@ of three runs at each size (the peaks vary by about ±0.3 MB between runs, which
 Usage: python contact_peers.py WEARCOEF_BIN OUTDIR [N ...]
 Prints a markdown table.
 
+Also: python contact_peers.py --alternate OLD_BIN NEW_BIN OUTDIR ROUNDS [N ...] (used by
+benches/peers/alternate.sh): per N, Tamaas once, then the two binaries' 1-thread sweeps in
+turn, ROUNDS each, on the same surface; prints each binary's least and median time against
+Tamaas's, NEW's median over OLD's, and whether both did the same iterations and pixel counts.
+
 Also: python contact_peers.py --tamaas-maps SURFACE.npy TOL W1,W2,... OUT.u8 (used by
 `make speed-accuracy`): solves the sweep with Tamaas, writes the contact maps (one byte per
 node, load-major, 1 = contact) to OUT.u8 and prints the seconds of the solves as JSON.
@@ -133,6 +138,49 @@ def tamaas_maps(path, tol, loads, out):
     print(json.dumps({"seconds": seconds}))
 
 
+def make_surface(wearcoef, outdir, n):
+    path = os.path.join(outdir, f"surface_{n}.npy")
+    subprocess.run([wearcoef, "surface", "--n", str(n), "--lambda-l-px", str(max(n // 4, 16)),
+                    "--lambda-s-px", "8", "--hurst", "0.8", "--seed", "1", "-o", path],
+                   check=True)
+    return path
+
+
+def alternate(old, new, outdir, rounds, sizes):
+    """Two wearcoef binaries against one Tamaas run per size, in turn (module docs)."""
+    import statistics
+    import tamaas
+
+    os.makedirs(outdir, exist_ok=True)
+    loads = ",".join(repr(float(w)) for w in LOADS)
+    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    print(f"Tamaas {tamaas.__version__} (1 thread) against two wearcoef binaries in turn, "
+          f"{rounds} rounds each; 30 loads, tol {TOL:g}\n")
+    print("| N | old: least / median ratio | new: least / median ratio | new / old (medians) "
+          "| new / old (least) | same iterations and pixel counts |")
+    print("|---|---|---|---|---|---|")
+    for n in sizes:
+        path = make_surface(new, outdir, n)
+        rt, _ = run_child([sys.executable, __file__, "--tamaas-child", path, repr(TOL)])
+        assert all(r["converged"] for r in rt), "Tamaas did not converge"
+        tt = sum(r["seconds"] for r in rt)
+        times = {old: [], new: []}
+        shape = {}
+        for _ in range(rounds):
+            for b in (old, new):
+                rows, _ = run_child([b, "solve", "--surface", path, "--loads", loads,
+                                     "--tol", repr(TOL), "--json"], env)
+                assert all(r["converged"] for r in rows), f"{b} did not converge"
+                times[b].append(sum(r["seconds"] for r in rows))
+                shape[b] = [(r["iterations"], r["n_contact_px"]) for r in rows]
+        lo = {b: min(t) / tt for b, t in times.items()}
+        med = {b: statistics.median(t) / tt for b, t in times.items()}
+        print(f"| {n} | {lo[old]:.4f} / {med[old]:.4f} | {lo[new]:.4f} / {med[new]:.4f} | "
+              f"{med[new] / med[old]:.3f} | {lo[new] / lo[old]:.3f} | "
+              f"{'yes' if shape[old] == shape[new] else 'NO'} |")
+        sys.stdout.flush()
+
+
 def main():
     if sys.argv[1] == "--tamaas-maps":
         tamaas_maps(sys.argv[2], float(sys.argv[3]),
@@ -140,6 +188,10 @@ def main():
         return
     if sys.argv[1] == "--tamaas-child":
         tamaas_child(sys.argv[2], float(sys.argv[3]))
+        return
+    if sys.argv[1] == "--alternate":
+        alternate(sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5]),
+                  [int(s) for s in sys.argv[6:]] or [256, 512, 1024])
         return
     wearcoef, outdir = sys.argv[1], sys.argv[2]
     sizes = [int(s) for s in sys.argv[3:]] or [256, 512, 1024]

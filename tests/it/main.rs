@@ -6,6 +6,7 @@ mod cli;
 mod clusters;
 mod config;
 mod contact;
+mod docs;
 mod galleries;
 mod layout;
 mod measured_study;
