@@ -29,7 +29,7 @@ META = ["date", "commit", "machine", "command"]
 DATED = [
     (re.compile(r"\b20\d\d-\d\d-\d\d\b"), "a date"),
     (re.compile(r"\bversion \d+\b"), "a stage version"),
-    (re.compile(r"\b[0-9a-f]{7,12}\b"), "a commit"),
+    (re.compile(r"\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,12}\b"), "a commit"),
 ]
 
 

@@ -14,8 +14,9 @@ use super::lanes::Lanes;
 
 /// The admissible set of the pressure at one node. Each rule is written once, generic over
 /// [`Lanes`]: the scalar code runs it on one `f64`, the AVX2 kernels on four lanes, and both
-/// give the same bits (the rules' test, [`tests::check`], compares them). A pressure of 0 must
-/// be inactive (the row kernels pad their tails with it).
+/// give the same bits (the rules' test, [`tests::check`], compares them). The load offset's
+/// rules ([`Self::moves`], [`Self::offset`]) run only in scalar passes and take one `f64`. A
+/// pressure of 0 must be inactive (the row kernels pad their tails with it).
 pub trait Constraint: Copy + Send + Sync + PartialEq + std::fmt::Debug + 'static {
     /// The admissible pressure nearest to `p` (NaN maps to an admissible value).
     fn project<V: Lanes>(self, p: V) -> V;
